@@ -1,0 +1,145 @@
+"""The ``gyrotest`` command line.
+
+Thin layer: each command lives in ``gyrotest/cli/cmd_<name>.py`` and exposes a click command
+object named ``command``; it parses options, calls the core, and renders (rich tables on a
+terminal, ``--json`` for scripts). Commands are imported lazily so ``gyrotest --help`` and
+pipelines stay fast.
+
+Exit codes: 0 ok, 2 bad input or usage, 1 internal error. Errors are one line on stderr
+(``gyrotest: error: ...``); ``--debug`` adds the traceback.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+import sys
+import traceback
+
+import click
+
+from .. import __version__
+from ..errors import GyrotestError
+
+# command name -> module (in the order shown by --help)
+COMMANDS: dict[str, str] = {
+    "info": "cmd_info",
+    "ingest": "cmd_ingest",
+    "bias": "cmd_bias",
+    "allan": "cmd_allan",
+    "scale-factor": "cmd_scale_factor",
+    "model": "cmd_model",
+    "thermal-fit": "cmd_thermal_fit",
+    "mag-fit": "cmd_mag_fit",
+    "compensate": "cmd_compensate",
+    "report": "cmd_report",
+    "simulate": "cmd_simulate",
+}
+
+
+class LazyGroup(click.Group):
+    """A click group whose sub-commands are imported on first use."""
+
+    def list_commands(self, ctx):
+        return [name for name, mod in COMMANDS.items() if _module_exists(mod)]
+
+    def get_command(self, ctx, name):
+        mod = COMMANDS.get(name)
+        if mod is None or not _module_exists(mod):
+            return None
+        module = importlib.import_module(f"{__name__}.{mod}")
+        return module.command
+
+    def format_commands(self, ctx, formatter):
+        rows = []
+        for name in self.list_commands(ctx):
+            cmd = self.get_command(ctx, name)
+            if cmd is not None and not cmd.hidden:
+                rows.append((name, cmd.get_short_help_str(limit=70)))
+        if rows:
+            with formatter.section("Commands"):
+                formatter.write_dl(rows)
+
+
+def _module_exists(mod: str) -> bool:
+    return importlib.util.find_spec(f"{__name__}.{mod}") is not None
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, "--version", prog_name="gyrotest")
+@click.option("--debug", is_flag=True, help="Show the Python traceback on errors.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress or notes on stderr.")
+@click.pass_context
+def cli(ctx, debug, quiet):
+    """gyrotest: gyro test-bench logs to an IEEE-952-style specification sheet.
+
+    Ingest bench logs (CSV/TSV, Parquet, Feather, stdin), strip earth rate and estimate the
+    bias D_F, reduce rate-table runs to scale factor, fit thermal and magnetic models, run
+    Allan noise analysis, and write a spec sheet. Every analysis command takes --json for
+    scripts; units are explicit everywhere (deg/h, deg/sqrt(h), arcsec/pulse ...).
+
+    Exit codes: 0 ok, 2 bad input or usage, 1 internal error.
+    """
+    from .common import Settings
+
+    ctx.obj = Settings(debug=debug, quiet=quiet)
+
+
+def _err(msg: str) -> None:
+    try:
+        sys.stderr.write(f"gyrotest: error: {msg}\n")
+        sys.stderr.flush()
+    except Exception:  # pragma: no cover - stderr closed
+        pass
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in args or os.environ.get("GYROTEST_DEBUG") == "1"
+    try:
+        rv = cli.main(args=args, prog_name="gyrotest", standalone_mode=False)
+        code = rv if isinstance(rv, int) else 0
+    except click.exceptions.Exit as e:
+        code = e.exit_code
+    except click.exceptions.Abort:
+        _err("aborted")
+        code = 1
+    except click.ClickException as e:
+        if debug:
+            traceback.print_exc()
+        # usage errors (unknown option, missing argument, bad value): one line + hint
+        msg = e.format_message().replace("\n", " ")
+        ctx = getattr(e, "ctx", None)
+        hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+        _err(msg + hint)
+        code = 2
+    except GyrotestError as e:
+        if debug:
+            traceback.print_exc()
+        _err(str(e).replace("\n", " "))
+        code = e.exit_code
+    except BrokenPipeError:
+        # downstream closed the pipe (e.g. `| head`): not an error
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        code = 0
+    except KeyboardInterrupt:
+        _err("interrupted")
+        code = 130
+    except MemoryError:
+        if debug:
+            traceback.print_exc()
+        _err("out of memory; analyse a shorter part of the log (--skip/--duration) or convert it "
+             "to Parquet first with 'gyrotest ingest'")
+        code = 1
+    except Exception as e:  # internal error: a bug
+        if debug:
+            traceback.print_exc()
+        _err(f"internal error: {type(e).__name__}: {e} (run with --debug for the traceback; "
+             "please report it)")
+        code = 1
+    sys.exit(code)

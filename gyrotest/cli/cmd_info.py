@@ -1,0 +1,70 @@
+"""``gyrotest info``: summarise a log (duration, rate, channels, gaps, ranges)."""
+
+from __future__ import annotations
+
+import click
+
+from ..units import format_duration
+from .common import (console, emit_json, fmt_num, ingest_options, json_option, load_log,
+                     with_ingest)
+
+
+@click.command("info")
+@click.argument("log", type=str)
+@ingest_options
+@json_option
+@with_ingest
+def command(log, as_json, ingest_opts):
+    """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps.
+
+    LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
+    for CSV on stdin. Shows which column was used for what.
+
+    \b
+    Example:
+      gyrotest info sample_data/static.csv --profile sample_data/static.profile.toml
+    """
+    g = load_log(log, ingest_opts, announce=not as_json)
+    summary = g.summary()
+    if as_json:
+        emit_json(summary)
+        return
+    from rich.table import Table
+
+    tm = g.timing
+    c = console()
+    c.print(f"[bold]{g.source}[/bold]")
+    c.print(f"  samples        {tm.n:,}   ({tm.source})")
+    c.print(f"  sample rate    {fmt_num(tm.sample_rate_hz, 6)} Hz  (tau0 = {fmt_num(tm.tau0, 6)} s)")
+    c.print(f"  duration       {format_duration(tm.duration_s)}  ({tm.duration_s:.6g} s)")
+    if tm.start:
+        c.print(f"  start          {tm.start}")
+    gy = g.gyro
+    kind = {"rate": f"rate ({gy.rate_unit})", "counts": "pulse counts per sample",
+            "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
+            "voltage": "analog voltage"}[gy.output_kind]
+    c.print(f"  gyro output    {kind}")
+    if gy.scale_factor is not None:
+        c.print(f"  scale factor   {gy.scale_factor:g} {gy.scale_factor_unit}"
+                + (f", offset {gy.offset_v:g} V" if gy.offset_v is not None else ""))
+    if g.site:
+        s = g.site
+        c.print(f"  site           latitude {s.latitude_deg:g}°, IA {s.ia_label} "
+                f"(earth rate along IA {s.earth_rate_dph():+.4f} deg/h)")
+    if tm.gaps:
+        c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
+            f"at {gp.time_s:.6g} s for {gp.duration_s:.4g} s" for gp in tm.gaps[:5])
+            + (" ..." if len(tm.gaps) > 5 else ""))
+    else:
+        c.print("  gaps           none")
+    if tm.irregular:
+        c.print(f"  [yellow]irregular sampling: jitter {100 * tm.jitter_rel:.2g}% of tau0[/yellow]")
+    t = Table(title="channels", show_lines=False)
+    for col in ("channel", "unit", "min", "mean", "max", "std"):
+        t.add_column(col, justify="right" if col not in ("channel", "unit") else "left")
+    for name, st in summary["channels"].items():
+        t.add_row(name, st["unit"], fmt_num(st["min"]), fmt_num(st["mean"]), fmt_num(st["max"]),
+                  fmt_num(st["std"]))
+    c.print(t)
+    if summary.get("positions"):
+        c.print("  positions      " + ", ".join(f"{k}: {v}" for k, v in summary["positions"].items()))

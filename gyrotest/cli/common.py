@@ -1,0 +1,241 @@
+"""Shared CLI plumbing: ingest options, --json, human output on stderr/stdout, progress.
+
+Conventions for command modules (``gyrotest/cli/cmd_<name>.py``, exposing ``command``):
+
+* decorate with :func:`ingest_options` to get every column/profile option and call
+  :func:`load_log` (or :func:`load_logs`) with the collected kwargs: one ingest path for all;
+* :func:`json_option` adds ``--json``; with it, print exactly one JSON document to stdout via
+  :func:`emit_json` and nothing else on stdout;
+* human output goes through :func:`console` (stdout, rich) and notes/warnings through
+  :func:`note` / :func:`warn` (stderr, suppressed by ``-q``);
+* files are written atomically with :mod:`gyrotest.output` helpers;
+* raise :class:`gyrotest.errors.InputError` for anything the user can fix (exit code 2).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
+
+import click
+
+from ..errors import InputError
+from ..output import dumps
+
+
+@dataclass
+class Settings:
+    debug: bool = False
+    quiet: bool = False
+
+
+def settings() -> Settings:
+    ctx = click.get_current_context(silent=True)
+    while ctx is not None:
+        if isinstance(ctx.obj, Settings):
+            return ctx.obj
+        ctx = ctx.parent
+    return Settings()
+
+
+_console = None
+_err_console = None
+
+
+def console():
+    """Rich console on stdout (plain text when piped)."""
+    global _console
+    from rich.console import Console
+
+    if _console is None or _console.file is not sys.stdout:
+        _console = Console(file=sys.stdout, highlight=False, soft_wrap=False)
+    return _console
+
+
+def err_console():
+    """Rich console on stderr for notes, warnings and progress."""
+    global _err_console
+    from rich.console import Console
+
+    if _err_console is None or _err_console.file is not sys.stderr:
+        _err_console = Console(file=sys.stderr, highlight=False, soft_wrap=True)
+    return _err_console
+
+
+def note(msg: str) -> None:
+    """An informational line on stderr (suppressed by -q)."""
+    if not settings().quiet:
+        err_console().print(f"[dim]{_escape(msg)}[/dim]")
+
+
+def warn(msg: str) -> None:
+    """A warning on stderr (always shown, also with --json: stdout stays clean)."""
+    err_console().print(f"[yellow]warning:[/yellow] {_escape(msg)}")
+
+
+def _escape(msg: str) -> str:
+    from rich.markup import escape
+
+    return escape(msg)
+
+
+def emit_json(obj: Any) -> None:
+    """Write one JSON document to stdout."""
+    sys.stdout.write(dumps(obj) + "\n")
+    sys.stdout.flush()
+
+
+@contextlib.contextmanager
+def progress(description: str, total: float | None = None) -> Iterator[Callable[[float], None]]:
+    """A progress bar on stderr when it is a terminal (and not -q); otherwise silent.
+    Yields ``advance(amount)``."""
+    if settings().quiet or not sys.stderr.isatty():
+        yield lambda amount=1: None
+        return
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn(),
+                  console=err_console(), transient=True) as prog:
+        task = prog.add_task(description, total=total)
+        yield lambda amount=1: prog.advance(task, amount)
+
+
+# ----------------------------------------------------------------------------- options
+def json_option(f):
+    return click.option("--json", "as_json", is_flag=True,
+                        help="Print the result as one JSON document on stdout (for scripts).")(f)
+
+
+def _split_cols(value: str | None) -> list[str] | None:
+    if value is None:
+        return None
+    parts = [p.strip() for p in value.split(",") if p.strip()]
+    return parts or None
+
+
+INGEST_OPTION_NAMES = (
+    "profile", "time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
+    "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
+    "temp_col", "field_cols", "supply_col", "table_col", "position_col", "latitude", "ia",
+    "nan_policy",
+)
+
+
+def ingest_options(f):
+    """Add the ingest options shared by every command that reads a log."""
+    opts = [
+        click.option("--profile", type=click.Path(dir_okay=False), default=None,
+                     help="Bench profile TOML naming columns and constants; options below override it."),
+        click.option("--time-col", default=None, help="Time column (seconds or ISO-8601)."),
+        click.option("--rate-col", default=None,
+                     help="Rate column(s), comma-separated for several axes."),
+        click.option("--rate-unit", default=None,
+                     help="Unit of the rate column: deg/h, deg/s, rad/s, mrad/s, urad/s, deg/min."),
+        click.option("--counts-col", default=None, help="Pulse counts per sample column."),
+        click.option("--up-col", default=None, help="Up-pulse column (with --down-col)."),
+        click.option("--down-col", default=None, help="Down-pulse column (with --up-col)."),
+        click.option("--counter-col", default=None, help="Cumulative counter column (rolls over)."),
+        click.option("--counter-bits", type=int, default=None, help="Counter width, bits (16, 32)."),
+        click.option("--voltage-col", default=None, help="Analog output voltage column."),
+        click.option("--scale-factor", type=float, default=None,
+                     help="S0: arcsec/pulse for pulse outputs, (deg/h)/V for voltage."),
+        click.option("--offset", type=float, default=None, help="Voltage offset, V."),
+        click.option("--sample-rate", type=float, default=None,
+                     help="Sample rate, Hz, when the log has no time column."),
+        click.option("--temp-col", multiple=True, help="Temperature column, degC (repeatable)."),
+        click.option("--field-cols", default=None, help="Magnetic field columns X,Y,Z (uT)."),
+        click.option("--supply-col", default=None, help="Supply-voltage column, V."),
+        click.option("--table-col", default=None, help="Commanded rate-table rate column (deg/s)."),
+        click.option("--position-col", default=None, help="Multi-position label column."),
+        click.option("--latitude", type=float, default=None, help="Site latitude, degrees."),
+        click.option("--ia", default=None,
+                     help="Input-axis direction: up/down/north/south/east/west or AZ/EL degrees."),
+        click.option("--nan", "nan_policy", type=click.Choice(["error", "gap", "interpolate"]),
+                     default="error", show_default=True,
+                     help="Missing values: stop, drop rows as gaps, or interpolate channels."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def pop_ingest_kwargs(kwargs: dict) -> dict:
+    """Remove the ingest options from a command's kwargs and return them."""
+    return {k: kwargs.pop(k) for k in INGEST_OPTION_NAMES if k in kwargs}
+
+
+def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
+    cols = {
+        "time": opts.get("time_col"),
+        "rate": _split_cols(opts.get("rate_col")),
+        "counts": _split_cols(opts.get("counts_col")),
+        "up": opts.get("up_col"),
+        "down": opts.get("down_col"),
+        "counter": _split_cols(opts.get("counter_col")),
+        "voltage": _split_cols(opts.get("voltage_col")),
+        "temperature": list(opts.get("temp_col") or []) or None,
+        "field": _split_cols(opts.get("field_cols")),
+        "supply": opts.get("supply_col"),
+        "table_rate": opts.get("table_col"),
+        "position": opts.get("position_col"),
+    }
+    gyro = {
+        "rate_unit": opts.get("rate_unit"),
+        "scale_factor": opts.get("scale_factor"),
+        "offset_v": opts.get("offset"),
+        "counter_bits": opts.get("counter_bits"),
+        "sample_rate_hz": opts.get("sample_rate"),
+    }
+    site: dict[str, Any] = {"latitude_deg": opts.get("latitude")}
+    if opts.get("ia"):
+        site["ia"] = opts["ia"]
+    return {"columns": cols, "gyro": gyro, "site": site}
+
+
+def load_log(path: str, opts: dict, *, announce: bool = True):
+    """Read one log with the shared ingest options; prints the column choices as notes."""
+    from ..ingest import read_log
+    from ..profile import load_profile
+
+    prof = load_profile(opts["profile"]) if opts.get("profile") else None
+    log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
+                   nan_policy=opts.get("nan_policy") or "error")
+    if announce:
+        for msg in log.notes:
+            note(f"{log.source}: {msg}")
+    return log
+
+
+def load_logs(paths: tuple[str, ...] | list[str], opts: dict, *, announce: bool = True) -> list:
+    if not paths:
+        raise InputError("no log file given")
+    if sum(1 for p in paths if p == "-") > 1:
+        raise InputError("stdin ('-') can be read only once")
+    return [load_log(p, opts, announce=announce) for p in paths]
+
+
+def with_ingest(func):
+    """Decorator for commands: collects the ingest options into ``ingest_opts``."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        kwargs["ingest_opts"] = pop_ingest_kwargs(kwargs)
+        return func(*args, **kwargs)
+
+    return wrapper
+
+
+def fmt_num(x: float | None, digits: int = 4) -> str:
+    """Compact number formatting for tables ('—' for None/NaN)."""
+    import math
+
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "—"
+    if x == 0:
+        return "0"
+    ax = abs(x)
+    if 1e-3 <= ax < 1e5:
+        return f"{x:.{digits}g}"
+    return f"{x:.{max(digits - 1, 1)}e}"

@@ -1,0 +1,100 @@
+"""Output plumbing shared by every command: atomic file writes and JSON serialisation.
+
+Nothing here knows about the terminal. Results are dataclasses; :func:`jsonable` turns them
+(and numpy scalars/arrays, NaN, paths) into plain JSON values, so every ``--json`` output and
+every saved model/report uses the same rules: NaN and infinities become ``null``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as _dt
+import enum
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import IO, Any, Iterator
+
+import numpy as np
+
+
+def jsonable(obj: Any) -> Any:
+    """Recursively convert ``obj`` to JSON-safe Python values (NaN/inf -> None)."""
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, int) and not isinstance(obj, bool):
+        return obj
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, np.generic):
+        return jsonable(obj.item())
+    if isinstance(obj, np.ndarray):
+        return [jsonable(v) for v in obj.tolist()]
+    if hasattr(obj, "to_dict") and callable(obj.to_dict):
+        return jsonable(obj.to_dict())
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, set)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, enum.Enum):
+        return jsonable(obj.value)
+    if isinstance(obj, (_dt.datetime, _dt.date)):
+        return obj.isoformat()
+    return str(obj)
+
+
+def dumps(obj: Any, *, indent: int | None = 2) -> str:
+    """JSON text of ``obj`` after :func:`jsonable` (strict JSON: no NaN)."""
+    return json.dumps(jsonable(obj), indent=indent, allow_nan=False, ensure_ascii=False)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
+    """Yield a temporary path in the destination directory; on success it is renamed over
+    ``path`` (atomic on POSIX), on any error it is removed. Never leaves a half-written file.
+
+    Use for writers that want a file name (pyarrow, matplotlib)::
+
+        with atomic_path("out.parquet") as tmp:
+            pq.write_table(table, tmp)
+    """
+    dest = Path(path)
+    directory = dest.parent if str(dest.parent) else Path(".")
+    if not directory.exists():
+        from .errors import InputError
+
+        raise InputError(f"cannot write {dest}: directory {directory} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp" + dest.suffix, dir=directory)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, dest)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        raise
+
+
+@contextlib.contextmanager
+def atomic_open(path: str | os.PathLike, mode: str = "w", **kwargs) -> Iterator[IO]:
+    """Like ``open(path, mode)`` for writing, but atomic (see :func:`atomic_path`)."""
+    with atomic_path(path) as tmp:
+        with open(tmp, mode, **kwargs) as fh:
+            yield fh
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    with atomic_open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
+def write_json(path: str | os.PathLike, obj: Any) -> None:
+    write_text(path, dumps(obj) + "\n")

@@ -1,0 +1,198 @@
+"""Bench profiles: which column is what, and the gyro and site constants.
+
+A lab writes one TOML profile per bench and passes it with ``--profile FILE``; command-line
+options override it key by key. Example::
+
+    [columns]
+    time = "t_s"                   # seconds (any origin) or ISO-8601 timestamps
+    counts = "pulses"              # or: rate = "..." (or a list of axes) / voltage = "..." /
+                                   #     up = "...", down = "..." / counter = "..."
+    temperature = ["T_case_C", "T_coil_C"]
+    field = ["Hx_uT", "Hy_uT", "Hz_uT"]
+    supply = "vsupply"
+    table_rate = "table_dps"       # commanded rate-table rate
+    position = "pos"               # multi-position label column (up/down/north/...)
+    extra = ["vib_g"]              # free channels
+
+    [units]                        # per-column units where not the role default
+    "table_dps" = "deg/s"
+
+    [gyro]
+    scale_factor = 0.2             # arcsec/pulse for counts, (deg/h)/V for voltage
+    offset_v = 2.5
+    rate_unit = "deg/h"            # for a rate column
+    counter_bits = 32
+    sample_rate_hz = 10.0          # only when there is no time column
+    model = "FOG-X"
+    serial = "0001"
+
+    [site]
+    latitude_deg = 48.137
+    ia = "up"                      # up/down/north/south/east/west, or ia_azimuth_deg + ia_elevation_deg
+
+Role default units: time s, rate deg/h, temperature degC, field uT, supply V, table_rate deg/s.
+Unknown sections or keys are an error (a misspelt key would otherwise be silently ignored).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import InputError
+
+SCHEMA: dict[str, dict[str, type | tuple]] = {
+    "columns": {
+        "time": str,
+        "rate": (str, list),
+        "counts": (str, list),
+        "up": str,
+        "down": str,
+        "counter": (str, list),
+        "voltage": (str, list),
+        "temperature": (str, list),
+        "field": (str, list),
+        "supply": str,
+        "table_rate": str,
+        "position": str,
+        "extra": (str, list),
+    },
+    "units": {},  # free keys: column name -> unit string
+    "gyro": {
+        "rate_unit": str,
+        "scale_factor": (float, int),
+        "offset_v": (float, int),
+        "counter_bits": int,
+        "sample_rate_hz": (float, int),
+        "model": str,
+        "serial": str,
+        "type": str,
+    },
+    "site": {
+        "latitude_deg": (float, int),
+        "ia": str,
+        "ia_azimuth_deg": (float, int),
+        "ia_elevation_deg": (float, int),
+    },
+}
+
+LIST_KEYS = {"rate", "counts", "counter", "voltage", "temperature", "field", "extra"}
+OUTPUT_KINDS = ("rate", "counts", "updown", "counter", "voltage")
+
+
+@dataclass
+class Profile:
+    """A bench profile (possibly empty) after validation. Lists are always lists."""
+
+    columns: dict[str, Any] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+    gyro: dict[str, Any] = field(default_factory=dict)
+    site: dict[str, Any] = field(default_factory=dict)
+    source: str | None = None
+
+    def to_dict(self) -> dict:
+        return {"columns": self.columns, "units": self.units, "gyro": self.gyro,
+                "site": self.site, "source": self.source}
+
+    def output_kind(self) -> str | None:
+        """Which gyro output kind the columns name, or None when not given."""
+        c = self.columns
+        kinds = [k for k in ("rate", "counts", "counter", "voltage") if c.get(k)]
+        if c.get("up") or c.get("down"):
+            kinds.append("updown")
+        if len(kinds) > 1:
+            raise InputError(
+                f"{self.source or 'options'}: more than one gyro output given ({', '.join(kinds)}); "
+                "name exactly one of rate, counts, up+down, counter, voltage"
+            )
+        return kinds[0] if kinds else None
+
+
+def _check(section: str, key: str, value: Any, src: str) -> Any:
+    spec = SCHEMA[section]
+    if section == "units":
+        if not isinstance(value, str):
+            raise InputError(f"{src}: [units] {key!r} must be a unit string like \"deg/s\"")
+        return value
+    if key not in spec:
+        raise InputError(
+            f"{src}: unknown key {key!r} in [{section}]; known keys: {', '.join(spec)}"
+        )
+    typ = spec[key]
+    types = typ if isinstance(typ, tuple) else (typ,)
+    if float in types and isinstance(value, bool):
+        raise InputError(f"{src}: [{section}] {key} must be a number, got {value!r}")
+    if not isinstance(value, types):
+        want = " or ".join("list of strings" if t is list else t.__name__ for t in types)
+        raise InputError(f"{src}: [{section}] {key} must be {want}, got {value!r}")
+    if isinstance(value, list):
+        if not all(isinstance(v, str) for v in value):
+            raise InputError(f"{src}: [{section}] {key} must be a list of column names (strings)")
+    if key in LIST_KEYS and isinstance(value, str):
+        value = [value]
+    return value
+
+
+def profile_from_dict(data: dict, source: str = "profile") -> Profile:
+    """Validate a parsed TOML profile (unknown sections/keys and wrong types are errors)."""
+    prof = Profile(source=source)
+    for section, body in data.items():
+        if section not in SCHEMA:
+            raise InputError(
+                f"{source}: unknown section [{section}]; known sections: "
+                + ", ".join(f"[{s}]" for s in SCHEMA)
+            )
+        if not isinstance(body, dict):
+            raise InputError(f"{source}: [{section}] must be a table of key = value lines")
+        target = getattr(prof, section)
+        for key, value in body.items():
+            target[key] = _check(section, key, value, source)
+    prof.output_kind()  # validates that at most one output kind is named
+    if "field" in prof.columns and len(prof.columns["field"]) not in (1, 2, 3):
+        raise InputError(f"{source}: [columns] field must list 1 to 3 columns (X, Y, Z)")
+    if prof.columns.get("up") and not prof.columns.get("down") or (
+        prof.columns.get("down") and not prof.columns.get("up")
+    ):
+        raise InputError(f"{source}: up/down pulse pairs need both 'up' and 'down' columns")
+    return prof
+
+
+def load_profile(path: str | Path) -> Profile:
+    """Read and validate a bench profile TOML file."""
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise InputError(f"{p}: profile not found; check the --profile path") from None
+    except IsADirectoryError:
+        raise InputError(f"{p}: is a directory, expected a TOML profile file") from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(f"{p}: not a text file; a profile is TOML text") from None
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"{p}: invalid TOML: {e}") from None
+    return profile_from_dict(data, source=str(p))
+
+
+def merge(base: Profile | None, overrides: dict[str, dict[str, Any]]) -> Profile:
+    """Return ``base`` with ``overrides`` (same shape as a profile; None values skipped)
+    applied key by key. Naming a different gyro output kind on the command line replaces
+    the profile's output kind."""
+    prof = copy.deepcopy(base) if base is not None else Profile()
+    out_keys = {"rate", "counts", "up", "down", "counter", "voltage"}
+    for section, body in overrides.items():
+        target = getattr(prof, section)
+        given = {k: v for k, v in body.items() if v is not None and v != [] and v != ()}
+        if section == "columns" and out_keys & set(given):
+            for k in out_keys:
+                target.pop(k, None)
+        for key, value in given.items():
+            if key in LIST_KEYS and isinstance(value, str):
+                value = [value]
+            target[key] = list(value) if isinstance(value, tuple) else value
+    prof.output_kind()
+    return prof

@@ -1,0 +1,230 @@
+"""Units: parsing and conversion to gyrotest's internal units.
+
+Internal units (everything in the core uses these):
+
+=============== ============= ==========================================================
+quantity        internal      note
+=============== ============= ==========================================================
+angular rate    deg/h         1 deg/h = 1 arcsec/s, so counts x S0[arcsec] / dt[s] is deg/h
+angle           arcsec
+time            s
+temperature     degC
+magnetic field  uT            H0 = 100 uT normalises magnetic coefficients (seed 002)
+voltage         V
+=============== ============= ==========================================================
+
+Unit strings are case-sensitive where it matters (``mT`` vs ``MT`` is not an issue here, but
+``G`` is gauss); common spellings (``°/h``, ``dph``, ``dps``, ``µT``, ``degC``) are accepted.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from .errors import InputError
+
+DEG = math.pi / 180.0
+
+# angular rate -> deg/h
+_RATE = {
+    "deg/h": 1.0,
+    "deg/hr": 1.0,
+    "°/h": 1.0,
+    "dph": 1.0,
+    "arcsec/s": 1.0,
+    "deg/min": 60.0,
+    "°/min": 60.0,
+    "deg/s": 3600.0,
+    "°/s": 3600.0,
+    "dps": 3600.0,
+    "mdeg/s": 3.6,
+    "rad/s": 3600.0 / DEG,
+    "mrad/s": 3.6 / DEG,
+    "urad/s": 3.6e-3 / DEG,
+    "µrad/s": 3.6e-3 / DEG,
+    "rad/h": 1.0 / DEG,
+    "rpm": 360.0 * 60.0,
+    "arcsec/h": 1.0 / 3600.0,
+}
+
+# angle -> arcsec
+_ANGLE = {
+    "arcsec": 1.0,
+    '"': 1.0,
+    "deg": 3600.0,
+    "°": 3600.0,
+    "arcmin": 60.0,
+    "rad": 3600.0 / DEG,
+    "mrad": 3.6 / DEG,
+    "urad": 3.6e-3 / DEG,
+    "µrad": 3.6e-3 / DEG,
+}
+
+# time -> s
+_TIME = {
+    "s": 1.0,
+    "sec": 1.0,
+    "ms": 1e-3,
+    "us": 1e-6,
+    "µs": 1e-6,
+    "ns": 1e-9,
+    "min": 60.0,
+    "h": 3600.0,
+    "hr": 3600.0,
+    "d": 86400.0,
+}
+
+# magnetic field -> uT
+_FIELD = {
+    "uT": 1.0,
+    "µT": 1.0,
+    "nT": 1e-3,
+    "mT": 1e3,
+    "T": 1e6,
+    "G": 100.0,
+    "mG": 0.1,
+    "Oe": 100.0,  # in air 1 Oe <-> 1 G <-> 100 uT
+}
+
+# voltage -> V
+_VOLT = {"V": 1.0, "mV": 1e-3, "uV": 1e-6, "µV": 1e-6}
+
+_TEMP = {"degC", "C", "°C", "celsius", "K", "degF", "F", "°F"}
+
+QUANTITIES = {
+    "rate": _RATE,
+    "angle": _ANGLE,
+    "time": _TIME,
+    "field": _FIELD,
+    "voltage": _VOLT,
+}
+INTERNAL = {
+    "rate": "deg/h",
+    "angle": "arcsec",
+    "time": "s",
+    "field": "uT",
+    "voltage": "V",
+    "temperature": "degC",
+}
+
+
+def _norm(unit: str) -> str:
+    u = unit.strip().replace(" ", "")
+    u = u.replace("deg/hr", "deg/h").replace("degree", "deg").replace("degs", "deg")
+    u = u.replace("/sec", "/s").replace("per", "/")
+    return u
+
+
+def known_units(quantity: str) -> list[str]:
+    if quantity == "temperature":
+        return sorted(_TEMP)
+    return list(QUANTITIES[quantity])
+
+
+def factor(unit: str, quantity: str, *, what: str = "") -> float:
+    """Multiplicative factor converting ``unit`` of ``quantity`` to the internal unit.
+
+    Raises InputError naming the accepted spellings when the unit is unknown.
+    """
+    table = QUANTITIES[quantity]
+    u = _norm(unit)
+    if u in table:
+        return table[u]
+    low = {k.lower(): v for k, v in table.items()}
+    if u.lower() in low and quantity != "field":
+        return low[u.lower()]
+    where = f" for {what}" if what else ""
+    raise InputError(
+        f"unknown {quantity} unit {unit!r}{where}; use one of: {', '.join(table)}"
+    )
+
+
+def to_internal(values, unit: str, quantity: str, *, what: str = ""):
+    """Convert an array (or scalar) in ``unit`` to gyrotest's internal unit for ``quantity``."""
+    if quantity == "temperature":
+        u = _norm(unit)
+        if u in ("degC", "C", "°C", "celsius", "degc"):
+            return values
+        if u == "K":
+            return values - 273.15
+        if u in ("degF", "F", "°F"):
+            return (values - 32.0) * (5.0 / 9.0)
+        raise InputError(
+            f"unknown temperature unit {unit!r}{' for ' + what if what else ''}; "
+            "use one of: degC, K, degF"
+        )
+    f = factor(unit, quantity, what=what)
+    return values * f if f != 1.0 else values
+
+
+def rate_factor(unit: str) -> float:
+    """deg/h per ``unit`` of angular rate (e.g. 3600 for deg/s)."""
+    return factor(unit, "rate")
+
+
+_DUR_TOKEN = re.compile(r"\s*((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zµ]*)\s*")
+_DUR_UNITS = {
+    "": 1.0,
+    "s": 1.0,
+    "sec": 1.0,
+    "second": 1.0,
+    "seconds": 1.0,
+    "ms": 1e-3,
+    "m": 60.0,
+    "min": 60.0,
+    "mins": 60.0,
+    "minute": 60.0,
+    "minutes": 60.0,
+    "h": 3600.0,
+    "hr": 3600.0,
+    "hrs": 3600.0,
+    "hour": 3600.0,
+    "hours": 3600.0,
+    "d": 86400.0,
+    "day": 86400.0,
+    "days": 86400.0,
+}
+
+
+def parse_duration(text: str | float | int, *, what: str = "duration") -> float:
+    """Parse a duration such as ``"40min"``, ``"2h"``, ``"90 s"``, ``"1.5h"`` or a number of
+    seconds into seconds."""
+    if isinstance(text, (int, float)):
+        if text < 0:
+            raise InputError(f"{what} must not be negative, got {text}")
+        return float(text)
+    s = str(text).strip().lower()
+    bad = InputError(f"cannot read {what} {text!r}; write e.g. 40min, 2h, 90s or 1h30min")
+    if not s:
+        raise bad
+    total, pos = 0.0, 0
+    while pos < len(s):
+        m = _DUR_TOKEN.match(s, pos)
+        if not m or m.end() == pos or m.group(2) not in _DUR_UNITS:
+            raise bad
+        if m.group(2) == "" and m.end() != len(s):
+            raise bad
+        total += float(m.group(1)) * _DUR_UNITS[m.group(2)]
+        pos = m.end()
+    if total < 0:
+        raise InputError(f"{what} must not be negative, got {text!r}")
+    return total
+
+
+def format_duration(seconds: float) -> str:
+    """Human duration: ``3725 -> '1 h 2 min 5 s'``."""
+    if not math.isfinite(seconds):
+        return str(seconds)
+    if seconds < 120:
+        return f"{seconds:.4g} s"
+    h, rem = divmod(seconds, 3600)
+    m, s = divmod(rem, 60)
+    out = []
+    if h:
+        out.append(f"{int(h)} h")
+    if m:
+        out.append(f"{int(m)} min")
+    if s >= 0.5 and h < 10:
+        out.append(f"{s:.0f} s")
+    return " ".join(out)

@@ -163,7 +163,7 @@ class GyroLog:
             return self.rates[name]
         return None
 
-    def slice(self, start: int, stop: int | None = None) -> "GyroLog":
+    def slice(self, start: int, stop: int | None = None) -> GyroLog:
         """A new log with samples ``start:stop`` (gaps and time re-based accordingly)."""
         stop = self.n if stop is None else min(stop, self.n)
         start = max(0, start)
@@ -198,7 +198,7 @@ class GyroLog:
             units=dict(self.units), notes=list(self.notes), meta=dict(self.meta),
         )
 
-    def skip(self, seconds: float) -> "GyroLog":
+    def skip(self, seconds: float) -> GyroLog:
         """Drop the first ``seconds`` (warm-up trim)."""
         if seconds <= 0:
             return self

@@ -30,9 +30,10 @@ import json
 import os
 import re
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -885,7 +886,7 @@ def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
         d = np.mod(d + mod / 2, mod) - mod / 2  # signed, unwrapped modulo 2^bits
         rates[c] = d * k
         units[c] = f"counter ({bits}-bit)"
-    notes.append("counter unwrapped modulo 2^%d; first sample sets the origin" % bits)
+    notes.append(f"counter unwrapped modulo 2^{bits}; first sample sets the origin")
     return rates
 
 

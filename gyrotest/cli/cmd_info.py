@@ -5,8 +5,7 @@ from __future__ import annotations
 import click
 
 from ..units import format_duration
-from .common import (console, emit_json, fmt_num, ingest_options, json_option, load_log,
-                     with_ingest)
+from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
 
 
 @click.command("info")

@@ -27,6 +27,7 @@ import csv
 import difflib
 import io
 import json
+import math
 import os
 import re
 import sys
@@ -216,9 +217,17 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
             head = fh.read(65536)
     suffix = p.suffix.lower() if p else ""
     if head[:4] == b"PAR1" or suffix in (".parquet", ".pq"):
-        return _read_parquet(p, source, columns) if p else _bad_binary(source)
+        if p is None:
+            _bad_binary(source)
+        if _names_only:
+            return RawTable(pa.table({}), source, "parquet", p)
+        return _read_parquet(p, source, columns)
     if head[:6] == b"ARROW1" or head[:4] == b"FEA1" or suffix in (".feather", ".arrow", ".ipc"):
-        return _read_feather(p, source, columns) if p else _bad_binary(source)
+        if p is None:
+            _bad_binary(source)
+        if _names_only:
+            return RawTable(pa.table({}), source, "feather", p)
+        return _read_feather(p, source, columns)
     delim, skip, names = _sniff_text(head, source)
     if _names_only:
         return RawTable(pa.table({n: pa.array([], pa.float64()) for n in names}), source,
@@ -304,7 +313,7 @@ def _read_parquet(p: Path, source: str, columns: list[str] | None) -> RawTable:
         names = pf.schema_arrow.names
         if columns is not None:
             _check_columns(columns, names, source)
-        table = pf.read(columns=columns, use_threads=True)
+        table = pq.read_table(p, columns=columns, use_threads=True, memory_map=True)
         meta = pf.schema_arrow.metadata or {}
     except InputError:
         raise
@@ -530,8 +539,11 @@ def _time_seconds(raw: RawTable, col: str, unit: str) -> tuple[np.ndarray, str |
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise InputError(f"{raw.source}: invalid time value in column {col!r}, {raw.where(i)}")
-    v = v * factor(unit, "time", what=f"column {col!r}")
-    return v - v[0], None
+    f = factor(unit, "time", what=f"column {col!r}")
+    v -= v[0]  # in place: no new 10^7-element arrays
+    if f != 1.0:
+        v *= f
+    return v, None
 
 
 def analyse_timing(t: np.ndarray, source: str, where: Callable[[int], str],
@@ -543,6 +555,13 @@ def analyse_timing(t: np.ndarray, source: str, where: Callable[[int], str],
     if n < 2:
         raise InputError(f"{source}: only {n} sample(s); a log needs at least 2")
     dt = np.diff(t)
+    dmin, dmax = float(dt.min()), float(dt.max())
+    if dmin > 0 and dmax <= dmin * (1 + 1e-6) and (tau0 is None or abs(dmin - tau0) <= 1e-6 * tau0):
+        # uniform sampling (the common case): no median/partition over 10^7 intervals
+        tau0 = (float(t[-1]) - float(t[0])) / (n - 1) if tau0 is None else tau0
+        timing = Timing(n=n, tau0=tau0, duration_s=float(t[-1] - t[0] + tau0), source="",
+                        jitter_rel=(dmax - dmin) / tau0 / math.sqrt(12.0))
+        return timing, np.ones(n, dtype=bool)
     back = np.flatnonzero(dt < 0)
     if back.size:
         i = int(back[0]) + 1
@@ -1064,8 +1083,10 @@ def write_log(log: GyroLog, path: str | os.PathLike, fmt: str | None = None) -> 
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
-            pq.write_table(table, tmp, compression="snappy", use_dictionary=False,
-                           write_statistics=False)
+            # plain, uncompressed float pages (gyro noise does not compress), large pages:
+            # re-reading is close to a memory copy
+            pq.write_table(table, tmp, compression="none", use_dictionary=False,
+                           write_statistics=False, data_page_size=64 << 20)
         elif fmt == "feather":
             import pyarrow.feather as feather
 

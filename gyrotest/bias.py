@@ -1,0 +1,421 @@
+"""Bias D_F, run-to-run repeatability and multi-position tests (IEEE 952 §12.11.4.1.1).
+
+For each sample ``Ω_m = S0·ΔN_m/Δt_m − Ω_IA`` (GYRO_REFERENCE §2); the bias D_F is the mean of
+Ω_m after the warm-up. Its uncertainty is **not** σ/√n: gyro noise is correlated (flicker,
+rate random walk, Markov), so the standard uncertainty of a mean over a record of length T is
+taken from the Allan variance at τ = T, σ_A²(T), which equals the variance of the mean for white
+rate noise (N²/T), for rate random walk started at the record start (K²T/3) and for Markov
+noise with T ≫ T_c ((q_c·T_c)²/T). σ_A(T) cannot be measured directly from one record of
+length T, so it is evaluated from a noise model fitted to the overlapping Allan deviation of
+the record (see :func:`mean_uncertainty`).
+
+Repeatability of D_F: sample standard deviation (1σ) and max − min spread of D_F over runs
+separated by power-off, thermal cycles or remounting.
+
+Multi-position tests: with the IA pointing in several directions u_p (unit vectors in the
+local north/east/up frame), the mean outputs obey ``m_p = D_F + Ω⃗_E · u_p`` and a weighted
+least-squares fit separates the bias from the earth rate; the fitted earth-rate vector gives
+the latitude check and the IA misalignment (azimuth offset of the fixture, equivalent tilt of
+the IA) where the positions allow.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .data import GyroLog
+from .earth import OMEGA_E_DPH, Site, earth_rate_vector, ia_unit_vector, parse_ia
+from .errors import AnalysisError, InputError
+
+MIN_RECORD_SAMPLES = 16
+
+
+# ----------------------------------------------------------------------------- uncertainty
+@dataclass
+class MeanUncertainty:
+    """Standard uncertainty of the mean of a correlated-noise record."""
+
+    sigma_dph: float  # 1σ of the mean, deg/h
+    record_s: float
+    method: str
+    naive_sigma_dph: float  # σ/√n, for comparison (wrong for correlated noise)
+    N_dph_rt_s: float = 0.0  # fitted white-rate coefficient, (deg/h)·√s
+    flicker_level_dph: float = 0.0  # fitted flat Allan level, deg/h
+    K_dph_per_rt_s: float = 0.0  # fitted rate-random-walk coefficient, (deg/h)/√s
+
+    def to_dict(self) -> dict:
+        return {
+            "sigma_mean_dph": self.sigma_dph,
+            "record_s": self.record_s,
+            "method": self.method,
+            "naive_sigma_over_sqrt_n_dph": self.naive_sigma_dph,
+            "model": {
+                "N_deg_per_rt_h": self.N_dph_rt_s / 60.0,
+                "allan_floor_dph": self.flicker_level_dph,
+                "K_deg_per_h_per_rt_h": self.K_dph_per_rt_s * 60.0,
+            },
+        }
+
+
+def mean_uncertainty(rate: np.ndarray, tau0: float,
+                     segments: list[tuple[int, int]] | None = None) -> MeanUncertainty:
+    """Standard uncertainty (1σ, deg/h) of the mean of ``rate`` (deg/h, interval ``tau0`` s).
+
+    Method: overlapping Allan deviation on an octave τ grid up to a quarter of the record
+    (gap-aware pooling over ``segments``), a non-negative weighted fit of
+    ``σ²(τ) = N²/τ + F² + K²τ/3`` (white rate, flat/flicker, rate random walk; weights from the
+    estimator's χ² confidence, NIST SP1065), evaluated at τ = T, the record length:
+    ``u = sqrt(N²/T + F² + K²T/3)``. σ_A²(T) is the variance of a mean over T for white and
+    random-walk noise (IEEE 952 Annex C relations), so this is honest for correlated noise,
+    unlike σ/√n. Never smaller than the white-noise value σ(τ0)·sqrt(τ0/T).
+    """
+    from .noise.deviations import compute_deviation
+
+    rate = np.asarray(rate, dtype=np.float64)
+    n = rate.size
+    if n < MIN_RECORD_SAMPLES:
+        raise AnalysisError(f"only {n} samples: too few to estimate a bias uncertainty "
+                            f"(need at least {MIN_RECORD_SAMPLES})")
+    T = n * tau0
+    naive = float(np.std(rate, ddof=1) / math.sqrt(n))
+    segs = segments or [(0, n)]
+    dev = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus="octave",
+                            stop_ratio=4, segments=segs, noise_id=False)
+    tau = np.asarray(dev.tau, float)
+    sig = np.asarray(dev.sigma, float)
+    ok = np.isfinite(sig) & (sig > 0)
+    tau, sig = tau[ok], sig[ok]
+    if tau.size == 0:
+        raise AnalysisError("the rate is constant: the bias uncertainty cannot be estimated "
+                            "(quantised to a single level? check the scale factor)")
+    nterms = np.asarray(dev.n, float)[ok]
+    # relative std of the Allan-variance estimate ~ sqrt(2/edf); edf ~ number of terms*(τ0/τ)
+    edf = np.maximum(nterms * np.minimum(1.0, 1.5 * tau0 / tau), 1.0)
+    w = 1.0 / (sig**2 * np.sqrt(2.0 / edf))
+    A = np.column_stack([1.0 / tau, np.ones_like(tau), tau / 3.0]) * w[:, None]
+    from scipy.optimize import nnls
+
+    coef, _ = nnls(A, sig**2 * w)
+    var_T = coef[0] / T + coef[1] + coef[2] * T
+    white_floor = sig[0] ** 2 * tau[0] / T
+    var_T = max(var_T, white_floor)
+    return MeanUncertainty(
+        sigma_dph=math.sqrt(var_T), record_s=T,
+        method="Allan variance at the record length from a weighted N/flat/K fit of the "
+               "overlapping Allan deviation (octave τ up to T/4)",
+        naive_sigma_dph=naive, N_dph_rt_s=math.sqrt(coef[0]),
+        flicker_level_dph=math.sqrt(coef[1]), K_dph_per_rt_s=math.sqrt(coef[2]),
+    )
+
+
+# ----------------------------------------------------------------------------- single run
+@dataclass
+class BiasResult:
+    """D_F of one run (or one position of a multi-position run)."""
+
+    source: str
+    axis: str
+    label: str  # run or position label
+    samples: int
+    skip_s: float
+    duration_s: float
+    mean_output_dph: float  # mean indicated rate before earth-rate removal
+    earth_rate_ia_dph: float | None
+    bias_dph: float  # D_F
+    uncertainty: MeanUncertainty
+    site: Site | None
+    mean_temperature_c: float | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def sigma_dph(self) -> float:
+        return self.uncertainty.sigma_dph
+
+    def to_dict(self) -> dict:
+        return {
+            "source": self.source,
+            "axis": self.axis,
+            "label": self.label,
+            "samples": self.samples,
+            "skip_s": self.skip_s,
+            "duration_s": self.duration_s,
+            "mean_output_dph": self.mean_output_dph,
+            "earth_rate_ia_dph": self.earth_rate_ia_dph,
+            "bias_D_F_dph": self.bias_dph,
+            "bias_sigma_dph": self.sigma_dph,
+            "bias_2sigma_dph": 2 * self.sigma_dph,
+            "uncertainty": self.uncertainty.to_dict(),
+            "site": self.site.to_dict() if self.site else None,
+            "mean_temperature_c": self.mean_temperature_c,
+            "notes": self.notes,
+        }
+
+
+def _mean_over_segments(x: np.ndarray, segs: list[tuple[int, int]]) -> float:
+    tot = sum(float(np.sum(x[a:b])) for a, b in segs)
+    cnt = sum(b - a for a, b in segs)
+    return tot / cnt
+
+
+def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
+                  earth_rate: bool = True, label: str | None = None) -> BiasResult:
+    """D_F of a static run: mean rate after ``skip_s`` minus the earth-rate component along
+    the IA (from ``log.site``; without a site the earth rate is not removed and a note says
+    so). Uncertainty from :func:`mean_uncertainty`.
+    """
+    axis = axis or log.axes[0]
+    if axis not in log.rates:
+        raise InputError(f"{log.source}: no axis {axis!r}; axes are {', '.join(log.axes)}")
+    if skip_s >= log.duration_s:
+        raise InputError(f"{log.source}: --skip {skip_s:g} s removes the whole record "
+                         f"({log.duration_s:.6g} s long); use a shorter warm-up trim")
+    part = log.skip(skip_s)
+    if part.n < MIN_RECORD_SAMPLES:
+        raise AnalysisError(f"{log.source}: only {part.n} samples after the warm-up trim; "
+                            f"need at least {MIN_RECORD_SAMPLES}")
+    rate = part.rates[axis]
+    segs = part.segments
+    mean = _mean_over_segments(rate, segs)
+    notes: list[str] = []
+    if len(segs) > 1:
+        notes.append(f"{len(segs)} contiguous segments (gaps not bridged); mean and Allan "
+                     "deviation pooled over segments")
+    er = None
+    if earth_rate and log.site is not None:
+        er = log.site.earth_rate_dph()
+    elif earth_rate:
+        notes.append("no site given (--latitude/--ia): earth rate NOT removed; D_F includes it")
+    unc = mean_uncertainty(rate, part.tau0, segs)
+    temps = [np.mean(v) for v in part.temperature.values()]
+    return BiasResult(
+        source=log.source, axis=axis, label=label or log.source, samples=part.n,
+        skip_s=skip_s, duration_s=part.duration_s, mean_output_dph=mean,
+        earth_rate_ia_dph=er, bias_dph=mean - (er or 0.0), uncertainty=unc, site=log.site,
+        mean_temperature_c=float(np.mean(temps)) if temps else None, notes=notes,
+    )
+
+
+# ----------------------------------------------------------------------------- repeatability
+@dataclass
+class Repeatability:
+    """Run-to-run repeatability of D_F (IEEE 952 §12.11.4.1.1)."""
+
+    runs: list[BiasResult]
+    mean_dph: float
+    sigma_1_dph: float  # sample standard deviation over runs (ddof = 1)
+    spread_dph: float  # max − min
+    within_run_sigma_dph: float  # RMS of the runs' own uncertainties
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {
+            "runs": len(self.runs),
+            "mean_bias_dph": self.mean_dph,
+            "repeatability_1sigma_dph": self.sigma_1_dph,
+            "repeatability_max_spread_dph": self.spread_dph,
+            "within_run_sigma_rms_dph": self.within_run_sigma_dph,
+            "notes": self.notes,
+        }
+
+
+def repeatability(runs: list[BiasResult]) -> Repeatability:
+    """1σ (ddof = 1) and max − min spread of D_F over runs; notes when the spread is not
+    larger than the runs' own uncertainties (then it is not resolved)."""
+    if len(runs) < 2:
+        raise InputError("repeatability needs at least two runs")
+    b = np.array([r.bias_dph for r in runs])
+    u = np.array([r.sigma_dph for r in runs])
+    s1 = float(np.std(b, ddof=1))
+    within = float(np.sqrt(np.mean(u**2)))
+    notes = []
+    if s1 < 1.5 * within:
+        notes.append("the run-to-run spread is comparable with the runs' own uncertainty: "
+                     "repeatability is at most this (longer runs would resolve it)")
+    return Repeatability(runs, float(np.mean(b)), s1, float(b.max() - b.min()), within, notes)
+
+
+# ----------------------------------------------------------------------------- multi-position
+@dataclass
+class MultiPositionResult:
+    """Bias separated from earth rate by a multi-position test."""
+
+    positions: list[BiasResult]
+    bias_dph: float
+    bias_sigma_dph: float
+    earth_rate_fit_dph: dict[str, float | None]  # north/east/up components fitted (None: fixed)
+    earth_rate_fit_sigma_dph: dict[str, float | None]
+    latitude_deg: float | None  # given
+    latitude_est_deg: float | None
+    latitude_est_sigma_deg: float | None
+    azimuth_misalignment_deg: float | None
+    azimuth_misalignment_sigma_deg: float | None
+    ia_tilt_deg: float | None  # apparent IA tilt north from the up/down earth-rate component
+    residuals_dph: list[float]
+    chi2_dof: float | None
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {
+            "positions": [
+                {"label": p.label, "source": p.source, "mean_output_dph": p.mean_output_dph,
+                 "sigma_dph": p.sigma_dph, "duration_s": p.duration_s,
+                 "ia_azimuth_deg": p.site.ia_azimuth_deg if p.site else None,
+                 "ia_elevation_deg": p.site.ia_elevation_deg if p.site else None,
+                 "residual_dph": r}
+                for p, r in zip(self.positions, self.residuals_dph)
+            ],
+            "bias_D_F_dph": self.bias_dph,
+            "bias_sigma_dph": self.bias_sigma_dph,
+            "earth_rate_fit_dph": self.earth_rate_fit_dph,
+            "earth_rate_fit_sigma_dph": self.earth_rate_fit_sigma_dph,
+            "earth_rate_expected_dph": (
+                dict(zip(("north", "east", "up"),
+                         map(float, earth_rate_vector(self.latitude_deg))))
+                if self.latitude_deg is not None else None),
+            "latitude_given_deg": self.latitude_deg,
+            "latitude_est_deg": self.latitude_est_deg,
+            "latitude_est_sigma_deg": self.latitude_est_sigma_deg,
+            "azimuth_misalignment_deg": self.azimuth_misalignment_deg,
+            "azimuth_misalignment_sigma_deg": self.azimuth_misalignment_sigma_deg,
+            "ia_tilt_north_deg": self.ia_tilt_deg,
+            "chi2_per_dof": self.chi2_dof,
+            "notes": self.notes,
+        }
+
+
+def multi_position(positions: list[BiasResult], latitude_deg: float | None) -> MultiPositionResult:
+    """Separate D_F from earth rate: weighted least squares of
+    ``m_p = D_F + Ω_N·u_N,p + Ω_E·u_E,p + Ω_U·u_U,p`` over positions p (IA unit vector u_p in the
+    north/east/up frame; weights 1/σ_p²). Earth-rate components the positions cannot resolve
+    are fixed at their values for the given latitude. Derived: latitude estimate (from the
+    fitted components), the azimuth misalignment δA = −atan2(Ω_E, Ω_N) (the horizontal IA
+    positions point δA clockwise of nominal; the true east component is zero), and the
+    apparent IA tilt from up/down positions.
+    """
+    if len(positions) < 2:
+        raise InputError("a multi-position test needs at least two IA positions")
+    if any(p.site is None for p in positions):
+        raise InputError("every position needs its IA direction (a position column, --positions, "
+                         "or [site] ia per file)")
+    U = np.array([ia_unit_vector(p.site.ia_azimuth_deg, p.site.ia_elevation_deg) for p in positions])
+    m = np.array([p.mean_output_dph for p in positions])
+    s = np.array([p.sigma_dph for p in positions])
+    w = 1.0 / s
+    names = ("north", "east", "up")
+    # which earth-rate components the positions resolve (together with the bias column)
+    resolvable = []
+    base = np.ones((len(positions), 1))
+    for j in range(3):
+        trial = np.column_stack([base] + [U[:, k] for k in resolvable + [j]])
+        if np.linalg.matrix_rank(trial, tol=1e-6) == trial.shape[1]:
+            resolvable.append(j)
+    fixed = [j for j in range(3) if j not in resolvable]
+    notes: list[str] = []
+    if fixed and latitude_deg is None:
+        raise InputError("these positions do not resolve every earth-rate component; give the "
+                         "latitude (--latitude) so the others can be fixed")
+    er_known = earth_rate_vector(latitude_deg) if latitude_deg is not None else np.zeros(3)
+    y = m - (U[:, fixed] @ er_known[fixed] if fixed else 0.0)
+    X = np.column_stack([np.ones(len(positions))] + [U[:, j] for j in resolvable])
+    if X.shape[0] < X.shape[1]:
+        raise InputError("too few positions for the unknowns")
+    Xw, yw = X * w[:, None], y * w
+    beta, *_ = np.linalg.lstsq(Xw, yw, rcond=None)
+    cov = np.linalg.inv(Xw.T @ Xw)
+    resid = y - X @ beta
+    dof = X.shape[0] - X.shape[1]
+    chi2 = float(np.sum((resid * w) ** 2) / dof) if dof > 0 else None
+    if chi2 is not None and chi2 > 1:
+        cov = cov * chi2  # scale by the observed scatter (Birge ratio)
+        notes.append(f"position scatter exceeds the noise (χ²/dof = {chi2:.2f}); uncertainties "
+                     "scaled up accordingly")
+    sig = np.sqrt(np.diag(cov))
+    fit = {n: None for n in names}
+    fit_s = {n: None for n in names}
+    for k, j in enumerate(resolvable, start=1):
+        fit[names[j]] = float(beta[k])
+        fit_s[names[j]] = float(sig[k])
+    # latitude check
+    lat_est = lat_sig = None
+    comps = {names[j]: beta[k] for k, j in enumerate(resolvable, start=1)}
+    if "up" in comps and ("north" in comps):
+        h = math.hypot(comps["north"], comps.get("east", 0.0))
+        lat_est = math.degrees(math.atan2(comps["up"], h))
+        # first-order error propagation
+        ju = h / (h * h + comps["up"] ** 2)
+        jh = -comps["up"] / (h * h + comps["up"] ** 2)
+        iu = resolvable.index(2) + 1
+        iN = resolvable.index(0) + 1
+        var = ju**2 * cov[iu, iu] + jh**2 * cov[iN, iN] + 2 * ju * jh * cov[iu, iN]
+        lat_sig = math.degrees(math.sqrt(max(var, 0.0)))
+    elif "up" in comps:
+        r = comps["up"] / OMEGA_E_DPH
+        if abs(r) <= 1:
+            lat_est = math.degrees(math.asin(r))
+            iu = resolvable.index(2) + 1
+            lat_sig = math.degrees(sig[iu] / (OMEGA_E_DPH * max(math.sqrt(1 - r * r), 1e-9)))
+        else:
+            notes.append("fitted vertical earth-rate component exceeds Ω_E: check the bias "
+                         "stability between positions")
+    elif "north" in comps:
+        r = math.hypot(comps["north"], comps.get("east", 0.0)) / OMEGA_E_DPH
+        if r <= 1 and latitude_deg is not None:
+            lat_est = math.copysign(math.degrees(math.acos(r)), latitude_deg)
+            iN = resolvable.index(0) + 1
+            lat_sig = math.degrees(sig[iN] / (OMEGA_E_DPH * max(math.sqrt(1 - r * r), 1e-9)))
+    az = az_sig = None
+    if "north" in comps and "east" in comps:
+        # an IA turned δA clockwise (towards east) from its nominal azimuth makes the fit see
+        # an east earth-rate component −Ω_h·sin δA: δA = −atan2(Ω_E,fit, Ω_N,fit)
+        az = -math.degrees(math.atan2(comps["east"], comps["north"]))
+        iE = resolvable.index(1) + 1
+        az_sig = math.degrees(sig[iE] / max(abs(comps["north"]), 1e-12))
+    elif "east" in comps and latitude_deg is not None:
+        h = OMEGA_E_DPH * math.cos(math.radians(latitude_deg))
+        if h > 1e-9:
+            az = -math.degrees(math.asin(max(-1.0, min(1.0, comps["east"] / h))))
+            iE = resolvable.index(1) + 1
+            az_sig = math.degrees(sig[iE] / h)
+    tilt = None
+    if "up" in comps and latitude_deg is not None and "north" not in comps:
+        r = max(-1.0, min(1.0, comps["up"] / OMEGA_E_DPH))
+        tilt = math.degrees(math.asin(r)) - latitude_deg
+        notes.append("up/down positions cannot tell a latitude error from an IA tilt towards "
+                     "north: the tilt shown is the equivalent of the whole difference")
+    if fixed:
+        notes.append("earth-rate component(s) " + ", ".join(names[j] for j in fixed)
+                     + " not resolved by these positions: fixed at the value for the given latitude")
+    return MultiPositionResult(
+        positions=positions, bias_dph=float(beta[0]), bias_sigma_dph=float(sig[0]),
+        earth_rate_fit_dph=fit, earth_rate_fit_sigma_dph=fit_s, latitude_deg=latitude_deg,
+        latitude_est_deg=lat_est, latitude_est_sigma_deg=lat_sig,
+        azimuth_misalignment_deg=az, azimuth_misalignment_sigma_deg=az_sig, ia_tilt_deg=tilt,
+        residuals_dph=[float(r) for r in resid], chi2_dof=chi2, notes=notes,
+    )
+
+
+def split_positions(log: GyroLog, settle_s: float = 0.0) -> list[tuple[str, GyroLog]]:
+    """Split a log with a position column into one log per contiguous position, dropping
+    ``settle_s`` after every change (the fixture moved). Labels must be IA directions."""
+    if log.position is None:
+        raise InputError(f"{log.source}: no position column; name it with --position-col")
+    lab = log.position.astype(str)
+    change = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+    cuts = [0, *change.tolist(), log.n]
+    out = []
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        label = lab[a]
+        if not label:
+            continue
+        part = log.slice(a, b).skip(settle_s)
+        if part.n < MIN_RECORD_SAMPLES:
+            raise AnalysisError(f"{log.source}: position {label!r} at t = {log.t[a]:.6g} s is "
+                                f"too short after the {settle_s:g} s settling time")
+        az, el, name = parse_ia(label)
+        lat = log.site.latitude_deg if log.site else None
+        part.site = Site(lat if lat is not None else float("nan"), az, el, name)
+        out.append((name, part))
+    return out

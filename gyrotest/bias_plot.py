@@ -1,0 +1,68 @@
+"""Plot for ``gyrotest bias``: the rate of each run with D_F and its 2σ band."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .plotting import COLORS, new_figure, save_figure
+
+
+def block_means(t: np.ndarray, x: np.ndarray, target: int = 2000) -> tuple[np.ndarray, np.ndarray]:
+    """Average ``x`` in consecutive blocks so that about ``target`` points remain."""
+    n = len(x)
+    k = max(1, n // target)
+    m = (n // k) * k
+    if m == 0:
+        return t, x
+    return t[:m].reshape(-1, k).mean(axis=1), x[:m].reshape(-1, k).mean(axis=1)
+
+
+def plot_bias(logs, runs, multi, path, *, skip_s: float = 0.0):
+    """Rate (block means) vs time per run, the warm-up trim shaded, D_F ± 2σ; and for a
+    multi-position test the position means against the fitted model."""
+    nrow = 2 if multi else 1
+    fig, axes = new_figure(nrow, 1, size=(8, 4.6 * nrow))
+    ax = axes[0] if multi else axes
+    for i, (g, r) in enumerate(zip(logs, runs)):
+        col = COLORS[i % len(COLORS)]
+        name = os.path.basename(r.label) if not multi else r.label
+        th = g.t / 3600.0
+        t, x = block_means(th, g.rates[r.axis], 3000)
+        ax.plot(t, x, color=col, lw=0.6, alpha=0.35)
+        t2, x2 = block_means(th, g.rates[r.axis], 150)
+        ax.plot(t2, x2, color=col, lw=1.6, label=f"{name}: indicated rate (fine and coarse means)")
+        if not multi:
+            er = r.earth_rate_ia_dph or 0.0
+            t_end = th[-1] if len(th) else 0.0
+            lo = r.mean_output_dph - 2 * r.sigma_dph
+            ax.hlines(r.mean_output_dph, skip_s / 3600.0, t_end, color=col, ls="--", lw=1.3,
+                      label=f"mean = D_F + Ω_IA = {r.mean_output_dph:.5g} deg/h "
+                            f"(Ω_IA = {er:.5g})")
+            ax.fill_between([skip_s / 3600.0, t_end], lo, lo + 4 * r.sigma_dph, color=col,
+                            alpha=0.18, label=f"D_F = {r.bias_dph:.5g} ± {r.sigma_dph:.2g} deg/h "
+                                              "(1σ); band ±2σ")
+    if skip_s > 0:
+        ax.axvspan(0, skip_s / 3600.0, color="0.5", alpha=0.15, label="warm-up trim")
+    ax.set_xlabel("time, h")
+    ax.set_ylabel("indicated rate, deg/h")
+    ax.set_title("Static run(s): indicated rate and bias estimate")
+    ax.legend(loc="best")
+    if multi:
+        ax2 = axes[1]
+        labels = [p.label for p in multi.positions]
+        m = np.array([p.mean_output_dph for p in multi.positions])
+        s = np.array([p.sigma_dph for p in multi.positions])
+        x = np.arange(len(m))
+        ax2.errorbar(x, m, yerr=2 * s, fmt="o", color=COLORS[0], capsize=4,
+                     label="position mean ± 2σ")
+        model = m - np.array(multi.residuals_dph)
+        ax2.plot(x, model, "x", color=COLORS[1], ms=9, mew=2, label="fit: D_F + Ω_E·u")
+        ax2.axhline(multi.bias_dph, color=COLORS[2], ls="--",
+                    label=f"D_F = {multi.bias_dph:.4g} ± {multi.bias_sigma_dph:.2g} deg/h")
+        ax2.set_xticks(x, labels, rotation=15)
+        ax2.set_ylabel("mean output, deg/h")
+        ax2.set_title("Multi-position test")
+        ax2.legend(loc="best")
+    return save_figure(fig, path)

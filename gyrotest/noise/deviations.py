@@ -1,0 +1,1196 @@
+"""Allan-family deviations of gyro rate, increment or angle records (pure numpy).
+
+Input kinds
+-----------
+Every public function takes ``input_kind`` explicitly — there is no default that silently
+assumes angle ("phase") data:
+
+* ``"rate"``: rate samples Ω_k (e.g. deg/h), each the average over the sample interval τ0 — the
+  "fractional frequency" of time-and-frequency metrology. Results are in the rate unit.
+* ``"increment"``: angle increments per sample ΔΘ_k = Ω_k·τ0 (pulse count × scale factor).
+  Results are in angle unit per second.
+* ``"angle"``: cumulative angle Θ_k (the "phase"). Results are in angle unit per second.
+
+Internally the record becomes the angle series θ with a leading 0,
+θ = [0, cumsum(Ω − Ω̄)·τ0] (rate), [0, cumsum(ΔΘ − mean ΔΘ)] (increment), or Θ minus the
+straight line through its first and last points (angle). Removing the mean rate first keeps
+the cumulative sum small (precision; the PTB fix AllanTools also applies) and changes none of
+the statistics here: all of them are invariant to a constant rate offset — the finite
+differences cancel it, TOTDEV's odd reflection continues a straight line, and MTOTDEV removes
+each subsequence's own frequency offset. (This is checked in the tests.)
+
+Statistics (τ = m·τ0, N angle points θ_0 … θ_{N−1}; NIST SP1065 equation numbers)
+------------------------------------------------------------------------------------
+========= ============================================================================= =====
+adev      σ² = Σ_k (θ_{(k+2)m} − 2θ_{(k+1)m} + θ_{km})² / (2τ²n), n = ⌊(N−1)/m⌋ − 1     (7)
+oadev     σ² = Σ_{k=0}^{N−2m−1} (θ_{k+2m} − 2θ_{k+m} + θ_k)² / (2τ²(N−2m))              (11)
+mdev      σ² = Σ_j [Σ_{i=j}^{j+m−1} (θ_{i+2m} − 2θ_{i+m} + θ_i)]² / (2m²τ²(N−3m+1))      (14)
+tdev      σ_x = τ/√3 · mdev (angle unit)                                                (15)
+hdev      σ² = Σ_k (θ_{(k+3)m} − 3θ_{(k+2)m} + 3θ_{(k+1)m} − θ_{km})² / (6τ²n)           (18)
+ohdev     σ² = Σ_{k=0}^{N−3m−1} (θ_{k+3m} − 3θ_{k+2m} + 3θ_{k+m} − θ_k)² / (6τ²(N−3m))  (20)
+totdev    OADEV of the series reflected at both ends (θ*_{−j} = 2θ_0 − θ_j, θ*_{N−1+j} =
+          2θ_{N−1} − θ_{N−1−j}), σ² = Σ_{i=1}^{N−2} (θ*_{i−m} − 2θ_i + θ*_{i+m})²/(2τ²(N−2)) (25)
+mtotdev   MVAR of each 3m-point subsequence with its half-average slope removed and extended
+          by even reflection to 9m points, averaged over the N−3m+1 subsequences          (27)
+akdev     Allan–Krobka dispersion (Krobka, seed 001 eq. 5.10):
+          σ²_AK = ½⟨(ω̄_{k+m} − ω̄_k)²⟩ − ½⟨ω̄_{k+m} − ω̄_k⟩² over overlapping cluster
+          averages ω̄_k = (θ_{k+m} − θ_k)/τ; zero for a rate ramp Ω = Rt (OADEV = Rτ/√2)
+hkdev     the Hadamard analogue: (⟨h²⟩ − ⟨h⟩²)/(6τ²), h the third difference of ohdev
+========= ============================================================================= =====
+
+IEEE Std 952-1997 Annex C gives the Allan variance of gyro rate in exactly the overlapping
+form of ``oadev`` (GYRO_REFERENCE §4). TOTDEV and MTOTDEV are computed *without* bias
+correction (Stable32's "no bias correction" setting), in the phase (angle) domain of SP1065.
+
+Cost: every statistic is O(N) per τ, vectorised and processed in cache-sized chunks so the
+temporaries stay small; the only full-size array is θ (1× the input). MTOTDEV uses an exact
+O(N)-per-τ reformulation (see :func:`_mtot_sum`) instead of the O(N·m) direct sum.
+
+Gaps
+----
+``segments`` is a list of (start, stop) sample-index ranges (Python slice convention, on the
+input array) of contiguous, uniformly sampled data. Each segment is integrated separately
+(its own leading zero and mean rate); each estimator's sum of squares and term count are
+added over segments and the variance is the pooled sum / pooled count — no difference ever
+spans a gap. TOTDEV reflects at the ends of each segment; MTOTDEV subsequences lie within one
+segment. The EDF of a pooled estimate is 1/Σ_s (w_s²/edf_s), w_s = n_s/Σn (independent
+segments). The τ grid is built on the longest segment.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import AnalysisError, InputError
+from . import edf as _edf
+from .taus import STOP_RATIOS, tau_grid
+
+__all__ = [
+    "DEVIATION_KINDS",
+    "INPUT_KINDS",
+    "AngleSeries",
+    "DeviationResult",
+    "adev",
+    "akdev",
+    "angle_series",
+    "compute_deviation",
+    "hdev",
+    "hkdev",
+    "mdev",
+    "mtotdev",
+    "oadev",
+    "ohdev",
+    "tdev",
+    "totdev",
+]
+
+INPUT_KINDS = ("rate", "increment", "angle")
+DEVIATION_KINDS = (
+    "oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev", "hkdev",
+)
+_LONG_NAMES = {
+    "adev": "Allan deviation (non-overlapping)",
+    "oadev": "overlapping Allan deviation",
+    "mdev": "modified Allan deviation",
+    "tdev": "time deviation",
+    "hdev": "Hadamard deviation (non-overlapping)",
+    "ohdev": "overlapping Hadamard deviation",
+    "totdev": "total deviation",
+    "mtotdev": "modified total deviation",
+    "akdev": "Allan-Krobka dispersion",
+    "hkdev": "Hadamard-Krobka dispersion",
+}
+
+#: Elements per chunk of the streaming kernels (64 Ki float64 = 512 KiB: fits L2 with the
+#: three input streams; measured fastest on the reference VM, see benchmarks/README.md).
+CHUNK = 1 << 16
+
+
+# ---------------------------------------------------------------------------------------------
+# Result type
+# ---------------------------------------------------------------------------------------------
+
+
+def _json_float(v: float) -> float | None:
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+@dataclass
+class DeviationResult:
+    """A deviation table (one row per τ), Stable32-like.
+
+    Fields: ``kind`` (e.g. "oadev"), ``input_kind``, ``tau0`` (s), ``m`` (averaging factors),
+    ``tau`` (s), ``n`` (number of terms of the estimator, Stable32's "#"), ``alpha`` (noise
+    exponent used for the EDF: −2 … 2, down to −4 for the Hadamard family), ``alpha_method``
+    (per τ: "acf", "b1", "b1+rn", "reused", "assumed", "forced"), ``edf``, ``sigma``,
+    ``sigma_lo``/``sigma_hi`` (χ² interval at ``confidence``), ``ci_method``, ``unit`` (of
+    sigma), ``notes`` (gap pooling, τ dropped or moved, assumptions).
+    """
+
+    kind: str
+    input_kind: str
+    tau0: float
+    m: np.ndarray
+    tau: np.ndarray
+    n: np.ndarray
+    alpha: np.ndarray
+    edf: np.ndarray
+    sigma: np.ndarray
+    sigma_lo: np.ndarray
+    sigma_hi: np.ndarray
+    confidence: float
+    ci_method: str
+    unit: str
+    notes: list[str] = field(default_factory=list)
+    alpha_method: list[str] = field(default_factory=list)
+    n_samples: int = 0
+    segments: list[tuple[int, int]] = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return len(self.m)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-safe dict: lists of Python floats/ints, None instead of NaN."""
+        return {
+            "kind": self.kind,
+            "name": _LONG_NAMES.get(self.kind, self.kind),
+            "input_kind": self.input_kind,
+            "tau0_s": float(self.tau0),
+            "unit": self.unit,
+            "confidence": float(self.confidence),
+            "ci_method": self.ci_method,
+            "n_samples": int(self.n_samples),
+            "segments": [[int(a), int(b)] for a, b in self.segments],
+            "m": [int(v) for v in self.m],
+            "tau_s": [float(v) for v in self.tau],
+            "n": [int(v) for v in self.n],
+            "alpha": [int(v) for v in self.alpha],
+            "alpha_method": list(self.alpha_method),
+            "edf": [_json_float(v) for v in self.edf],
+            "sigma": [_json_float(v) for v in self.sigma],
+            "sigma_lo": [_json_float(v) for v in self.sigma_lo],
+            "sigma_hi": [_json_float(v) for v in self.sigma_hi],
+            "notes": list(self.notes),
+        }
+
+    def to_frame(self):
+        """pandas DataFrame with Stable32's column order: tau, m, n, alpha, edf, sigma_lo,
+        sigma, sigma_hi."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            {
+                "tau": np.asarray(self.tau, dtype=float),
+                "m": np.asarray(self.m, dtype=np.int64),
+                "n": np.asarray(self.n, dtype=np.int64),
+                "alpha": np.asarray(self.alpha, dtype=np.int64),
+                "edf": np.asarray(self.edf, dtype=float),
+                "sigma_lo": np.asarray(self.sigma_lo, dtype=float),
+                "sigma": np.asarray(self.sigma, dtype=float),
+                "sigma_hi": np.asarray(self.sigma_hi, dtype=float),
+            }
+        )
+
+
+# ---------------------------------------------------------------------------------------------
+# Input → angle series
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass
+class AngleSeries:
+    """The integrated angle series θ of one or more gap-free segments.
+
+    ``theta`` holds all segments back to back; ``bounds`` are (start, stop) of each segment in
+    ``theta``; the true angle is ``scale·theta`` (scale = τ0 for rate input, whose cumulative
+    sum is kept in rate × samples to save a pass; 1 otherwise). ``segments`` are the input-index
+    ranges, ``n_data`` the number of input samples used, ``n_longest`` the samples of the
+    longest segment.
+    """
+
+    theta: np.ndarray
+    bounds: list[tuple[int, int]]
+    scale: float
+    tau0: float
+    input_kind: str
+    segments: list[tuple[int, int]]
+    n_data: int
+    n_longest: int
+    notes: list[str] = field(default_factory=list)
+
+    def parts(self) -> list[np.ndarray]:
+        """Views of θ, one per segment."""
+        return [self.theta[a:b] for a, b in self.bounds]
+
+
+def _as_float_array(data, what: str = "data") -> np.ndarray:
+    try:
+        arr = np.asarray(data, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what} is not numeric: {exc}") from None
+    if arr.ndim != 1:
+        raise InputError(f"{what} must be a 1-D array of samples, got shape {arr.shape}")
+    return arr
+
+
+def _check_kind(input_kind: str) -> str:
+    if input_kind not in INPUT_KINDS:
+        raise InputError(
+            f"input_kind must be one of {', '.join(INPUT_KINDS)} (got {input_kind!r}); "
+            "say explicitly whether the samples are rates, per-sample angle increments or "
+            "cumulative angles"
+        )
+    return input_kind
+
+
+def _normalise_segments(segments, n: int) -> list[tuple[int, int]]:
+    if segments is None:
+        return [(0, n)]
+    segs: list[tuple[int, int]] = []
+    for s in segments:
+        try:
+            a, b = (int(s[0]), int(s[1]))
+        except (TypeError, ValueError, IndexError):
+            raise InputError(f"segment {s!r} is not a (start, stop) pair of sample indices") from None
+        if not 0 <= a < b <= n:
+            raise InputError(
+                f"segment ({a}, {b}) outside the record of {n} samples; use 0 <= start < stop <= {n}"
+            )
+        segs.append((a, b))
+    if not segs:
+        raise InputError("empty segment list; give at least one (start, stop) range")
+    segs.sort()
+    for (a0, b0), (a1, _) in zip(segs, segs[1:]):
+        if a1 < b0:
+            raise InputError(f"segments ({a0}, {b0}) and ({a1}, ...) overlap; segments must be disjoint")
+    return segs
+
+
+def _first_bad(arr: np.ndarray) -> int:
+    for s in range(0, arr.size, CHUNK):
+        bad = ~np.isfinite(arr[s : s + CHUNK])
+        if bad.any():
+            return s + int(np.argmax(bad))
+    return -1
+
+
+def _span(x: np.ndarray) -> tuple[float, float]:
+    """(max − min, max |x|) of a segment, streaming, no full-size temporaries."""
+    return float(np.max(x) - np.min(x)), float(max(abs(np.max(x)), abs(np.min(x))))
+
+
+def _diff_span(x: np.ndarray) -> tuple[float, float]:
+    """(max − min, max |·|) of the first differences of x, chunked."""
+    lo, hi = math.inf, -math.inf
+    for s in range(0, x.size - 1, CHUNK):
+        d = np.diff(x[s : s + CHUNK + 1])
+        lo = min(lo, float(d.min()))
+        hi = max(hi, float(d.max()))
+    return hi - lo, max(abs(lo), abs(hi))
+
+
+def angle_series(
+    data, tau0: float, *, input_kind: str, segments: Sequence[tuple[int, int]] | None = None
+) -> AngleSeries:
+    """Convert rate, increment or angle samples to the angle series θ (see module docstring).
+
+    θ = [0, cumsum(Ω − Ω̄)]·τ0 for rate input (kept as [0, cumsum(Ω − Ω̄)] with ``scale`` = τ0),
+    [0, cumsum(ΔΘ − mean)] for increments, Θ − (Θ_0 + k·(Θ_end − Θ_0)/(n − 1)) for angles; per
+    segment. Memory: one float64 array of about the input size; the cumulative sum is done in
+    chunks with a carry, so no other full-size temporary is made.
+
+    Raises :class:`InputError` for NaN/inf samples, an empty record or bad segments, and
+    :class:`AnalysisError` for a constant rate (every deviation would be zero).
+    """
+    _check_kind(input_kind)
+    if not (isinstance(tau0, (int, float, np.floating)) and math.isfinite(tau0) and tau0 > 0):
+        raise InputError(f"sample interval tau0 must be a number > 0 s, got {tau0!r}")
+    arr = _as_float_array(data)
+    n = arr.size
+    if n == 0:
+        raise InputError("empty record: no samples to analyse")
+    segs = _normalise_segments(segments, n)
+    notes: list[str] = []
+    # NaN/inf check without a full-size temporary: any NaN/inf makes the sum non-finite.
+    if not math.isfinite(float(np.sum(arr))):
+        i = _first_bad(arr)
+        if i >= 0:
+            raise InputError(
+                f"{input_kind} sample {i} is {arr[i]!r}: remove or interpolate it, or pass "
+                "segments that exclude it (gap-aware analysis)"
+            )
+        raise InputError(f"{input_kind} samples overflow float64; rescale the data")
+    per = 1 if input_kind != "angle" else 0  # extra leading point per segment
+    total = sum(b - a + per for a, b in segs)
+    theta = np.empty(total, dtype=np.float64)
+    bounds: list[tuple[int, int]] = []
+    pos = 0
+    any_variation = False
+    for a, b in segs:
+        x = arr[a:b]
+        L = b - a + per
+        out = theta[pos : pos + L]
+        if input_kind == "angle":
+            if x.size >= 2:
+                span, mag = _diff_span(x)
+                any_variation |= span > 8 * np.finfo(float).eps * max(mag, 1e-300) * 4
+            slope = (x[-1] - x[0]) / (x.size - 1) if x.size > 1 else 0.0
+            x0 = x[0]
+            for s in range(0, x.size, CHUNK):
+                e = min(x.size, s + CHUNK)
+                k = np.arange(s, e, dtype=np.float64)
+                k *= slope
+                np.subtract(x[s:e], x0, out=out[s:e])
+                out[s:e] -= k
+        else:
+            span, mag = _span(x)
+            any_variation |= span > 4 * np.finfo(float).eps * max(mag, 1e-300)
+            mean = float(np.mean(x))
+            out[0] = 0.0
+            carry = 0.0
+            for s in range(0, x.size, CHUNK):
+                e = min(x.size, s + CHUNK)
+                buf = out[1 + s : 1 + e]
+                np.subtract(x[s:e], mean, out=buf)
+                np.cumsum(buf, out=buf)
+                if carry:
+                    buf += carry
+                carry = float(buf[-1])
+        bounds.append((pos, pos + L))
+        pos += L
+    if not any_variation:
+        what = "angle increases at a constant rate" if input_kind == "angle" else (
+            f"{input_kind} is constant ({arr[segs[0][0]]!r} in every sample)"
+        )
+        raise AnalysisError(
+            f"the {what}: every deviation is exactly zero and no noise can be identified; "
+            "check the channel, scale factor and quantization (a gyro output this quiet is "
+            "below its resolution)"
+        )
+    if len(segs) > 1:
+        notes.append(
+            f"gap-aware estimate: {len(segs)} segments analysed separately, sums of squares and "
+            "term counts pooled; no difference spans a gap"
+        )
+    lengths = [b - a for a, b in segs]
+    return AngleSeries(
+        theta=theta,
+        bounds=bounds,
+        scale=float(tau0) if input_kind == "rate" else 1.0,
+        tau0=float(tau0),
+        input_kind=input_kind,
+        segments=segs,
+        n_data=int(sum(lengths)),
+        n_longest=int(max(lengths)),
+        notes=notes,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Streaming kernels: each returns a sum of squares (and a term count) for one contiguous θ
+# ---------------------------------------------------------------------------------------------
+
+
+def _d2_sumsq(v: np.ndarray, lag: int, center: float = 0.0) -> tuple[float, int]:
+    """Σ_k (v_{k+2lag} − 2v_{k+lag} + v_k − center)² over k = 0 … len(v)−2lag−1, chunked.
+
+    One preallocated chunk buffer; three ``np.subtract/add(..., out=)`` passes and one
+    ``np.dot``: no temporaries beyond the buffer."""
+    n = v.size - 2 * lag
+    if n <= 0:
+        return 0.0, 0
+    buf = np.empty(min(CHUNK, n))
+    ss = 0.0
+    for s in range(0, n, CHUNK):
+        c = min(CHUNK, n - s)
+        b = buf[:c]
+        mid = v[s + lag : s + lag + c]
+        np.subtract(v[s + 2 * lag : s + 2 * lag + c], mid, out=b)
+        np.subtract(b, mid, out=b)
+        np.add(b, v[s : s + c], out=b)
+        if center:
+            b -= center
+        ss += float(np.dot(b, b))
+    return ss, n
+
+
+def _d3_sumsq(v: np.ndarray, lag: int, center: float = 0.0) -> tuple[float, int]:
+    """Σ_k (v_{k+3lag} − 3v_{k+2lag} + 3v_{k+lag} − v_k − center)², chunked (two buffers)."""
+    n = v.size - 3 * lag
+    if n <= 0:
+        return 0.0, 0
+    size = min(CHUNK, n)
+    buf = np.empty(size)
+    tmp = np.empty(size)
+    ss = 0.0
+    for s in range(0, n, CHUNK):
+        c = min(CHUNK, n - s)
+        b = buf[:c]
+        t = tmp[:c]
+        np.subtract(v[s + 3 * lag : s + 3 * lag + c], v[s : s + c], out=b)
+        np.subtract(v[s + 2 * lag : s + 2 * lag + c], v[s + lag : s + lag + c], out=t)
+        t *= 3.0
+        b -= t
+        if center:
+            b -= center
+        ss += float(np.dot(b, b))
+    return ss, n
+
+
+def _window_diff_total(v: np.ndarray, a: int, b: int, count: int) -> float:
+    """Σ_{k<count} (v_{k+a} − v_{k+b}), a > b, by telescoping: Σv[b+count : a+count] − Σv[b:a]."""
+    if count <= 0:
+        return 0.0
+    w = a - b
+    if w >= count:
+        return float(np.sum(v[a : a + count]) - np.sum(v[b : b + count]))
+    return float(np.sum(v[b + count : a + count]) - np.sum(v[b:a]))
+
+
+def _d2_total(v: np.ndarray, lag: int) -> tuple[float, int]:
+    """Σ_k (v_{k+2lag} − 2v_{k+lag} + v_k) in O(lag) by telescoping, and the term count."""
+    n = v.size - 2 * lag
+    if n <= 0:
+        return 0.0, 0
+    return _window_diff_total(v, 2 * lag, lag, n) - _window_diff_total(v, lag, 0, n), n
+
+
+def _d3_total(v: np.ndarray, lag: int) -> tuple[float, int]:
+    """Σ_k (v_{k+3lag} − 3v_{k+2lag} + 3v_{k+lag} − v_k) in O(lag) by telescoping."""
+    n = v.size - 3 * lag
+    if n <= 0:
+        return 0.0, 0
+    t = (
+        _window_diff_total(v, 3 * lag, 2 * lag, n)
+        - 2.0 * _window_diff_total(v, 2 * lag, lag, n)
+        + _window_diff_total(v, lag, 0, n)
+    )
+    return t, n
+
+
+def _mod_sumsq(v: np.ndarray, m: int) -> tuple[float, int]:
+    """Σ_j s_j² with s_j = Σ_{i=j}^{j+m−1} (v_{i+2m} − 2v_{i+m} + v_i), j = 0 … N−3m (MDEV).
+
+    s_{j+1} = s_j + e_j with the third difference e_j = v_{j+3m} − 3v_{j+2m} + 3v_{j+m} − v_j,
+    so s is a running sum of third differences: O(N) per τ, chunked. When 3m fits in a chunk,
+    s is re-anchored at every chunk start by a direct sum of m second differences, bounding
+    the accumulated rounding error; otherwise the carry runs through (error ~ √N·ε).
+    """
+    N = v.size
+    n = N - 3 * m + 1
+    if n <= 0:
+        return 0.0, 0
+    size = min(CHUNK, n)
+    buf = np.empty(size)
+    tmp = np.empty(size)
+    anchor = np.empty(m) if 3 * m <= CHUNK else None
+
+    def direct(j: int) -> float:
+        if anchor is not None:
+            a = anchor
+            np.subtract(v[j + 2 * m : j + 3 * m], v[j + m : j + 2 * m], out=a)
+            np.subtract(a, v[j + m : j + 2 * m], out=a)
+            np.add(a, v[j : j + m], out=a)
+            return float(np.sum(a))
+        return float(
+            np.sum(v[j + 2 * m : j + 3 * m]) - 2.0 * np.sum(v[j + m : j + 2 * m])
+            + np.sum(v[j : j + m])
+        )
+
+    ss = 0.0
+    carry = 0.0
+    for s in range(0, n, CHUNK):
+        c = min(CHUNK, n - s)
+        b = buf[:c]
+        b[0] = direct(s) if (s == 0 or anchor is not None) else carry
+        if c > 1:  # e_s … e_{s+c-2} feed s_{s+1} … s_{s+c-1}
+            k = c - 1
+            t = tmp[:k]
+            np.subtract(v[s + 3 * m : s + 3 * m + k], v[s : s + k], out=b[1:c])
+            np.subtract(v[s + 2 * m : s + 2 * m + k], v[s + m : s + m + k], out=t)
+            t *= 3.0
+            b[1:c] -= t
+        np.cumsum(b, out=b)
+        ss += float(np.dot(b, b))
+        j = s + c - 1  # e_j carries into the next chunk, if there is one
+        if anchor is None and j <= n - 2:
+            carry = float(b[c - 1]) + float(
+                v[j + 3 * m] - 3.0 * v[j + 2 * m] + 3.0 * v[j + m] - v[j]
+            )
+    return ss, n
+
+
+def _ext(theta: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """TOTDEV's doubly reflected series (SP1065 eq. 25) at integer indices −(N−2) … 2N−3."""
+    N = theta.size
+    out = np.empty(idx.shape)
+    lo = idx < 0
+    hi = idx > N - 1
+    mid = ~(lo | hi)
+    out[mid] = theta[idx[mid]]
+    out[lo] = 2.0 * theta[0] - theta[-idx[lo]]
+    out[hi] = 2.0 * theta[N - 1] - theta[2 * (N - 1) - idx[hi]]
+    return out
+
+
+def _tot_sumsq(v: np.ndarray, m: int) -> tuple[float, int]:
+    """Σ_{i=1}^{N−2} (θ*_{i−m} − 2θ_i + θ*_{i+m})² for TOTDEV: the overlapping-Allan sum over
+    the interior i ∈ [m, N−1−m] (no reflection needed) plus the 2(m−1) edge terms that use the
+    reflected points. Term count N − 2 (Stable32's "#")."""
+    N = v.size
+    if N < 3 or m > N - 2:
+        return 0.0, 0
+    ss, _ = _d2_sumsq(v, m)
+    lo_edge = np.arange(1, min(m, N - 1), dtype=np.int64)
+    hi_start = max(N - m, m) if N - 1 - m >= m else None
+    if hi_start is None:  # no interior: every i in [1, N-2] not yet counted
+        lo_edge = np.arange(1, N - 1, dtype=np.int64)
+        hi_edge = np.zeros(0, dtype=np.int64)
+    else:
+        hi_edge = np.arange(hi_start, N - 1, dtype=np.int64)
+    for edge in (lo_edge, hi_edge):
+        for s in range(0, edge.size, CHUNK):
+            i = edge[s : s + CHUNK]
+            t = _ext(v, i - m) - 2.0 * v[i] + _ext(v, i + m)
+            ss += float(np.dot(t, t))
+    return ss, N - 2
+
+
+# --- MTOTDEV ---------------------------------------------------------------------------------
+
+_EPS3 = (-1.0, 3.0, -3.0, 1.0)  # A = F(j+3m) − 3F(j+2m) + 3F(j+m) − F(j): coefficients on F(j+tm)
+_MTOT_DIRECT_MAX_M = 8
+_MTOT_BATCH_ELEMS = 1 << 21
+
+
+def _mtot_direct(v: np.ndarray, m: int) -> float:
+    """Σ_n Σ_j A_j(n)² for MTOTDEV by the definition (SP1065 eq. 27), vectorised over the
+    subsequence start n; O(N·m) per τ — used for small m, where it is also the fastest."""
+    N = v.size
+    n_sub = N - 3 * m + 1
+    h = (3 * m) // 2
+    D = 3 * m - h
+    total = 0.0
+    step = max(1, (1 << 18) // (3 * m + 1))
+    jj = np.arange(6 * m)
+    for n0 in range(0, n_sub, step):
+        n1 = min(n_sub, n0 + step)
+        idx = np.arange(n0, n1)[:, None] + np.arange(3 * m)[None, :]
+        X = v[idx]
+        X -= X[:, :1]  # constant shift per subsequence: MTOT is invariant to it
+        s = (X[:, 3 * m - h :].mean(axis=1) - X[:, :h].mean(axis=1)) / D
+        Z = X - s[:, None] * np.arange(3 * m)[None, :]
+        ext = np.concatenate([Z[:, ::-1], Z, Z[:, ::-1]], axis=1)
+        Cs = np.zeros((ext.shape[0], 9 * m + 1))
+        np.cumsum(ext, axis=1, out=Cs[:, 1:])
+        A = Cs[:, jj + 3 * m] - 3.0 * Cs[:, jj + 2 * m] + 3.0 * Cs[:, jj + m] - Cs[:, jj]
+        total += float(np.sum(A * A))
+    return total
+
+
+def _mtot_block_terms(b: int, m: int):
+    """Coefficients of A_j, j = b·m + r (r = 0 … m−1), in terms of the window's prefix sums.
+
+    With S(a) = Σ_{i<a} z_i the prefix sums of the detrended subsequence z (3m points), the
+    even-reflected 9m-point series has the cumulative sum F(p) = −S(3m − p) (p ≤ 3m),
+    S(p − 3m) (3m ≤ p ≤ 6m), 2S(3m) − S(9m − p) (p ≥ 6m), and A_j = Σ_t ε_t F(j + t·m).
+    Returns (fwd, bwd, c3, poly): A = Σ_a fwd[a]·D(a + r) + Σ_a bwd[a]·D(a − r) + c3·D(3m)
+    + s·(p0 + p1 r + p2 r²), with D(a) the raw window sums and s the removed slope
+    (S(a) = D(a) − s·a(a−1)/2).
+    """
+    fwd: dict[int, float] = {}
+    bwd: dict[int, float] = {}
+    c3 = 0.0
+    p = np.zeros(3)
+
+    def q_fwd(a: int) -> np.ndarray:  # a(a-1)/2 at a + r, as a polynomial in r
+        return np.array([(a * a - a) / 2.0, (2 * a - 1) / 2.0, 0.5])
+
+    def q_bwd(a: int) -> np.ndarray:  # at a - r
+        return np.array([(a * a - a) / 2.0, (1 - 2 * a) / 2.0, 0.5])
+
+    for t in range(4):
+        k = b + t
+        e = _EPS3[t]
+        if k <= 2:  # F = -S((3-k)m - r)
+            a = (3 - k) * m
+            bwd[a] = bwd.get(a, 0.0) - e
+            p += e * q_bwd(a)
+        elif k <= 5:  # F = S((k-3)m + r)
+            a = (k - 3) * m
+            fwd[a] = fwd.get(a, 0.0) + e
+            p -= e * q_fwd(a)
+        else:  # F = 2S(3m) - S((9-k)m - r)
+            a = (9 - k) * m
+            c3 += 2.0 * e
+            p[0] -= 2.0 * e * (3 * m) * (3 * m - 1) / 2.0
+            bwd[a] = bwd.get(a, 0.0) - e
+            p += e * q_bwd(a)
+    return fwd, bwd, c3, p
+
+
+def _mtot_blocks(v: np.ndarray, m: int, starts: np.ndarray, B: int) -> float:
+    """Σ over subsequences n ∈ [start, start+B) of Σ_j A_j(n)², for a batch of blocks.
+
+    Each block gets local prefix sums of its own stretch of θ (minus the straight line through
+    its end points — MTOT is invariant to that), so every quantity stays of the size of the
+    local fluctuation. Per block and per sixth of the j range, A = U(n+r) + V(n−r) + W0(n) +
+    s(n)·π(r): U/V are fixed combinations of prefix sums moving forward/backward with r, W0 and
+    the slope s depend on n only, π is quadratic in r. Σ_{n,r} A² then needs only O(B + m)
+    prefix sums: boxcar and polynomial-weighted sums for the U·W0, U·s·π terms, a trapezoid
+    weight for U², and a stride-2 prefix sum for the anti-diagonal U(n+r)·V(n−r) term.
+    """
+    nb = starts.size
+    Lx = B + 3 * m - 1
+    h = (3 * m) // 2
+    D = 3 * m - h
+    idx = starts[:, None] + np.arange(Lx)[None, :]
+    X = v[idx]
+    t = np.arange(Lx) / (Lx - 1)
+    X -= X[:, :1] + (X[:, -1:] - X[:, :1]) * t[None, :]
+    C = np.zeros((nb, Lx + 1))
+    np.cumsum(X, axis=1, out=C[:, 1:])
+    del X
+    nl = np.arange(B)
+    nf = nl.astype(float)
+    s = ((C[:, nl + 3 * m] - C[:, nl + 3 * m - h]) - (C[:, nl + h] - C[:, nl])) / (h * D)
+    r = np.arange(m, dtype=float)
+    W = B + m - 1  # width of the U and V arrays
+    u = np.arange(W)
+    cU = np.minimum(np.minimum(u + 1, m), np.minimum(B, B + m - 1 - u)).astype(float)
+    vv = np.arange(-(m - 1), B)
+    cV = (np.minimum(m - 1, B - 1 - vv) - np.maximum(0, -vv) + 1).astype(float)
+    nlo = np.maximum(0, u - m + 1)
+    nhi = np.minimum(B - 1, u)
+    ilo = 2 * nlo - u + (m - 1)
+    ihi = 2 * nhi - u + (m - 1)
+    uf = u.astype(float)
+    w_rev = nf + (m - 1)
+    sum_s2 = float(np.sum(s * s))
+
+    def prefix(Y: np.ndarray) -> np.ndarray:
+        P = np.zeros((nb, Y.shape[1] + 1))
+        np.cumsum(Y, axis=1, out=P[:, 1:])
+        return P
+
+    def box(P: np.ndarray) -> np.ndarray:
+        return P[:, m : m + B] - P[:, :B]
+
+    total = 0.0
+    for b in range(6):
+        fwd, bwd, c3, p = _mtot_block_terms(b, m)
+        U = np.zeros((nb, W))
+        for a, c in fwd.items():
+            if c:
+                U += c * C[:, a : a + W]
+        V = np.zeros((nb, W))  # V[:, i] = V(v = i - (m-1))
+        for a, c in bwd.items():
+            if c:
+                V += c * C[:, a - (m - 1) : a - (m - 1) + W]
+        csum = sum(fwd.values()) + sum(bwd.values()) + c3
+        W0 = c3 * C[:, 3 * m : 3 * m + B] - csum * C[:, :B]
+        pir = p[0] + p[1] * r + p[2] * r * r
+        s_pi = float(pir.sum())
+        s_pi2 = float(np.dot(pir, pir))
+        # forward terms: sums over r of r^k U(n + r)
+        bu0 = box(prefix(U))
+        tu1 = box(prefix(U * uf))  # Σ u·U(u) over the window u ∈ [n, n+m)
+        bu1 = tu1 - nf * bu0  # Σ (u−n)·U
+        bu2 = box(prefix(U * (uf * uf))) - 2.0 * nf * tu1 + nf * nf * bu0  # Σ (u−n)²·U
+        pi_u = p[0] * bu0 + p[1] * bu1 + p[2] * bu2
+        # backward terms: i = v + m - 1, r = n + m - 1 - i over the window i ∈ [n, n+m-1]
+        iv = uf
+        bv0 = box(prefix(V))
+        bv1_raw = box(prefix(V * iv))
+        bv2_raw = box(prefix(V * (iv * iv)))
+        rv1 = w_rev * bv0 - bv1_raw
+        rv2 = w_rev * w_rev * bv0 - 2.0 * w_rev * bv1_raw + bv2_raw
+        pi_v = p[0] * bv0 + p[1] * rv1 + p[2] * rv2
+        # anti-diagonal Σ_{n,r} U(n+r) V(n-r): stride-2 prefix sums of V
+        P2 = np.zeros((nb, W + 2))
+        P2[:, 2::2] = np.cumsum(V[:, 0::2], axis=1)
+        P2[:, 3::2] = np.cumsum(V[:, 1::2], axis=1)
+        anti = P2[:, ihi + 2] - P2[:, ilo]
+        q = (
+            float(np.sum((U * U) @ cU))
+            + float(np.sum((V * V) @ cV))
+            + m * float(np.sum(W0 * W0))
+            + s_pi2 * sum_s2
+            + 2.0 * float(np.sum(W0 * (bu0 + bv0)))
+            + 2.0 * s_pi * float(np.sum(W0 * s))
+            + 2.0 * float(np.sum(s * (pi_u + pi_v)))
+            + 2.0 * float(np.sum(U * anti))
+        )
+        total += q
+    return total
+
+
+def _mtot_sum(v: np.ndarray, m: int) -> tuple[float, int]:
+    """Σ over the N−3m+1 subsequences of Σ_{j<6m} A_j² for MTOTDEV (unscaled), and the count.
+
+    MTOTDEV = sqrt(Σ / (12·m³·τ²·(N−3m+1))): each subsequence contributes (1/6m)Σ_j (A_j/m)²
+    and SP1065 eq. 27 divides by 2τ²(N−3m+1).
+
+    Complexity: O(N) per τ. The direct definition costs O(N·m) per τ (AllanTools: minutes for
+    a few thousand points); here the sum over the 6m positions j of every subsequence is
+    rearranged into prefix sums over blocks of B = 4m subsequences (see :func:`_mtot_blocks`),
+    which is exact — the tests compare it with the direct definition to 1e-10. For m ≤ 8 the
+    vectorised direct sum is used (same cost, simplest).
+    """
+    N = v.size
+    n_sub = N - 3 * m + 1
+    if n_sub <= 0:
+        return 0.0, 0
+    if m <= _MTOT_DIRECT_MAX_M:
+        return _mtot_direct(v, m), n_sub
+    B = min(4 * m, n_sub)
+    n_full = n_sub // B
+    rem = n_sub - n_full * B
+    total = 0.0
+    if n_full:
+        per_batch = max(1, _MTOT_BATCH_ELEMS // (B + 3 * m))
+        for i0 in range(0, n_full, per_batch):
+            starts = np.arange(i0, min(n_full, i0 + per_batch), dtype=np.int64) * B
+            total += _mtot_blocks(v, m, starts, B)
+    if rem:
+        total += _mtot_blocks(v, m, np.array([n_full * B], dtype=np.int64), rem)
+    return total, n_sub
+
+
+# ---------------------------------------------------------------------------------------------
+# Raw variances (pooled over segments)
+# ---------------------------------------------------------------------------------------------
+
+
+def _n_terms(kind: str, L: int, m: int) -> int:
+    """Number of estimator terms of ``kind`` on a segment of L angle points."""
+    if kind in ("oadev", "akdev"):
+        return max(L - 2 * m, 0)
+    if kind == "adev":
+        return max((L - 1) // m - 1, 0)
+    if kind in ("mdev", "tdev", "mtotdev"):
+        return max(L - 3 * m + 1, 0)
+    if kind in ("ohdev", "hkdev"):
+        return max(L - 3 * m, 0)
+    if kind == "hdev":
+        return max((L - 1) // m - 2, 0)
+    if kind == "totdev":
+        return L - 2 if (L >= 3 and 2 * m <= L) else 0
+    raise InputError(f"unknown deviation kind {kind!r}")
+
+
+def _raw_variance(kind: str, parts: Sequence[np.ndarray], m: int) -> tuple[float, int, list[int]]:
+    """Pooled raw variance of θ (in θ units², before the 1/τ² scaling) and term counts.
+
+    Returns (var_raw, n_total, n_per_segment) with var_raw·scale²/τ² = σ².
+    """
+    ns = [_n_terms(kind, p.size, m) for p in parts]
+    n_tot = int(sum(ns))
+    if n_tot == 0:
+        return math.nan, 0, ns
+    ss = 0.0
+    if kind in ("oadev", "adev", "totdev"):
+        for p, nk in zip(parts, ns):
+            if nk <= 0:
+                continue
+            if kind == "oadev":
+                ss += _d2_sumsq(p, m)[0]
+            elif kind == "adev":
+                ss += _d2_sumsq(p[::m], 1)[0]
+            else:
+                ss += _tot_sumsq(p, m)[0]
+        return ss / (2.0 * n_tot), n_tot, ns
+    if kind in ("hdev", "ohdev"):
+        for p, nk in zip(parts, ns):
+            if nk > 0:
+                ss += (_d3_sumsq(p, m) if kind == "ohdev" else _d3_sumsq(p[::m], 1))[0]
+        return ss / (6.0 * n_tot), n_tot, ns
+    if kind in ("mdev", "tdev"):
+        for p, nk in zip(parts, ns):
+            if nk > 0:
+                ss += _mod_sumsq(p, m)[0]
+        return ss / (2.0 * m * m * n_tot), n_tot, ns
+    if kind == "mtotdev":
+        for p, nk in zip(parts, ns):
+            if nk > 0:
+                ss += _mtot_sum(p, m)[0]
+        return ss / (12.0 * m**3 * n_tot), n_tot, ns
+    if kind in ("akdev", "hkdev"):
+        tot_fn, sq_fn, norm = (
+            (_d2_total, _d2_sumsq, 2.0) if kind == "akdev" else (_d3_total, _d3_sumsq, 6.0)
+        )
+        s1 = sum(tot_fn(p, m)[0] for p, nk in zip(parts, ns) if nk > 0)
+        mean = s1 / n_tot
+        for p, nk in zip(parts, ns):
+            if nk > 0:
+                ss += sq_fn(p, m, center=mean)[0]
+        return ss / (norm * n_tot), n_tot, ns
+    raise InputError(f"unknown deviation kind {kind!r}")
+
+
+# ---------------------------------------------------------------------------------------------
+# The dispatcher
+# ---------------------------------------------------------------------------------------------
+
+_MIN_POINTS_TEXT = {
+    "oadev": "2m + 1 angle points (N − 2m ≥ 1 cluster differences)",
+    "akdev": "2m + 1 angle points",
+    "adev": "2m + 1 angle points (at least one pair of adjacent clusters)",
+    "mdev": "3m angle points",
+    "tdev": "3m angle points",
+    "mtotdev": "3m angle points",
+    "ohdev": "3m + 1 angle points",
+    "hkdev": "3m + 1 angle points",
+    "hdev": "3m + 1 angle points",
+    "totdev": "2m angle points",
+}
+
+
+#: MTOTDEV bias B(α) = E[Mod Tot var]/Mod var (Howe & Vernotte 1999; SP1065 §5.2.12).
+_MTOT_BIAS = {2: 0.94, 1: 0.83, 0: 0.73, -1: 0.70, -2: 0.69}
+#: TOTDEV bias 1 − a·τ/T (SP1065 §5.2.11): a = 1/(3 ln 2) for flicker rate, 3/4 for random-walk rate.
+_TOT_BIAS_A = {-1: 0.481, -2: 0.750}
+
+
+def _bias_factor(kind: str, alpha: np.ndarray, tau: np.ndarray, T: float) -> np.ndarray:
+    """Variance bias factor of TOTDEV (1 − a·τ/T) or MTOTDEV (B(α)) per τ."""
+    if kind == "mtotdev":
+        return np.array([_MTOT_BIAS[int(a)] for a in alpha])
+    a = np.array([_TOT_BIAS_A.get(int(v), 0.0) for v in alpha])
+    return 1.0 - a * tau / T
+
+
+def _pooled_edf(kind: str, alpha: int, m: int, parts: Sequence[np.ndarray], ns: list[int]) -> tuple[float, str]:
+    """EDF of the pooled estimate: 1/Σ_s (w_s²/edf_s), w_s = n_s/Σn (one segment: its EDF)."""
+    used = [(p.size, nk) for p, nk in zip(parts, ns) if nk > 0]
+    if len(used) == 1:
+        return _edf.edf_for(kind, alpha, m, used[0][0])
+    n_tot = float(sum(nk for _, nk in used))
+    inv = 0.0
+    label = ""
+    for L, nk in used:
+        e, label = _edf.edf_for(kind, alpha, m, L)
+        if not (e > 0 and math.isfinite(e)):
+            return math.nan, label
+        inv += (nk / n_tot) ** 2 / e
+    return 1.0 / inv, label
+
+
+def compute_deviation(
+    data,
+    tau0: float,
+    *,
+    input_kind: str,
+    kind: str = "oadev",
+    taus: str | Sequence[float] = "decade10",
+    confidence: float = _edf.DEFAULT_CONFIDENCE,
+    stop_ratio: float | None = None,
+    segments: Sequence[tuple[int, int]] | None = None,
+    unit: str = "deg/h",
+    noise_id: bool = True,
+    alpha: int | Sequence[int] | None = None,
+    bias_correction: bool = False,
+) -> DeviationResult:
+    """Compute one deviation with noise identification, EDF and χ² confidence interval.
+
+    Parameters
+    ----------
+    data : 1-D array of rate, increment or angle samples (no NaN: use ``segments`` for gaps).
+    tau0 : sample interval, s.
+    input_kind : "rate" | "increment" | "angle" (required; see the module docstring).
+    kind : one of :data:`DEVIATION_KINDS` (default "oadev", the IEEE 952 Annex C estimator).
+    taus : τ grid: "octave", "decade", "decadeN" (default "decade10"), "all", or a list of τ
+        in seconds (see :mod:`gyrotest.noise.taus`).
+    confidence : two-sided confidence of [sigma_lo, sigma_hi] (default 0.683 as Stable32).
+    stop_ratio : max m = N // stop_ratio for generated grids (default: Stable32's per kind).
+    segments : gap-free (start, stop) sample ranges; default the whole record.
+    unit : rate unit of the data (rate input) or of the result, stored in the result.
+    noise_id : identify α per τ (lag-1 ACF, B1 fallback); if False, α = 0 (white rate noise)
+        is assumed for the EDF and the notes say so.
+    alpha : force α (an int for all τ, or one per τ, e.g. Stable32's column) instead of
+        identifying it.
+    bias_correction : TOTDEV/MTOTDEV only. False (default) gives the plain estimators, as
+        Stable32's "no bias correction" and the NBS14 reference values. True divides the
+        variance by the SP1065 bias factor for the identified α: TOTDEV 1 − a·τ/T with
+        a = 0.481 (α = −1) or 0.750 (α = −2), T the segment length (no bias for α ≥ 0);
+        MTOTDEV 0.94, 0.83, 0.73, 0.70, 0.69 for α = 2 … −2 (Howe & Vernotte 1999).
+
+    Returns a :class:`DeviationResult`. Units: σ in the rate unit of the input (rate input) or
+    angle unit per second (increment/angle input); TDEV in the angle unit (rate unit × s).
+
+    Raises :class:`InputError` (bad input, NaN, τ the record cannot support in an explicit
+    list) or :class:`AnalysisError` (constant signal, record too short for any τ).
+    """
+    if kind not in DEVIATION_KINDS:
+        raise InputError(f"unknown deviation {kind!r}; choose one of {', '.join(DEVIATION_KINDS)}")
+    _check_kind(input_kind)
+    if not 0.0 < confidence < 1.0:
+        raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
+    series = angle_series(data, tau0, input_kind=input_kind, segments=segments)
+    parts = series.parts()
+    grid = tau_grid(taus, n_data=series.n_longest, tau0=series.tau0, kind=kind, stop_ratio=stop_ratio)
+    notes = list(series.notes) + list(grid.notes)
+    explicit = grid.spec == "explicit"
+    longest = max(p.size for p in parts)
+
+    rows_m: list[int] = []
+    rows_var: list[float] = []
+    rows_n: list[int] = []
+    rows_ns: list[list[int]] = []
+    dropped: list[int] = []
+    for m in grid.m:
+        m = int(m)
+        var, n_tot, ns = _raw_variance(kind, parts, m)
+        if n_tot < 1:
+            dropped.append(m)
+            continue
+        rows_m.append(m)
+        rows_var.append(var)
+        rows_n.append(n_tot)
+        rows_ns.append(ns)
+    if dropped and explicit:
+        tau_txt = ", ".join(f"{mm * series.tau0:g}" for mm in dropped)
+        raise InputError(
+            f"record too short for τ = {tau_txt} s: the longest segment has {series.n_longest} "
+            f"samples ({longest} angle points) and {kind} needs {_MIN_POINTS_TEXT[kind]}; "
+            "use a shorter --tau-max"
+        )
+    if dropped:
+        notes.append(
+            f"τ = {', '.join(f'{mm * series.tau0:g}' for mm in dropped)} s dropped: fewer than "
+            f"one {kind} term ({_MIN_POINTS_TEXT[kind]} needed)"
+        )
+    if not rows_m:
+        ratio = STOP_RATIOS.get(kind, 4) if stop_ratio is None else stop_ratio
+        raise AnalysisError(
+            f"record too short for {kind}: {series.n_longest} samples in the longest segment give "
+            f"no τ (stop ratio {ratio:g}; {kind} needs {_MIN_POINTS_TEXT[kind]} at τ = m·τ0); "
+            "record longer or use a smaller stop ratio"
+        )
+
+    m_arr = np.array(rows_m, dtype=np.int64)
+    tau = m_arr * series.tau0
+    var = np.array(rows_var)
+    sigma = np.sqrt(var) * series.scale / tau
+    out_unit = unit
+    if kind == "tdev":
+        sigma = sigma * tau / math.sqrt(3.0)
+        out_unit = f"({unit})·s"
+
+    # --- noise identification -----------------------------------------------------------
+    hadamard = kind in ("hdev", "ohdev", "hkdev")
+    alpha_min = -4 if hadamard else -2
+    if alpha is not None:
+        a_arr = np.broadcast_to(np.asarray(alpha, dtype=np.int64), m_arr.shape).copy()
+        if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
+            raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
+        a_methods = ["forced"] * len(m_arr)
+    elif noise_id:
+        data_type = "phase" if input_kind == "angle" else "frequency"
+
+        def rn_ratio(mm: int) -> float:
+            mv, _, _ = _raw_variance("mdev", parts, mm)
+            av, _, _ = _raw_variance("oadev", parts, mm)
+            return mv / av if av > 0 else math.nan
+
+        nids = _edf.identify_noise(
+            parts, m_arr, data_type=data_type, dmax=3 if hadamard else 2, alpha_min=alpha_min,
+            rn_ratio=rn_ratio,
+        )
+        a_arr = np.array([nid.alpha for nid in nids], dtype=np.int64)
+        a_methods = [nid.method for nid in nids]
+        if any(mm == "reused" for mm in a_methods):
+            notes.append(
+                "noise type at the longest τ reused from the previous τ (too few averages for "
+                "the lag-1 or B1 method), as Stable32 does"
+            )
+    else:
+        a_arr = np.zeros(len(m_arr), dtype=np.int64)
+        a_methods = ["assumed"] * len(m_arr)
+        notes.append("noise identification off: α = 0 (white rate noise) assumed for the EDF")
+
+    if bias_correction:
+        if kind not in ("totdev", "mtotdev"):
+            raise InputError(f"bias correction is defined for totdev and mtotdev only, not {kind}")
+        factor = _bias_factor(kind, a_arr, tau, series.tau0 * (longest - 1))
+        sigma = sigma / np.sqrt(factor)
+        notes.append(
+            "SP1065 bias correction applied: "
+            + ("TOTDEV / (1 − a·τ/T), a = 0.481 (α = −1), 0.750 (α = −2)" if kind == "totdev"
+               else "MTOTDEV / B(α), B = 0.94, 0.83, 0.73, 0.70, 0.69 for α = 2 … −2")
+        )
+
+    # --- EDF and confidence interval ------------------------------------------------------
+    edf_kind = "mdev" if kind == "tdev" else kind
+    edfs = np.empty(len(m_arr))
+    methods: list[str] = []
+    for i, (mm, aa, ns) in enumerate(zip(m_arr, a_arr, rows_ns)):
+        e, lab = _pooled_edf(edf_kind, int(aa), int(mm), parts, ns)
+        edfs[i] = e if (e > 0 and math.isfinite(e)) else math.nan
+        methods.append(lab)
+    lo, hi = _edf.chi2_interval(sigma, edfs, confidence)
+    uniq = list(dict.fromkeys(methods))
+    ci_method = uniq[0] if len(uniq) == 1 else "; ".join(uniq)
+    if kind in ("akdev", "hkdev"):
+        ci_method = "OADEV/OHDEV Greenhall-Riley EDF minus 1 (approximation), chi-square"
+        if _edf.CI_SIMPLE in uniq:
+            ci_method += "; " + _edf.CI_SIMPLE
+    if len(uniq) > 1 and _edf.CI_SIMPLE in uniq:
+        notes.append("SP1065 Table 5 simple EDF used where the primary EDF method has no entry")
+    if series.input_kind != "rate":
+        notes.append(f"{series.input_kind} input: σ in angle unit per second")
+    return DeviationResult(
+        kind=kind,
+        input_kind=input_kind,
+        tau0=series.tau0,
+        m=m_arr,
+        tau=tau,
+        n=np.array(rows_n, dtype=np.int64),
+        alpha=a_arr,
+        edf=edfs,
+        sigma=sigma,
+        sigma_lo=lo,
+        sigma_hi=hi,
+        confidence=float(confidence),
+        ci_method=ci_method,
+        unit=out_unit,
+        notes=notes,
+        alpha_method=a_methods,
+        n_samples=series.n_data,
+        segments=list(series.segments),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# One function per statistic
+# ---------------------------------------------------------------------------------------------
+
+_COMMON_DOC = """
+    Parameters are those of :func:`compute_deviation` (``data``, ``tau0`` in s, keyword-only
+    ``input_kind`` — required —, ``taus``, ``confidence``, ``stop_ratio``, ``segments``,
+    ``unit``, ``noise_id``, ``alpha``; ``bias_correction`` for totdev/mtotdev). Returns a
+    :class:`DeviationResult` with α, EDF and the χ² interval filled in.
+"""
+
+
+def _make(kind: str, doc: str) -> Callable[..., DeviationResult]:
+    def f(
+        data,
+        tau0: float,
+        *,
+        input_kind: str,
+        taus: str | Sequence[float] = "decade10",
+        confidence: float = _edf.DEFAULT_CONFIDENCE,
+        stop_ratio: float | None = None,
+        segments: Sequence[tuple[int, int]] | None = None,
+        unit: str = "deg/h",
+        noise_id: bool = True,
+        alpha: int | Sequence[int] | None = None,
+        **kwargs,
+    ) -> DeviationResult:
+        return compute_deviation(
+            data, tau0, input_kind=input_kind, kind=kind, taus=taus, confidence=confidence,
+            stop_ratio=stop_ratio, segments=segments, unit=unit, noise_id=noise_id, alpha=alpha,
+            **kwargs,
+        )
+
+    f.__name__ = kind
+    f.__qualname__ = kind
+    f.__doc__ = doc + _COMMON_DOC
+    return f
+
+
+oadev = _make(
+    "oadev",
+    """Overlapping Allan deviation (the default; IEEE 952 Annex C; NIST SP1065 eq. 11).
+
+    σ²(τ) = 1/(2τ²(N−2m)) · Σ_{k=0}^{N−2m−1} (θ_{k+2m} − 2θ_{k+m} + θ_k)², τ = m·τ0, θ the
+    angle series of N points. Rate unit. EDF: Greenhall & Riley (2004), d = 2, overlapping.
+    Stop ratio 4.""",
+)
+adev = _make(
+    "adev",
+    """Non-overlapping Allan deviation (NIST SP1065 eq. 7; IEEE 952 eq. C.1 with disjoint
+    clusters).
+
+    σ²(τ) = 1/(2τ²n) · Σ_k (θ_{(k+2)m} − 2θ_{(k+1)m} + θ_{km})², n = ⌊(N−1)/m⌋ − 1. Rate unit.
+    EDF: Greenhall & Riley (2004), d = 2, non-overlapping. Stop ratio 5.""",
+)
+mdev = _make(
+    "mdev",
+    """Modified Allan deviation (NIST SP1065 eq. 14).
+
+    Mod σ²(τ) = 1/(2m²τ²(N−3m+1)) · Σ_{j=0}^{N−3m} [Σ_{i=j}^{j+m−1} (θ_{i+2m} − 2θ_{i+m} + θ_i)]²,
+    computed in O(N) per τ as a running sum of third differences. Separates white from flicker
+    angle noise. Rate unit. EDF: Greenhall & Riley, d = 2, modified. Stop ratio 4.""",
+)
+tdev = _make(
+    "tdev",
+    """Time deviation (NIST SP1065 eq. 15): σ_x(τ) = τ/√3 · Mod σ(τ).
+
+    The angle-domain counterpart of MDEV: unit = (rate unit)·s, i.e. an angle (deg/h·s =
+    arcsec for deg/h input). EDF: that of MDEV. Stop ratio 4.""",
+)
+hdev = _make(
+    "hdev",
+    """Non-overlapping Hadamard deviation (NIST SP1065 eq. 18).
+
+    σ²_H(τ) = 1/(6τ²n) · Σ_k (θ_{(k+3)m} − 3θ_{(k+2)m} + 3θ_{(k+1)m} − θ_{km})²,
+    n = ⌊(N−1)/m⌋ − 2. Insensitive to a rate ramp (drift) and convergent for α down to −4.
+    Rate unit. EDF: Greenhall & Riley, d = 3, non-overlapping. Stop ratio 5.""",
+)
+ohdev = _make(
+    "ohdev",
+    """Overlapping Hadamard deviation (NIST SP1065 eq. 20).
+
+    σ²_H(τ) = 1/(6τ²(N−3m)) · Σ_{k=0}^{N−3m−1} (θ_{k+3m} − 3θ_{k+2m} + 3θ_{k+m} − θ_k)².
+    Zero for a rate ramp Ω = Rt. Rate unit. EDF: Greenhall & Riley, d = 3, overlapping.
+    Stop ratio 4.""",
+)
+totdev = _make(
+    "totdev",
+    """Total deviation (NIST SP1065 eq. 25; Howe & Greenhall 1997; Stable32 TOTDEV).
+
+    The angle series is extended at both ends by odd reflection, θ*_{−j} = 2θ_0 − θ_j and
+    θ*_{N−1+j} = 2θ_{N−1} − θ_{N−1−j} (j = 1 … N−2), and
+    Tot σ²(τ) = 1/(2τ²(N−2)) · Σ_{i=1}^{N−2} (θ*_{i−m} − 2θ_i + θ*_{i+m})²
+    (the phase-domain definition of SP1065; no bias correction). Better confidence than OADEV
+    at long τ. Rate unit. EDF: SP1065 Table 7 (α = 0, −1, −2), else Table 5. Stop ratio 2.""",
+)
+mtotdev = _make(
+    "mtotdev",
+    """Modified total deviation (NIST SP1065 eq. 27; Howe & Vernotte 1999; Stable32 MTOTDEV
+    without bias correction).
+
+    For each of the N−3m+1 subsequences of 3m angle points: remove the frequency offset
+    (slope = difference of the means of the first and last ⌊3m/2⌋ points divided by their
+    distance), extend to 9m points by even reflection at both ends, and take the MVAR sum over
+    its 6m second differences of m-point averages; average over subsequences and divide by
+    2τ². Computed exactly in O(N) per τ (see ``_mtot_sum``). Rate unit. EDF: SP1065 Table 8.
+    Stop ratio 2 (and 3m ≤ N).""",
+)
+akdev = _make(
+    "akdev",
+    """Allan–Krobka dispersion (Krobka, seed 001 eq. 5.10; notes-allan-topology §2.4).
+
+    σ²_AK(τ) = ½⟨(ω̄_{k+m} − ω̄_k)²⟩ − ½⟨ω̄_{k+m} − ω̄_k⟩², with the overlapping cluster
+    averages ω̄_k = (θ_{k+m} − θ_k)/τ, i.e. half the *variance* (not the mean square) of the
+    first differences of cluster averages: OAVAR minus the squared mean difference, so a rate
+    ramp Ω = Rt (OADEV = Rτ/√2) gives exactly 0 and a deterministic trend no longer masquerades
+    as rate random walk. For zero-mean stationary noise it equals OADEV in expectation. Rate
+    unit. EDF: OADEV's Greenhall EDF minus 1. Stop ratio 4.""",
+)
+hkdev = _make(
+    "hkdev",
+    """Hadamard–Krobka dispersion (Krobka, seed 001 §5: the Hadamard analogue of eq. 5.10).
+
+    σ²_HK(τ) = (⟨h²⟩ − ⟨h⟩²)/(6τ²) with h_k = θ_{k+3m} − 3θ_{k+2m} + 3θ_{k+m} − θ_k: the
+    overlapping Hadamard variance with the mean third difference removed, so a quadratic rate
+    trend Ω = Ct² gives zero. Rate unit. EDF: OHDEV's Greenhall EDF minus 1. Stop ratio 4.""",
+)

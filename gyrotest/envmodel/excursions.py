@@ -1,0 +1,140 @@
+"""Where a model fails: stretches of large residual, described by what the channels did.
+
+Rule: the block residual is smoothed with a centred moving mean over w blocks (w ≈ 1 min,
+at least 3 blocks); its typical size is σ_w = 1.4826·MAD of the smoothed series (robust, and
+already includes the residual's own autocorrelation); an excursion is a run where
+|smoothed residual| > k·σ_w (k = 3 by default), runs closer than w blocks are merged. Each
+excursion is described from the channels over the same time: temperature ramp up/down or
+turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,
+and the warm-up period after power-on.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .terms import temperature_rate
+
+
+def _moving_mean(x: np.ndarray, w: int) -> np.ndarray:
+    if w <= 1:
+        return x.copy()
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    n = len(x)
+    k = np.arange(n)
+    lo = np.maximum(k - w // 2, 0)
+    hi = np.minimum(k + w // 2 + 1, n)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def excursion_runs(resid: np.ndarray, resolution_s: float, k_sigma: float = 3.0
+                   ) -> tuple[list[tuple[int, int]], np.ndarray, float]:
+    """Runs (start, stop block indices) where the smoothed residual exceeds k·σ_w; also
+    returns the smoothed residual and σ_w (deg/h)."""
+    n = len(resid)
+    w = int(max(3, min(round(60.0 / resolution_s), max(3, n // 20))))
+    rs = _moving_mean(resid, w)
+    sig = 1.4826 * float(np.median(np.abs(rs - np.median(rs))))
+    if not sig > 0:
+        return [], rs, sig
+    over = np.abs(rs) > k_sigma * sig
+    runs: list[tuple[int, int]] = []
+    i = 0
+    while i < n:
+        if over[i]:
+            j = i
+            while j < n and over[j]:
+                j += 1
+            if runs and i - runs[-1][1] < w:
+                runs[-1] = (runs[-1][0], j)
+            else:
+                runs.append((i, j))
+            i = j
+        else:
+            i += 1
+    runs = [(a, b) for a, b in runs if b - a >= 2]
+    return runs, rs, sig
+
+
+def describe_interval(frame, refs, t1: float, t2: float) -> str:
+    """What the logged channels did between t1 and t2 (s): ramps, steps, warm-up."""
+    parts: list[str] = []
+    t = frame.t
+    pad = max(frame.dt, 0.5 * refs.smoothing_s)
+    sel = (t >= t1 - pad) & (t <= t2 + pad)
+    if not sel.any():
+        return "no data"
+    inside = (t >= t1) & (t <= t2)
+    if not inside.any():
+        inside = sel
+    cache = getattr(frame, "_rate_cache", None)
+    if cache is None:
+        cache = {}
+        try:
+            frame._rate_cache = cache
+        except AttributeError:  # pragma: no cover
+            pass
+    for name, T in list(frame.temperature.items())[:1]:
+        if name not in cache:
+            cache[name] = temperature_rate(T, frame.dt, refs.smoothing_s, frame.bounds)
+        r = cache[name][inside]
+        thr = max(0.5, refs.hyst_threshold_c_per_h.get(name, 0.1))
+        rm = float(np.mean(r))
+        ta, tb = float(T[inside][0]), float(T[inside][-1])
+        if np.any(r > thr) and np.any(r < -thr):
+            parts.append(f"temperature turn-around ({name} near {np.mean(T[inside]):.1f} °C)")
+        elif rm > thr:
+            parts.append(f"temperature ramp up ({rm:+.2g} °C/h, {name} {ta:.1f}→{tb:.1f} °C)")
+        elif rm < -thr:
+            parts.append(f"temperature ramp down ({rm:+.2g} °C/h, {name} {ta:.1f}→{tb:.1f} °C)")
+        else:
+            before = (t >= t1 - 4 * refs.smoothing_s) & (t < t1)
+            if before.any() and np.max(np.abs(cache[name][before])) > thr:
+                parts.append(f"settling after a temperature change ({name} {ta:.1f} °C)")
+    for name, H in frame.field_uT.items():
+        seg = H[sel]
+        span = float(np.ptp(H)) if len(H) else 0.0
+        jump = float(seg.max() - seg.min())
+        if span > 0 and jump > max(5.0, 0.05 * span):
+            parts.append(f"field step in {name} ({seg[0]:+.0f}→{seg[-1]:+.0f} µT)")
+        elif span > 0 and abs(float(np.median(seg)) - float(np.median(H))) > 0.25 * span:
+            parts.append(f"{name} held at {np.median(seg):+.0f} µT")
+    if frame.supply is not None:
+        seg = frame.supply[sel]
+        if float(seg.max() - seg.min()) > max(0.02, 0.005 * abs(float(np.median(seg)))):
+            parts.append(f"supply change ({seg[0]:.3g}→{seg[-1]:.3g} V)")
+    if frame.table_rate is not None:
+        seg = frame.table_rate[sel]
+        if float(seg.max() - seg.min()) > 1e-3 * max(1.0, float(np.abs(frame.table_rate).max())):
+            parts.append("rate-table step")
+    t_on = refs.t_on_s
+    if t1 - t_on < max(600.0, 0.03 * frame.duration_s):
+        parts.append(f"warm-up ({(t1 - t_on) / 60:.0f}–{(t2 - t_on) / 60:.0f} min after power-on)")
+    if not parts:
+        return "no logged channel changes (noise, or an effect that is not logged)"
+    return "; ".join(parts)
+
+
+def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
+    """Excursions of a :class:`~gyrotest.envmodel.fit.FitResult` (see the module docstring),
+    chronological, at most ``max_items`` (the largest)."""
+    from .fit import Excursion
+
+    runs, rs, sig = excursion_runs(res.resid, res.resolution_s, k_sigma)
+    if not runs:
+        return []
+    t = res.t
+    tb = res.resolution_s
+    items = []
+    for a, b in runs:
+        seg = rs[a:b]
+        i = int(np.argmax(np.abs(seg)))
+        items.append((abs(float(seg[i])), a, b, float(seg[i]), float(np.mean(res.resid[a:b]))))
+    items.sort(reverse=True)
+    items = sorted(items[:max_items], key=lambda x: x[1])
+    out = []
+    for _, a, b, peak, mean in items:
+        t1, t2 = float(t[a] - tb / 2), float(t[b - 1] + tb / 2)
+        out.append(Excursion(t1, t2, peak, mean, describe_interval(res.wd.frame, res.wd.refs,
+                                                                   t1, t2)))
+    return out

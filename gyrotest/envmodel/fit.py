@@ -1,0 +1,864 @@
+"""Fitting an environmental drift model to a bench log.
+
+Working resolution
+------------------
+Raw 10 Hz samples are dominated by white noise and 10⁶ rows make every fit slow, while the
+environmental effects live at minutes to hours. gyrotest therefore fits **block means**:
+
+1. channels are averaged onto a fine grid (dt_f ≈ min(1 s, T_b/5), a multiple of τ0) on which
+   every regressor is computed (derivatives, lags and powers of the channels);
+2. the gyro rate and every regressor are averaged over consecutive blocks of T_b seconds
+   inside each gap-free segment. Averaging the regressors (not recomputing them from averaged
+   channels) keeps a model linear in its coefficients exact under averaging.
+
+T_b is chosen from the noise level: the raw rate's Allan deviation reaches its minimum at
+τ_min (below it white noise dominates, above it drift and environment); T_b = τ_min/4 rounded
+down to 1-2-5 steps and clipped to [duration/20000, min(60 s, duration/300)], so white noise is
+averaged down by √(T_b/τ0) while effects slower than ≈ 4·T_b stay resolved, the fit sees at
+most 20 000 blocks, and at least 300. ``resolution=`` overrides it. The choice and its reason
+are stated in every result.
+
+Estimation
+----------
+Linear terms by least squares; terms with a time constant or frequency by variable projection
+(the nonlinear parameter is searched on a log grid / from the residual periodogram and refined
+by bounded Brent minimisation of the residual sum of squares, the linear coefficients solved
+exactly at each step). Uncertainties: HAC (see :mod:`.stats`) on the Gauss–Newton Jacobian
+(linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty propagates. Held-out
+validation: the blocks are cut into ``folds × chunks_per_fold`` contiguous time chunks; chunk
+c belongs to fold c mod folds; each fold is predicted from a fit (nonlinear parameters
+re-optimised locally) on the other folds, leaving out a buffer of 10 % of a chunk on either side
+of each held-out chunk against leakage through autocorrelated noise.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import optimize
+
+from ..errors import AnalysisError, InputError
+from . import stats as st
+from .model import EnvModel, ModelTerm
+from .terms import (
+    EnvFrame,
+    Refs,
+    TermSpec,
+    build_term,
+    default_refs,
+    describe,
+    frame_from_log,
+    nonlinear_bounds,
+    parse_terms,
+    resolve_terms,
+    smooth,
+    smoothed_rate,
+    smoothing_half,
+)
+
+NICE_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 30.0, 60.0)
+MAX_BLOCKS = 20000
+MIN_BLOCKS_RES = 300
+MAX_RES_S = 60.0
+
+
+# ============================================================================ working data
+@dataclass
+class WorkData:
+    """A log prepared for model fitting: fine-grid channels and block means."""
+
+    frame: EnvFrame  # fine grid (rate + channels)
+    block: np.ndarray  # block id of each fine sample (−1: not used)
+    counts: np.ndarray  # fine samples per block
+    t: np.ndarray  # block mean time, s
+    y: np.ndarray  # block mean rate (minus input rate), deg/h
+    resolution_s: float
+    resolution_note: str
+    refs: Refs
+    axis: str
+    info: dict[str, Any] = field(default_factory=dict)
+    log: Any = None
+
+    @property
+    def nb(self) -> int:
+        return len(self.y)
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.info.get("duration_s", self.frame.duration_s))
+
+    def bmean(self, x: np.ndarray) -> np.ndarray:
+        """Block means of a fine-grid array (n_f,) or (n_f, k)."""
+        sel = self._sel
+        ids = self.block[sel]
+        if x.ndim == 1:
+            return np.bincount(ids, weights=x[sel], minlength=self.nb) / self.counts
+        return np.column_stack([np.bincount(ids, weights=x[sel, j], minlength=self.nb)
+                                / self.counts for j in range(x.shape[1])])
+
+    def smooth(self, x: np.ndarray) -> np.ndarray:
+        """The working smoother S_W on the fine grid (columns of a 2-D array separately)."""
+        W = self.refs.smoothing_s
+        if x.ndim == 1:
+            return smooth(x, self.frame.dt, W, self.frame.bounds)
+        return np.column_stack([smooth(x[:, j], self.frame.dt, W, self.frame.bounds)
+                                for j in range(x.shape[1])])
+
+    @property
+    def _sel(self) -> np.ndarray:
+        if not hasattr(self, "_sel_cache"):
+            self._sel_cache = self.block >= 0
+        return self._sel_cache
+
+
+def _nice_floor(x: float) -> float:
+    best = NICE_STEPS[0]
+    for s in NICE_STEPS:
+        if s <= x * (1 + 1e-9):
+            best = s
+    return best
+
+
+def choose_resolution(frame: EnvFrame, smoothing_s: float, duration_s: float
+                      ) -> tuple[float, str, dict]:
+    """Working resolution T_b (s): the block length, chosen from the noise level.
+
+    Rule: τ_min = argmin of the overlapping Allan deviation of the rate (octave τ, on the fine
+    grid ``frame``): below τ_min white noise dominates, above it drift and environment. T_b =
+    τ_min/4 rounded down to a 1-2-5 step and clipped to [max(W/4, duration/20000, dt_f),
+    max(that, min(60 s, duration/300))]: no finer than a quarter of the smoother window W (the
+    smoothed series carries nothing faster), at most 20 000 blocks, and at least 300 blocks when
+    the record allows; a multiple of the fine-grid step dt_f. Returns (T_b, reason, details).
+    """
+    dt = frame.dt
+    tau, sig = st.oadev(frame.rate, dt, segments=frame.bounds)
+    lo = max(smoothing_s / 4.0, duration_s / MAX_BLOCKS, dt)
+    hi = max(lo, min(MAX_RES_S, duration_s / MIN_BLOCKS_RES))
+    if len(sig):
+        i = int(np.argmin(sig))
+        tmin, smin = float(tau[i]), float(sig[i])
+        target = tmin / 4.0
+    else:  # pragma: no cover - very short logs
+        tmin, smin, target = dt, float("nan"), dt
+    tb = _nice_floor(min(max(target, lo), hi))
+    if tb < lo:
+        tb = lo
+    tb = max(dt, round(tb / dt) * dt)
+    why = (f"block means of {tb:g} s: the rate's Allan deviation is lowest "
+           f"({smin:.3g} deg/h) at tau = {tmin:.3g} s (white noise dominates below); "
+           f"T_b = tau_min/4 rounded to 1-2-5 within [{lo:.3g}, {hi:.3g}] s "
+           f"(>= W/4, <= {MAX_BLOCKS} and >= {MIN_BLOCKS_RES} blocks, <= {MAX_RES_S:g} s)")
+    return tb, why, {"tau_min_s": tmin, "sigma_min_dph": smin}
+
+
+def file_provenance(path: str | os.PathLike | None) -> dict:
+    """File name, size and sha256 of the input file (for the model's provenance)."""
+    if path is None or str(path) == "-":
+        return {"file": "<stdin>" if path == "-" else None}
+    p = os.fspath(path)
+    h = hashlib.sha256()
+    with open(p, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return {"file": os.path.basename(p), "path": os.path.abspath(p), "sha256": h.hexdigest(),
+            "bytes": os.path.getsize(p)}
+
+
+def channel_ranges(log) -> dict[str, list[float]]:
+    """min/max of every auxiliary channel (the model's domain of validity)."""
+    out: dict[str, list[float]] = {}
+    for k, v in log.temperature.items():
+        out[f"temperature:{k}"] = [float(np.nanmin(v)), float(np.nanmax(v))]
+    for k, v in log.field_uT.items():
+        out[f"field:{k}"] = [float(np.nanmin(v)), float(np.nanmax(v))]
+    if log.supply is not None:
+        out["supply:V"] = [float(np.nanmin(log.supply)), float(np.nanmax(log.supply))]
+    for k, v in log.extra.items():
+        try:
+            out[f"extra:{k}"] = [float(np.nanmin(v)), float(np.nanmax(v))]
+        except (TypeError, ValueError):
+            pass
+    return out
+
+
+def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
+    """Window W of the working smoother S_W (moving mean over W, applied twice).
+
+    Rule: W = max(60 s, 4·dt_f, W_noise), W_noise = the window at which the derivative noise of
+    the noisiest temperature sensor, σ_T·√(2·dt/W³)·3600 degC/h (σ_T from second differences
+    on the fine grid), falls to 1 % of the RMS of that sensor's dT/dt; at most duration/20.
+    Because S_W is applied to the gyro rate and to every regressor alike, W costs time
+    resolution but never biases a coefficient.
+    """
+    w0 = max(60.0, 4.0 * frame.dt)
+    need = w0
+    why = "at least 60 s"
+    for name, x in frame.temperature.items():
+        x = np.asarray(x, float)
+        if len(x) < 8 or not np.all(np.isfinite(x)):
+            continue
+        d2 = x[2:] - 2 * x[1:-1] + x[:-2]
+        sig = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        if sig <= 0:
+            sig = float(np.std(d2)) / math.sqrt(6.0)
+        rate = smoothed_rate(x, frame.dt, w0, frame.bounds)
+        rms = float(np.sqrt(np.mean(rate ** 2)))
+        if not (rms > 0 and sig > 0):
+            continue
+        w = (sig * 3600.0 * math.sqrt(2 * frame.dt) / (0.01 * rms)) ** (2.0 / 3.0)
+        if w > need:
+            need = w
+            why = (f"derivative noise of {name} (σ ≈ {sig:.2g} °C per {frame.dt:g} s) below 1 % "
+                   f"of its dT/dt RMS ({rms:.3g} °C/h)")
+    cap = max(w0, duration_s / 20.0)
+    W = min(need, cap)
+    W = float(np.ceil(W / frame.dt) * frame.dt)
+    return W, f"smoothing window W = {W:g} s ({why})"
+
+
+def prepare(log, *, axis: str | None = None, resolution: float | None = None,
+            t_ref: float | None = None, v_ref: float | None = None,
+            smoothing_s: float | None = None, t_on_s: float = 0.0,
+            provenance: dict | None = None, fine_dt: float | None = None) -> WorkData:
+    """Prepare a :class:`~gyrotest.data.GyroLog` for fitting at the working resolution.
+
+    ``resolution`` T_b (s; default chosen by :func:`choose_resolution`), ``t_ref`` reference
+    temperature degC (default: mean, per sensor), ``v_ref`` reference supply V (default mean),
+    ``smoothing_s`` smoother window W (default :func:`choose_smoothing`), ``t_on_s`` power-on
+    time relative to the log start (warm-up term; −skip when the start was trimmed).
+
+    The gyro rate and every regressor are smoothed by S_W and then averaged over blocks of T_b
+    within each segment; samples within the smoother's reach (2·⌈W/2⌉) of a segment end are
+    left out.
+    """
+    axis = axis or log.axes[0]
+    if axis not in log.rates:
+        raise InputError(f"{log.source}: no gyro axis {axis!r} (axes: {', '.join(log.axes)})")
+    if log.n < 8:
+        raise AnalysisError(f"{log.source}: only {log.n} samples; too short to fit a model")
+    details: dict = {}
+    dur = log.duration_s
+    if resolution is not None:
+        resolution = float(resolution)
+        if not resolution > 0:
+            raise InputError(f"resolution must be > 0 s (got {resolution:g})")
+        if resolution < log.tau0 * (1 - 1e-9):
+            raise InputError(f"resolution {resolution:g} s is shorter than the sample interval "
+                             f"{log.tau0:g} s")
+    if fine_dt is None:
+        fine_dt = max(min(1.0, resolution or 1.0), dur / 200000.0)
+    mf = max(1, int(round(fine_dt / log.tau0)))
+    fine_dt = mf * log.tau0
+    frame = frame_from_log(log, axis=axis, dt=fine_dt if mf > 1 else None)
+    if smoothing_s is None:
+        W, wnote = choose_smoothing(frame, dur)
+    else:
+        W = float(smoothing_s)
+        if not W > 0:
+            raise InputError(f"smoothing window must be > 0 s (got {W:g})")
+        wnote = f"smoothing window W = {W:g} s (given)"
+    if resolution is None:
+        tb, why, details = choose_resolution(frame, W, dur)
+    else:
+        tb = resolution
+        why = f"block means of {tb:g} s (given)"
+    m = max(1, int(round(tb / fine_dt)))
+    tb = m * fine_dt
+    h = smoothing_half(W, frame.dt)
+    edge = 2 * h
+    block = np.full(frame.n, -1, dtype=np.int64)
+    nb = 0
+    for a, b in frame.bounds:
+        a2, b2 = a + edge, b - edge
+        if b2 - a2 < max(1, (m + 1) // 2):
+            continue
+        k = (b2 - a2) // m
+        rem = (b2 - a2) - k * m
+        ids = nb + np.repeat(np.arange(k), m)
+        block[a2:a2 + k * m] = ids
+        nb += k
+        if rem >= (m + 1) // 2 and rem > 0:
+            block[a2 + k * m:b2] = nb
+            nb += 1
+    if nb < 3:
+        raise AnalysisError(f"{log.source}: only {nb} usable blocks of {tb:g} s (smoothing "
+                            f"window {W:g} s trims each segment end); the log is too short "
+                            "for this resolution (use a finer --resolution or --smooth)")
+    counts = np.bincount(block[block >= 0], minlength=nb).astype(float)
+    refs = default_refs(frame, t_ref=t_ref, v_ref=v_ref, smoothing_s=W, t_on_s=t_on_s,
+                        resolution_s=tb)
+    info = {"source": log.source, "axis": axis, "samples": log.n, "tau0_s": log.tau0,
+            "duration_s": log.duration_s, "start": log.timing.start,
+            "segments": len(log.segments), "fine_dt_s": fine_dt, "blocks": nb,
+            "smoothing_window_s": W, "channel_ranges": channel_ranges(log), **details}
+    if provenance:
+        info.update(provenance)
+    wd = WorkData(frame=frame, block=block, counts=counts, t=np.zeros(nb), y=np.zeros(nb),
+                  resolution_s=tb, resolution_note=why + "; " + wnote + "; the same smoother "
+                  "is applied to the gyro rate and to every regressor", refs=refs, axis=axis,
+                  info=info, log=log)
+    wd.t = wd.bmean(frame.t)
+    wd.y = wd.bmean(wd.smooth(frame.rate))
+    wd.t_eff = effective_averaging_time(frame.dt, h, m)
+    return wd
+
+
+def effective_averaging_time(dt: float, half: int, m: int) -> float:
+    """Averaging time T_eff (s) of the combined filter (smoother S_W then block mean of m
+    samples) for white noise: T_eff = dt / Σ h_k² with h the unit-sum impulse response."""
+    box = np.ones(2 * half + 1) / (2 * half + 1)
+    k = np.convolve(np.convolve(box, box), np.ones(m) / m)
+    return float(dt / np.sum(k * k))
+
+
+# ============================================================================ design matrix
+class Design:
+    """Regressors of a set of terms on a :class:`WorkData` (fine and block level, cached)."""
+
+    def __init__(self, wd: WorkData):
+        self.wd = wd
+        self._lin: dict[str, np.ndarray] = {}
+        self._nl: OrderedDict = OrderedDict()
+
+    def block(self, spec: TermSpec, theta: dict[str, float] | None = None) -> np.ndarray:
+        if not spec.effect.nonlinear:
+            if spec.label not in self._lin:
+                xf = self._filtered(spec, {})
+                self._lin[spec.label] = self.wd.bmean(xf).reshape(self.wd.nb, -1)
+            return self._lin[spec.label]
+        key = (spec.label, tuple(sorted((theta or {}).items())))
+        if key in self._nl:
+            self._nl.move_to_end(key)
+            return self._nl[key]
+        xf = self._filtered(spec, theta or {})
+        xb = self.wd.bmean(xf).reshape(self.wd.nb, -1)
+        self._nl[key] = xb
+        if len(self._nl) > 64:
+            self._nl.popitem(last=False)
+        return xb
+
+    def _filtered(self, spec: TermSpec, theta: dict[str, float]) -> np.ndarray:
+        xf = build_term(self.wd.frame, spec, theta, self.wd.refs)
+        if spec.key == "bias" or spec.effect.prefiltered:
+            return xf
+        return self.wd.smooth(xf)
+
+    def fine(self, spec: TermSpec, theta: dict[str, float] | None = None) -> np.ndarray:
+        return build_term(self.wd.frame, spec, theta or {}, self.wd.refs)
+
+    def matrix(self, specs: list[TermSpec], thetas: dict[str, dict]) -> np.ndarray:
+        cols = [self.block(s, thetas.get(s.label)) for s in specs]
+        return np.column_stack(cols) if cols else np.zeros((self.wd.nb, 0))
+
+
+# ============================================================================ results
+@dataclass
+class Coefficient:
+    """A fitted coefficient with its unit and autocorrelation-robust uncertainty."""
+
+    name: str
+    symbol: str
+    term: str
+    value: float
+    stderr: float  # HAC 1σ
+    stderr_ols: float  # naive OLS on block means (independent-residual assumption)
+    unit: str
+    kind: str = "linear"
+
+    @property
+    def z(self) -> float:
+        return self.value / self.stderr if self.stderr and self.stderr > 0 else float("nan")
+
+    @property
+    def p(self) -> float:
+        from scipy import stats as sps
+
+        z = self.z
+        return float(2 * sps.norm.sf(abs(z))) if math.isfinite(z) else float("nan")
+
+    @property
+    def significance(self) -> str:
+        z = abs(self.z)
+        if not math.isfinite(z):
+            return "n/a"
+        if z >= 5:
+            return "strong"
+        if z >= 3:
+            return "significant"
+        if z >= 2:
+            return "marginal"
+        return "not significant"
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "symbol": self.symbol, "term": self.term, "value": self.value,
+                "stderr": self.stderr, "stderr_ols_naive": self.stderr_ols, "unit": self.unit,
+                "z": self.z, "p": self.p, "significance": self.significance, "kind": self.kind}
+
+
+@dataclass
+class Excursion:
+    """A stretch where the residual exceeds k·σ, with what the channels were doing."""
+
+    t_start_s: float
+    t_end_s: float
+    peak_dph: float
+    mean_dph: float
+    description: str
+
+    def to_dict(self) -> dict:
+        return {"t_start_s": self.t_start_s, "t_end_s": self.t_end_s, "peak_dph": self.peak_dph,
+                "mean_dph": self.mean_dph, "description": self.description}
+
+
+@dataclass
+class FitResult:
+    """Everything a model fit produced (``to_dict`` for JSON; arrays kept for plots)."""
+
+    model: EnvModel
+    specs: list[TermSpec]
+    coefficients: list[Coefficient]
+    n_blocks: int
+    n_params: int
+    resolution_s: float
+    resolution_note: str
+    rms_fit: float
+    rms_holdout: float
+    holdout_fold_rms: list[float]
+    holdout_scheme: str
+    aic: float
+    bic: float
+    condition_number: float
+    vif: dict[str, float]
+    warnings: list[str]
+    hac: st.HACInfo
+    rms_raw: float  # RMS of the mean-removed block means (no model)
+    floor: st.NoiseFloor | None = None
+    adev_tau: np.ndarray | None = None
+    adev_sigma: np.ndarray | None = None
+    excursions: list[Excursion] = field(default_factory=list)
+    data: dict[str, Any] = field(default_factory=dict)
+    # arrays (not serialised)
+    t: np.ndarray | None = None
+    y: np.ndarray | None = None
+    yhat: np.ndarray | None = None
+    resid: np.ndarray | None = None
+    holdout_resid: np.ndarray | None = None
+    fold_of_block: np.ndarray | None = None
+    cov: np.ndarray | None = None
+    param_names: list[str] = field(default_factory=list)
+    wd: WorkData | None = None
+
+    @property
+    def terms(self) -> list[str]:
+        return [s.label for s in self.specs]
+
+    def coef(self, name: str) -> Coefficient:
+        for c in self.coefficients:
+            if c.name == name or c.term == name or c.symbol == name:
+                return c
+        raise KeyError(name)
+
+    def to_dict(self) -> dict:
+        d = {
+            "terms": self.terms,
+            "term_descriptions": {s.label: describe(s) for s in self.specs},
+            "coefficients": [c.to_dict() for c in self.coefficients],
+            "rms_raw_dph": self.rms_raw,
+            "rms_fit_dph": self.rms_fit,
+            "rms_holdout_dph": self.rms_holdout,
+            "holdout_fold_rms_dph": self.holdout_fold_rms,
+            "holdout_scheme": self.holdout_scheme,
+            "aic": self.aic, "bic": self.bic,
+            "n_blocks": self.n_blocks, "n_params": self.n_params,
+            "resolution_s": self.resolution_s, "resolution_note": self.resolution_note,
+            "smoothing_window_s": self.model.refs.smoothing_s,
+            "condition_number": self.condition_number, "vif": self.vif,
+            "uncertainty": self.hac.to_dict(),
+            "noise_floor": self.floor.to_dict() if self.floor else None,
+            "residual_allan": ({"tau_s": self.adev_tau, "sigma_dph": self.adev_sigma}
+                               if self.adev_tau is not None else None),
+            "excursions": [e.to_dict() for e in self.excursions],
+            "warnings": self.warnings,
+            "data": self.data,
+            "model": self.model.to_dict(),
+        }
+        return d
+
+
+# ============================================================================ core fitting
+def _rss(X: np.ndarray, y: np.ndarray) -> float:
+    return st.lstsq(X, y)[1]
+
+
+class _Fitter:
+    """Variable projection over the nonlinear parameters of a term set."""
+
+    def __init__(self, design: Design, specs: list[TermSpec]):
+        self.d = design
+        self.wd = design.wd
+        self.specs = specs
+        self.nl = [s for s in specs if s.effect.nonlinear]
+        self.bounds = {s.label: nonlinear_bounds(s, self.wd.duration_s, self.wd.resolution_s)
+                       for s in self.nl}
+
+    def X(self, thetas: dict[str, dict]) -> np.ndarray:
+        return self.d.matrix(self.specs, thetas)
+
+    def solve(self, thetas: dict[str, dict], mask: np.ndarray | None) -> tuple[np.ndarray, float]:
+        X = self.X(thetas)
+        y = self.wd.y
+        if mask is not None:
+            X, y = X[mask], y[mask]
+        return st.lstsq(X, y)
+
+    def optimise(self, thetas0: dict[str, dict] | None, mask: np.ndarray | None,
+                 local: bool = False) -> dict[str, dict]:
+        thetas: dict[str, dict] = {k: dict(v) for k, v in (thetas0 or {}).items()}
+        if not self.nl:
+            return thetas
+        rounds = 1 if len(self.nl) == 1 else 2
+        for _ in range(rounds):
+            for s in self.nl:
+                thetas[s.label] = self._opt_one(s, thetas, mask,
+                                                local=local and s.label in (thetas0 or {}))
+        return thetas
+
+    def _opt_one(self, s: TermSpec, thetas: dict[str, dict], mask, local: bool) -> dict:
+        (pname, (lo, hi)), = self.bounds[s.label].items()
+        kind = s.effect.nonlinear[0].kind
+
+        def f(v: float) -> float:
+            th = dict(thetas)
+            th[s.label] = {pname: float(v)}
+            return self.solve(th, mask)[1]
+
+        cur = (thetas.get(s.label) or {}).get(pname)
+        if kind == "tau":
+            g = lambda u: f(math.exp(u))  # noqa: E731
+            llo, lhi = math.log(lo), math.log(hi)
+            if local and cur is not None:
+                c = math.log(min(max(cur, lo), hi))
+                a, b = max(llo, c - 0.7), min(lhi, c + 0.7)
+            else:
+                grid = np.linspace(llo, lhi, 14)
+                vals = [g(u) for u in grid]
+                i = int(np.argmin(vals))
+                a = grid[max(i - 1, 0)]
+                b = grid[min(i + 1, len(grid) - 1)]
+            r = optimize.minimize_scalar(g, bounds=(a, b), method="bounded",
+                                         options={"xatol": 0.003})
+            return {pname: float(math.exp(r.x))}
+        # frequency
+        T = self.wd.duration_s
+        if local and cur is not None:
+            a, b = max(lo, cur - 0.5 / T), min(hi, cur + 0.5 / T)
+        else:
+            f0 = self._periodogram_peak(s, thetas, mask, lo, hi)
+            a, b = max(lo, f0 - 1.0 / T), min(hi, f0 + 1.0 / T)
+        r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
+                                     options={"xatol": 1e-3 / T})
+        return {pname: float(r.x)}
+
+    def _periodogram_peak(self, s: TermSpec, thetas, mask, lo: float, hi: float) -> float:
+        others = [x for x in self.specs if x.label != s.label]
+        X = self.d.matrix(others, thetas)
+        y = self.wd.y
+        m = np.ones(self.wd.nb, bool) if mask is None else mask
+        if X.shape[1]:
+            beta, _ = st.lstsq(X[m], y[m])
+            r = y - X @ beta
+        else:
+            r = y - y[m].mean()
+        r = np.where(m, r, 0.0)
+        # place blocks on their nominal time grid (gaps stay zero)
+        tb = self.wd.resolution_s
+        idx = np.round((self.wd.t - self.wd.t[0]) / tb).astype(int)
+        n = int(idx[-1]) + 1
+        x = np.zeros(n)
+        x[idx] = r
+        nfft = 1 << int(math.ceil(math.log2(4 * n)))
+        P = np.abs(np.fft.rfft(x, nfft)) ** 2
+        fr = np.fft.rfftfreq(nfft, tb)
+        ok = (fr >= lo) & (fr <= hi)
+        if not ok.any():
+            return 0.5 * (lo + hi)
+        return float(fr[ok][np.argmax(P[ok])])
+
+    def jacobian(self, thetas: dict[str, dict], beta: np.ndarray) -> tuple[np.ndarray, list]:
+        """Columns ∂ŷ/∂θ for every nonlinear parameter (block level)."""
+        cols, names = [], []
+        offs = self._offsets()
+        for s in self.nl:
+            (pname, val), = thetas[s.label].items()
+            kind = s.effect.nonlinear[0].kind
+            h = val * 1e-3 if kind == "tau" else 1e-3 / self.wd.duration_s
+            a, b = offs[s.label]
+            bs = beta[a:b]
+            xp = self.d.block(s, {pname: val + h}) @ bs
+            xm = self.d.block(s, {pname: val - h}) @ bs
+            cols.append((xp - xm) / (2 * h))
+            names.append((s, pname))
+        return (np.column_stack(cols) if cols else np.zeros((self.wd.nb, 0))), names
+
+    def _offsets(self) -> dict[str, tuple[int, int]]:
+        out, k = {}, 0
+        for s in self.specs:
+            out[s.label] = (k, k + s.n_coef)
+            k += s.n_coef
+        return out
+
+
+def holdout_folds(nb: int, folds: int = 5, chunks_per_fold: int = 4,
+                  buffer_frac: float = 0.1) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Blocked cross-validation: fold id per block, and the training mask of each fold.
+
+    The nb blocks are cut into folds·chunks_per_fold contiguous chunks; chunk c is in fold
+    c mod folds; a training mask leaves out its fold plus ``buffer_frac`` of a chunk on both
+    sides of every held-out chunk.
+    """
+    n_chunks = max(folds, min(folds * chunks_per_fold, nb // 4))
+    edges = np.linspace(0, nb, n_chunks + 1).astype(int)
+    fold = np.empty(nb, dtype=int)
+    for c in range(n_chunks):
+        fold[edges[c]:edges[c + 1]] = c % folds
+    buf = int(round(buffer_frac * nb / n_chunks))
+    masks = []
+    for f in range(folds):
+        held = fold == f
+        excl = held.copy()
+        if buf > 0:
+            for c in range(n_chunks):
+                if c % folds != f:
+                    continue
+                a, b = edges[c], edges[c + 1]
+                excl[max(0, a - buf):a] = True
+                excl[b:min(nb, b + buf)] = True
+        masks.append(~excl)
+    return fold, masks
+
+
+def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bool = True,
+              folds: int = 5, chunks_per_fold: int = 4, thetas0: dict | None = None,
+              light: bool = False, k_sigma: float = 3.0) -> FitResult:
+    """Fit ``terms`` (plus a bias) to prepared data; see the module docstring.
+
+    Returns a :class:`FitResult` with coefficients in physical units ± HAC 1σ, residual RMS
+    (deg/h) on the fit and on held-out blocks, AIC/BIC, collinearity diagnostics, the residual
+    Allan deviation and noise floor, excursions (|residual| > k·σ) and the portable
+    :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
+    """
+    specs = parse_terms(terms) if not (isinstance(terms, list) and terms
+                                       and isinstance(terms[0], TermSpec)) else list(terms)
+    specs = [s for s in specs if s.key != "bias"]
+    specs = resolve_terms(specs, wd.frame)
+    if bias:
+        specs = [TermSpec("bias")] + specs
+    n_params = sum(s.n_coef + len(s.effect.nonlinear) for s in specs)
+    if wd.nb < n_params + 2:
+        names = ", ".join(s.label for s in specs)
+        raise AnalysisError(f"terms {names} need {n_params} parameters but {wd.info['source']} "
+                            f"gives only {wd.nb} blocks of {wd.resolution_s:g} s; use a longer "
+                            "log, fewer terms or a finer --resolution")
+    design = Design(wd)
+    fitter = _Fitter(design, specs)
+    thetas = fitter.optimise(thetas0, None, local=True)
+    X = fitter.X(thetas)
+    beta, rss = st.lstsq(X, wd.y)
+    yhat = X @ beta
+    resid = wd.y - yhat
+    nb = wd.nb
+    # ---- uncertainties on the Gauss-Newton Jacobian
+    Jn, nl_names = fitter.jacobian(thetas, beta)
+    J = np.column_stack([X, Jn]) if Jn.shape[1] else X
+    cov, hinfo = st.hac_covariance(J, resid)
+    cov_ols = st.ols_covariance(J, resid)
+    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    se_ols = np.sqrt(np.clip(np.diag(cov_ols), 0, None))
+    coefs: list[Coefficient] = []
+    mterms: list[ModelTerm] = []
+    offs = fitter._offsets()
+    for s in specs:
+        a, b = offs[s.label]
+        e = s.effect
+        unit = e.coef_unit if s.key != "custom" else "deg/h per unit of expression"
+        for j, (nm, sym) in enumerate(zip(s.coef_labels(), e.coef_names)):
+            coefs.append(Coefficient(nm, sym, s.label, float(beta[a + j]), float(se[a + j]),
+                                     float(se_ols[a + j]), unit))
+        mt = ModelTerm(s, dict(thetas.get(s.label, {})), {}, [float(v) for v in beta[a:b]],
+                       [float(v) for v in se[a:b]])
+        mterms.append(mt)
+    p_lin = X.shape[1]
+    for i, (s, pname) in enumerate(nl_names):
+        val = thetas[s.label][pname]
+        unit = s.effect.nonlinear[0].unit
+        coefs.append(Coefficient(f"{s.label}.{pname}", pname, s.label, float(val),
+                                 float(se[p_lin + i]), float(se_ols[p_lin + i]), unit,
+                                 kind="nonlinear"))
+        for mt in mterms:
+            if mt.spec.label == s.label:
+                mt.theta_stderr[pname] = float(se[p_lin + i])
+    # ---- held-out validation
+    fold, masks = holdout_folds(nb, folds, chunks_per_fold)
+    hres = np.full(nb, np.nan)
+    fold_rms = []
+    for f, m in enumerate(masks):
+        if m.sum() < n_params + 2:
+            continue
+        th_f = fitter.optimise(thetas, m, local=True)
+        Xf = fitter.X(th_f)
+        bf, _ = st.lstsq(Xf[m], wd.y[m])
+        held = fold == f
+        hres[held] = wd.y[held] - Xf[held] @ bf
+        fold_rms.append(float(np.sqrt(np.mean(hres[held] ** 2))))
+    ok = np.isfinite(hres)
+    rms_hold = float(np.sqrt(np.mean(hres[ok] ** 2))) if ok.any() else float("nan")
+    rms_fit = float(np.sqrt(rss / nb))
+    aic, bic = st.aic_bic(rss, nb, n_params)
+    names = [c.name for c in coefs]
+    cond, vif, corr = st.collinearity(X, names[:p_lin])
+    warnings = _warnings(specs, coefs, vif, corr, names[:p_lin], thetas, fitter, rms_fit,
+                         rms_hold, nb, n_params)
+    rms_raw = float(np.std(wd.y))
+    model = EnvModel(terms=mterms, refs=wd.refs, axis=wd.axis, resolution_s=wd.resolution_s,
+                     fine_dt_s=wd.frame.dt,
+                     fit={"rms_fit_dph": rms_fit, "rms_holdout_dph": rms_hold, "aic": aic,
+                          "bic": bic, "n_blocks": nb, "n_params": n_params,
+                          "rms_raw_dph": rms_raw,
+                          "uncertainty": hinfo.method},
+                     data={k: v for k, v in wd.info.items()})
+    res = FitResult(model=model, specs=specs, coefficients=coefs, n_blocks=nb,
+                    n_params=n_params, resolution_s=wd.resolution_s,
+                    resolution_note=wd.resolution_note, rms_fit=rms_fit, rms_holdout=rms_hold,
+                    holdout_fold_rms=fold_rms,
+                    holdout_scheme=(f"{folds}-fold blocked cross-validation over "
+                                    f"{int((np.diff(fold) != 0).sum()) + 1} contiguous time "
+                                    "chunks (10 % buffer)"),
+                    aic=aic, bic=bic, condition_number=cond, vif=vif, warnings=warnings,
+                    hac=hinfo, rms_raw=rms_raw, data=dict(wd.info), t=wd.t, y=wd.y, yhat=yhat,
+                    resid=resid, holdout_resid=hres, fold_of_block=fold, cov=cov,
+                    param_names=names, wd=wd)
+    res._thetas = thetas  # type: ignore[attr-defined]
+    res._fitter = fitter  # type: ignore[attr-defined]
+    if not light:
+        finish(res)
+    return res
+
+
+def fine_residual(res: FitResult) -> np.ndarray:
+    """Residual on the fine grid (rate − model), deg/h."""
+    wd = res.wd
+    fitter = res._fitter  # type: ignore[attr-defined]
+    pred = np.zeros(wd.frame.n)
+    offs = fitter._offsets()
+    beta = np.array([c.value for c in res.coefficients if c.kind == "linear"])
+    for s in res.specs:
+        a, b = offs[s.label]
+        pred += fitter.d.fine(s, res._thetas.get(s.label)) @ beta[a:b]  # type: ignore[attr-defined]
+    return wd.frame.rate - pred
+
+
+def finish(res: FitResult, k_sigma: float = 3.0) -> None:
+    """Residual Allan deviation, noise floor and excursions (the slower diagnostics)."""
+    from .excursions import find_excursions
+
+    wd = res.wd
+    r = fine_residual(res)
+    tau, sig = st.oadev(r, wd.frame.dt, segments=wd.frame.bounds)
+    res.adev_tau, res.adev_sigma = tau, sig
+    res.floor = st.noise_floor(tau, sig, getattr(wd, "t_eff", wd.resolution_s), wd.duration_s,
+                               fit_upto_s=None)
+    res.excursions = find_excursions(res, k_sigma=k_sigma)
+    res.model.fit["noise_floor_dph"] = res.floor.rms_dph
+
+
+_ADVICE = {
+    frozenset({"T", "ramp"}): "temperature and time rise together (a monotone ramp): run a "
+    "thermal cycle (up and down) or hold the temperature while time passes",
+    frozenset({"T", "warmup"}): "self-heating and warm-up coincide: log a warm-up at constant "
+    "chamber temperature, or a temperature change well after warm-up",
+    frozenset({"warmup", "ramp"}): "log longer after warm-up so the transient and the ramp "
+    "separate",
+    frozenset({"T", "T2"}): "widen the temperature range or centre T_ref in it",
+    frozenset({"T2", "T3"}): "widen the temperature range",
+    frozenset({"T", "T3"}): "widen the temperature range",
+    frozenset({"dTdt", "dGdt"}): "change the ramp rate or heat one side so that the gradient "
+    "rate and the temperature rate vary independently",
+    frozenset({"T", "Tlag"}): "use temperature steps or faster ramps so the core lag shows",
+    frozenset({"dTdt", "Tlag"}): "use temperature steps so a lag (exponential) and a rate "
+    "term (follows dT/dt) look different",
+    frozenset({"dTdt", "hyst"}): "add dwells between heating and cooling so the branch and the "
+    "rate decouple",
+    frozenset({"T", "dTdt"}): "hold set-points long enough for dT/dt to return to zero",
+}
+
+
+def _advice(ka: str, kb: str) -> str:
+    if ka == kb:
+        return "use sensors that differ, or keep one of them"
+    a = _ADVICE.get(frozenset({ka, kb}))
+    if a:
+        return a
+    if {ka, kb} <= {"Hx", "Hy", "Hz"}:
+        return "step one coil axis at a time (Helmholtz sequence per axis)"
+    return "vary the two channels independently in a dedicated test"
+
+
+def _warnings(specs, coefs, vif, corr, names, thetas, fitter, rms_fit, rms_hold, nb,
+              n_params) -> list[str]:
+    out: list[str] = []
+    key_of = {}
+    for s in specs:
+        for nm in s.coef_labels():
+            key_of[nm] = s.key
+    done = set()
+    for i, nm in enumerate(names):
+        v = vif.get(nm)
+        if v is None or not (v > 10):
+            continue
+        row = np.abs(np.nan_to_num(corr[i].copy()))
+        row[i] = 0
+        j = int(np.argmax(row))
+        pair = frozenset({nm, names[j]})
+        if pair in done:
+            continue
+        done.add(pair)
+        out.append(f"{nm} and {names[j]} are nearly collinear in this log "
+                   f"(r = {corr[i, j]:+.3f}, VIF {v:.3g}): their coefficients trade off and "
+                   f"cannot be told apart here; to separate them, "
+                   f"{_advice(key_of.get(nm, ''), key_of.get(names[j], ''))}")
+    for c in coefs:
+        if c.symbol == "D_F" or c.kind != "linear":
+            continue
+        if abs(c.z) < 2:
+            out.append(f"{c.name}: not significant (|z| = {abs(c.z):.2g} with the HAC error); "
+                       "the data do not support this term")
+    for s in fitter.nl:
+        (pname, val), = thetas[s.label].items()
+        lo, hi = fitter.bounds[s.label][pname]
+        if s.effect.nonlinear[0].kind == "tau" and (val < lo * 1.05 or val > hi / 1.05):
+            out.append(f"{s.label}: {pname} = {val:.4g} s is at the edge of its search range "
+                       f"[{lo:.4g}, {hi:.4g}] s: not resolved by this log")
+    if math.isfinite(rms_hold) and rms_hold > 1.5 * rms_fit:
+        out.append(f"held-out RMS {rms_hold:.3g} deg/h is {rms_hold / rms_fit:.2g}x the fit RMS: "
+                   "the model over-fits or does not extrapolate between the time chunks")
+    if nb < 10 * n_params:
+        out.append(f"only {nb} blocks for {n_params} parameters: uncertainties are rough")
+    return out
+
+
+def predict_blocks(res: FitResult, specs: list[TermSpec] | None = None) -> np.ndarray:
+    """Block-level prediction of a subset of a fit's terms (for partial-residual plots)."""
+    fitter = res._fitter  # type: ignore[attr-defined]
+    offs = fitter._offsets()
+    beta = np.array([c.value for c in res.coefficients if c.kind == "linear"])
+    out = np.zeros(res.n_blocks)
+    for s in specs or res.specs:
+        a, b = offs[s.label]
+        out += fitter.d.block(s, res._thetas.get(s.label)) @ beta[a:b]  # type: ignore[attr-defined]
+    return out

@@ -1,0 +1,334 @@
+"""Statistics for the model workbench: least squares, autocorrelation-robust (HAC)
+covariance, collinearity, information criteria, Allan deviation of residuals, noise floor.
+
+Why HAC: gyro residuals are autocorrelated (flicker, Markov, random walk, unmodelled slow
+effects). The textbook OLS covariance σ²(XᵀX)⁻¹ assumes independent samples; on 10⁵
+correlated samples it understates the coefficient error by orders of magnitude. gyrotest uses
+the Newey–West (Bartlett kernel) long-run covariance of the scores x_t·e_t with Andrews–
+Monahan VAR(1) prewhitening and Andrews' (1991) AR(1) plug-in bandwidth:
+
+    Cov(β) = (XᵀX)⁻¹ · S · (XᵀX)⁻¹,
+    S = D·[Γ0 + Σ_{j=1..L} (1 − j/(L+1))·(Γj + Γjᵀ)]·Dᵀ,  Γj = Σ_t v_t v_{t−j}ᵀ,
+    v_t = u_t − A·u_{t−1} (VAR(1) prewhitening of u_t = x_t·e_t), D = (I − A)⁻¹,
+    L = 1.1447·(α̂·n)^{1/3}, α̂ = Σ 4ρ²σ⁴/((1−ρ)⁶(1+ρ)²) / Σ σ⁴/(1−ρ)⁴ (AR(1) fits per column).
+
+Sources: Newey & West (1987) Econometrica 55:703; Andrews (1991) Econometrica 59:817;
+Andrews & Monahan (1992) Econometrica 60:953.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, stats
+
+#: largest eigenvalue modulus allowed in the VAR(1) prewhitening filter (Andrews–Monahan)
+PREWHITEN_MAX_EIG = 0.97
+
+
+def lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares coefficients β = argmin ‖y − Xβ‖² (columns scaled for conditioning)
+    and the residual sum of squares RSS. Units: those of y per unit of each column."""
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    beta_s, *_ = np.linalg.lstsq(X / scale, y, rcond=None)
+    beta = beta_s / scale
+    r = y - X @ beta
+    return beta, float(r @ r)
+
+
+def andrews_bandwidth(v: np.ndarray) -> tuple[float, float]:
+    """Andrews (1991) AR(1) plug-in bandwidth for the Bartlett kernel.
+
+    Formula: L = 1.1447·(α̂(1)·n)^{1/3}, α̂(1) = Σ_a 4ρ_a²σ_a⁴/((1−ρ_a)⁶(1+ρ_a)²) /
+    Σ_a σ_a⁴/(1−ρ_a)⁴ with ρ_a, σ_a² from AR(1) fits of each column a of ``v`` (n × k).
+    Returns (L, mean ρ). Source: Andrews (1991) eq. (6.4)-(6.6).
+    """
+    n = v.shape[0]
+    num = den = 0.0
+    rhos = []
+    for a in range(v.shape[1]):
+        x = v[:, a] - v[:, a].mean()
+        x0, x1 = x[:-1], x[1:]
+        d = float(x0 @ x0)
+        if d <= 0:
+            continue
+        rho = float(np.clip((x0 @ x1) / d, -0.97, 0.97))
+        s2 = float(np.mean((x1 - rho * x0) ** 2))
+        num += 4 * rho ** 2 * s2 ** 2 / ((1 - rho) ** 6 * (1 + rho) ** 2)
+        den += s2 ** 2 / (1 - rho) ** 4
+        rhos.append(rho)
+    if den <= 0:
+        return 1.0, 0.0
+    alpha = num / den
+    L = 1.1447 * (alpha * n) ** (1.0 / 3.0)
+    return float(min(max(L, 1.0), n / 2)), float(np.mean(rhos)) if rhos else 0.0
+
+
+@dataclass
+class HACInfo:
+    """How the long-run covariance was estimated."""
+
+    method: str
+    bandwidth: float  # Bartlett lags (in blocks)
+    prewhiten_eig: float  # largest eigenvalue modulus of the VAR(1) filter
+    residual_rho1: float  # lag-1 autocorrelation of the residual
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "bandwidth_blocks": self.bandwidth,
+                "prewhiten_max_eigenvalue": self.prewhiten_eig,
+                "residual_lag1_autocorrelation": self.residual_rho1}
+
+
+def hac_covariance(X: np.ndarray, e: np.ndarray, *, prewhiten: bool = True,
+                   bandwidth: float | None = None) -> tuple[np.ndarray, HACInfo]:
+    """Heteroskedasticity-and-autocorrelation-consistent covariance of LS coefficients.
+
+    Formula: see the module docstring (Newey–West Bartlett kernel, VAR(1) prewhitening,
+    Andrews AR(1) plug-in bandwidth). ``X`` n × k design (or Jacobian), ``e`` residuals.
+    Returns (k × k covariance in the units of β², info).
+    """
+    n, k = X.shape
+    u = X * e[:, None]
+    A = None
+    eig = 0.0
+    v = u
+    if prewhiten and n > 4 * k + 10:
+        U0, U1 = u[:-1], u[1:]
+        At, *_ = np.linalg.lstsq(U0, U1, rcond=None)
+        A = At.T
+        ev = np.linalg.eigvals(A)
+        eig = float(np.max(np.abs(ev))) if len(ev) else 0.0
+        if eig > PREWHITEN_MAX_EIG:
+            # shrink the filter so that its largest eigenvalue is PREWHITEN_MAX_EIG
+            uu, s, vt = np.linalg.svd(A)
+            s = np.minimum(s, PREWHITEN_MAX_EIG)
+            A = (uu * s) @ vt
+            ev2 = np.linalg.eigvals(A)
+            m2 = float(np.max(np.abs(ev2)))
+            if m2 > PREWHITEN_MAX_EIG:
+                A = A * (PREWHITEN_MAX_EIG / m2)
+        v = U1 - U0 @ A.T
+    if bandwidth is None:
+        L, _ = andrews_bandwidth(v)
+    else:
+        L = float(bandwidth)
+    Lint = int(math.floor(L))
+    S = v.T @ v
+    for j in range(1, Lint + 1):
+        w = 1.0 - j / (L + 1.0)
+        G = v[j:].T @ v[:-j]
+        S += w * (G + G.T)
+    if A is not None:
+        D = np.linalg.inv(np.eye(k) - A)
+        S = D @ S @ D.T * (n / (n - 1.0))
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    Xs = X / scale
+    XtX_inv = np.linalg.pinv(Xs.T @ Xs) / np.outer(scale, scale)
+    cov = XtX_inv @ S @ XtX_inv
+    cov = 0.5 * (cov + cov.T)
+    ee = e - e.mean()
+    rho1 = float((ee[1:] @ ee[:-1]) / (ee @ ee)) if float(ee @ ee) > 0 else 0.0
+    info = HACInfo("Newey-West (Bartlett) with VAR(1) prewhitening, Andrews AR(1) bandwidth"
+                   if A is not None else "Newey-West (Bartlett), Andrews AR(1) bandwidth",
+                   L, eig, rho1)
+    return cov, info
+
+
+def ols_covariance(X: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Textbook OLS covariance σ²(XᵀX)⁻¹ with σ² = RSS/(n − k): correct only for
+    independent residuals (shown for comparison)."""
+    n, k = X.shape
+    s2 = float(e @ e) / max(n - k, 1)
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    Xs = X / scale
+    return s2 * np.linalg.pinv(Xs.T @ Xs) / np.outer(scale, scale)
+
+
+def wald(beta: np.ndarray, cov: np.ndarray) -> tuple[float, float, float]:
+    """Wald test that the coefficients ``beta`` are all zero.
+
+    Formula: W = βᵀ Cov⁻¹ β ~ χ²_q. Returns (W, p, z) with z the standard-normal quantile of
+    the same p-value (|z| for q = 1). Source: standard large-sample test.
+    """
+    beta = np.atleast_1d(beta)
+    cov = np.atleast_2d(cov)
+    q = len(beta)
+    try:
+        W = float(beta @ np.linalg.solve(cov, beta))
+    except np.linalg.LinAlgError:
+        W = float(beta @ np.linalg.pinv(cov) @ beta)
+    if not np.isfinite(W) or W < 0:
+        return float("nan"), float("nan"), float("nan")
+    p = float(stats.chi2.sf(W, q))
+    z = math.sqrt(W) if q == 1 else float(stats.norm.isf(max(p, 1e-300) / 2))
+    return W, p, z
+
+
+def collinearity(X: np.ndarray, names: list[str]) -> tuple[float, dict[str, float], np.ndarray]:
+    """Condition number of the column-normalised design (Belsley), variance inflation
+    factors VIF_j = 1/(1 − R²_j) of each non-constant column regressed on the others, and the
+    correlation matrix of the centred columns."""
+    n, k = X.shape
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    sv = np.linalg.svd(X / scale, compute_uv=False)
+    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+    Xc = X - X.mean(axis=0)
+    sd = Xc.std(axis=0)
+    const = sd <= 1e-12 * (np.abs(X).max(axis=0) + 1e-300)
+    vif: dict[str, float] = {}
+    corr = np.full((k, k), np.nan)
+    nz = np.where(~const)[0]
+    if len(nz):
+        Z = Xc[:, nz] / sd[nz]
+        c = (Z.T @ Z) / n
+        corr[np.ix_(nz, nz)] = c
+        try:
+            inv = np.linalg.inv(c)
+            for i, j in enumerate(nz):
+                vif[names[j]] = float(inv[i, i])
+        except np.linalg.LinAlgError:
+            for j in nz:
+                vif[names[j]] = float("inf")
+    return cond, vif, corr
+
+
+def aic_bic(rss: float, n: int, p: int) -> tuple[float, float]:
+    """Gaussian information criteria on n residuals with p fitted parameters.
+
+    Formula: AIC = n·ln(RSS/n) + 2p, BIC = n·ln(RSS/n) + p·ln n. With autocorrelated
+    residuals only differences between models fitted to the same data are meaningful.
+    Source: Akaike (1974); Schwarz (1978).
+    """
+    if rss <= 0 or n <= 0:
+        return float("nan"), float("nan")
+    base = n * math.log(rss / n)
+    return base + 2 * p, base + p * math.log(n)
+
+
+# ----------------------------------------------------------------------------- Allan deviation
+def octave_taus(tau0: float, n: int, max_frac: float = 0.25) -> np.ndarray:
+    """Octave-spaced averaging times τ = 2^k·τ0 up to ``max_frac`` of the record."""
+    m = 1
+    out = []
+    while m <= max_frac * n:
+        out.append(m)
+        m *= 2
+    return np.array(out, dtype=float) * tau0
+
+
+def oadev(rate: np.ndarray, tau0: float, taus: np.ndarray | None = None,
+          segments: list[tuple[int, int]] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping Allan deviation of a rate series (deg/h), pooled over segments.
+
+    Formula: σ²(τ) = Σ (θ_{k+2m} − 2θ_{k+m} + θ_k)² / (2τ²·Σ(N_s − 2m)), θ = cumulative
+    angle τ0·Σω, τ = m·τ0 (GYRO_REFERENCE §4, IEEE 952 Annex C). Uses
+    :func:`gyrotest.noise.deviations.compute_deviation` when that module is installed.
+    Returns (tau s, sigma deg/h); τ with no complete cluster is dropped.
+    """
+    rate = np.asarray(rate, dtype=np.float64)
+    if segments is None:
+        segments = [(0, len(rate))]
+    if taus is None:
+        longest = max(b - a for a, b in segments)
+        taus = octave_taus(tau0, longest)
+    try:  # the shared Allan core, when present
+        from ..noise.deviations import compute_deviation  # type: ignore
+
+        res = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus=taus,
+                                segments=segments)
+        tau = np.asarray(res.tau, float)
+        sig = np.asarray(res.sigma, float)
+        ok = np.isfinite(sig)
+        return tau[ok], sig[ok]
+    except Exception:
+        pass
+    ms = np.unique(np.maximum(1, np.round(np.asarray(taus) / tau0).astype(int)))
+    tau_out, sig_out = [], []
+    thetas = []
+    for a, b in segments:
+        x = rate[a:b] - rate[a:b].mean() if b > a else rate[a:b]
+        thetas.append(np.concatenate([[0.0], np.cumsum(x) * tau0]))
+    for m in ms:
+        num = 0.0
+        cnt = 0
+        for th in thetas:
+            nn = len(th) - 1
+            if nn < 2 * m + 1:
+                continue
+            d = th[2 * m:] - 2 * th[m:-m] + th[:-2 * m]
+            num += float(d @ d)
+            cnt += len(d)
+        if cnt == 0:
+            continue
+        tau = m * tau0
+        tau_out.append(tau)
+        sig_out.append(math.sqrt(num / (2 * tau * tau * cnt)))
+    return np.array(tau_out), np.array(sig_out)
+
+
+@dataclass
+class NoiseFloor:
+    """The residual RMS expected from noise alone at the working resolution."""
+
+    rms_dph: float  # predicted RMS of block-mean residuals
+    white_N: float  # (deg/h)·sqrt(s): σ²(τ) = N²/τ
+    flicker_B: float  # deg/h: Allan plateau of the flicker part
+    tau_range_s: tuple[float, float]
+    basis: str
+
+    @property
+    def arw_deg_rt_h(self) -> float:
+        return self.white_N / 60.0
+
+    def to_dict(self) -> dict:
+        return {"rms_dph": self.rms_dph, "white_N_dph_rts": self.white_N,
+                "arw_deg_per_rt_h": self.arw_deg_rt_h, "flicker_plateau_dph": self.flicker_B,
+                "tau_range_s": list(self.tau_range_s), "basis": self.basis}
+
+
+def noise_floor(tau: np.ndarray, sigma: np.ndarray, resolution_s: float,
+                duration_s: float, fit_upto_s: float | None = None) -> NoiseFloor:
+    """Allan-predicted RMS of working-resolution residuals if they were white + flicker only.
+
+    Fit σ²(τ) = N²/τ + B² (non-negative LS on relative errors weighted by √(T/τ)) over the short-τ part of the
+    residual's Allan curve: τ up to the Allan minimum (at least three points; at most
+    ``fit_upto_s``), where slow unmodelled effects have not yet entered. Then the RMS of mean-removed residuals at an
+    effective averaging time T_eff (``resolution_s``; the block mean combined with the working
+    smoother) over a record of length T is predicted as
+
+        rms² = N²/T_eff + B²·ln(T/(2T_eff))/(2 ln 2)
+
+    (white noise averaged over T_eff; flicker with one-sided PSD h/f = B²/(2 ln 2 f) integrated
+    from 1/T to 1/(2T_eff)). Source: IEEE 952 Annex C (σ² of white and flicker noise);
+    gyrotest.
+    """
+    tau = np.asarray(tau, float)
+    sigma = np.asarray(sigma, float)
+    ok = np.isfinite(sigma) & (sigma > 0)
+    tau, sigma = tau[ok], sigma[ok]
+    if len(tau) == 0:
+        return NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0), "no Allan data")
+    # fit only up to the Allan minimum (beyond it drift, misfit or random walk take over)
+    imin = int(np.argmin(sigma))
+    upto = tau[max(imin, min(2, len(tau) - 1))]
+    if fit_upto_s is not None:
+        upto = min(upto, max(fit_upto_s, tau[min(2, len(tau) - 1)]))
+    sel = tau <= upto
+    t, s = tau[sel], sigma[sel]
+    # relative residuals weighted by the square root of the number of clusters (precision)
+    w = np.sqrt(duration_s / t) / s ** 2
+    A = np.column_stack([1.0 / t, np.ones_like(t)]) * w[:, None]
+    coef, _ = optimize.nnls(A, s ** 2 * w)
+    N = math.sqrt(max(coef[0], 0.0))
+    B = math.sqrt(max(coef[1], 0.0))
+    ratio = duration_s / (2.0 * resolution_s)
+    flick = B * B * math.log(ratio) / (2 * math.log(2)) if ratio > 1 else 0.0
+    rms = math.sqrt(N * N / resolution_s + flick)
+    return NoiseFloor(rms, N, B, (float(t[0]), float(t[-1])),
+                      "white + flicker fitted to the residual Allan deviation at short tau")

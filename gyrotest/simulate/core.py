@@ -548,19 +548,23 @@ def _plateau_truth(sc: Scenario, table: env.TableSchedule, noise_free: np.ndarra
 
     pos, neg = x > 0, x < 0
     if pos.any() and neg.any():
-        # (a) through the common intercept of the full fit
-        sp = float(np.sum(x[pos] * (y[pos] - b)) / np.sum(x[pos] ** 2))
-        sm = float(np.sum(x[neg] * (y[neg] - b)) / np.sum(x[neg] ** 2))
-        out["sf_plus"], out["sf_minus"] = sp, sm
-        out["asymmetry_ppm"] = asym(sp, sm)
-        # (b) separate least-squares lines (positive + zero inputs, negative + zero inputs)
+        # IEEE 952: SF+ from the positive inputs, SF- from the negative ones. Primary: separate
+        # least-squares lines (each side with the zero-rate plateaus); with fewer than two
+        # distinct inputs on a side: lines through the common intercept of the full fit.
+        sp_c = float(np.sum(x[pos] * (y[pos] - b)) / np.sum(x[pos] ** 2))
+        sm_c = float(np.sum(x[neg] * (y[neg] - b)) / np.sum(x[neg] ** 2))
+        out["asymmetry_ppm_common_intercept"] = asym(sp_c, sm_c)
         zero = x == 0
         mp, mn = pos | zero, neg | zero
         if np.unique(x[mp]).size >= 2 and np.unique(x[mn]).size >= 2:
-            sp2 = float(np.polyfit(x[mp], y[mp], 1)[0])
-            sm2 = float(np.polyfit(x[mn], y[mn], 1)[0])
-            out["sf_plus_separate"], out["sf_minus_separate"] = sp2, sm2
-            out["asymmetry_ppm_separate"] = asym(sp2, sm2)
+            sp = float(np.polyfit(x[mp], y[mp], 1)[0])
+            sm = float(np.polyfit(x[mn], y[mn], 1)[0])
+            out["asymmetry_method"] = "separate lines"
+        else:
+            sp, sm = sp_c, sm_c
+            out["asymmetry_method"] = "common intercept"
+        out["sf_plus"], out["sf_minus"] = sp, sm
+        out["asymmetry_ppm"] = asym(sp, sm)
     return out
 
 
@@ -711,8 +715,11 @@ def _truth(sc, seed, run, n, tau0, tm, t_end, sf_off, bias_off, ntruth, pos, tab
                   "commanded rate (deg/h); dimensionless (1 = nominal S0)",
             "linearity_ppm_fs": "residual from that line / (sf * max |input|) * 1e6; max of |.| "
                                 "and 1 sigma (RMS)",
-            "asymmetry_ppm": "(|SF+| - |SF-|)/(0.5(|SF+| + |SF-|)) * 1e6 (IEEE 952), SF+/- "
-                             "through the common intercept; *_separate: separate lines",
+            "asymmetry_ppm": "(|SF+| - |SF-|)/(0.5(|SF+| + |SF-|)) * 1e6 (IEEE 952); SF+ and "
+                             "SF- are least-squares slopes of the positive (negative) plateaus "
+                             "with the zero-rate plateaus (asymmetry_method 'separate lines'), or "
+                             "through the intercept of the full fit ('common intercept') when a "
+                             "side has fewer than two distinct rates",
         },
     }
     if table is not None:

@@ -568,3 +568,13 @@ def test_missing_duration_and_bad_file(tmp_path):
     bad.write_text("[gyro\n")
     with pytest.raises(InputError, match="invalid TOML"):
         simulate(bad)
+
+
+def test_readme_format_block_matches_the_module_docstring():
+    import gyrotest.simulate as S
+
+    readme = (ROOT / "sample_data" / "scenarios" / "README.md").read_text()
+    block = readme.split("```toml\n")[1].split("```")[0]
+    doc = S.__doc__.split(".. code-block:: toml")[1].split("Files written beside")[0]
+    doc = "\n".join(ln[4:] if ln.startswith("    ") else ln for ln in doc.splitlines())
+    assert tomllib.loads(block) == tomllib.loads(doc)

@@ -106,9 +106,9 @@ _LONG_NAMES = {
     "hkdev": "Hadamard-Krobka dispersion",
 }
 
-#: Elements per chunk of the streaming kernels (64 Ki float64 = 512 KiB: fits L2 with the
-#: three input streams; measured fastest on the reference VM, see benchmarks/README.md).
-CHUNK = 1 << 16
+#: Elements per chunk of the streaming kernels (32 Ki float64 = 256 KiB buffer; with the three
+#: input streams it stays in L2; tuned on the reference VM, see benchmarks/README.md).
+CHUNK = 1 << 15
 
 
 # ---------------------------------------------------------------------------------------------
@@ -317,15 +317,16 @@ def angle_series(
         raise InputError("empty record: no samples to analyse")
     segs = _normalise_segments(segments, n)
     notes: list[str] = []
-    # NaN/inf check without a full-size temporary: any NaN/inf makes the sum non-finite.
-    if not math.isfinite(float(np.sum(arr))):
-        i = _first_bad(arr)
-        if i >= 0:
-            raise InputError(
-                f"{input_kind} sample {i} is {arr[i]!r}: remove or interpolate it, or pass "
-                "segments that exclude it (gap-aware analysis)"
-            )
-        raise InputError(f"{input_kind} samples overflow float64; rescale the data")
+    for a, b in segs:
+        # NaN/inf check without a full-size temporary: any NaN/inf makes the sum non-finite.
+        if not math.isfinite(float(np.sum(arr[a:b]))):
+            i = _first_bad(arr[a:b])
+            if i >= 0:
+                raise InputError(
+                    f"{input_kind} sample {a + i} is {float(arr[a + i])}: remove or interpolate "
+                    "it, or pass segments that exclude it (gap-aware analysis)"
+                )
+            raise InputError(f"{input_kind} samples overflow float64; rescale the data")
     per = 1 if input_kind != "angle" else 0  # extra leading point per segment
     total = sum(b - a + per for a, b in segs)
     theta = np.empty(total, dtype=np.float64)
@@ -338,8 +339,9 @@ def angle_series(
         out = theta[pos : pos + L]
         if input_kind == "angle":
             if x.size >= 2:
-                span, mag = _diff_span(x)
-                any_variation |= span > 8 * np.finfo(float).eps * max(mag, 1e-300) * 4
+                span, _ = _diff_span(x)
+                _, mag = _span(x)  # rounding of the angles themselves sets the noise floor
+                any_variation |= span > 16 * np.finfo(float).eps * max(mag, 1e-300)
             slope = (x[-1] - x[0]) / (x.size - 1) if x.size > 1 else 0.0
             x0 = x[0]
             for s in range(0, x.size, CHUNK):
@@ -397,6 +399,11 @@ def angle_series(
 # ---------------------------------------------------------------------------------------------
 
 
+def _sumsq(b: np.ndarray) -> float:
+    """Σ b² of a chunk buffer via single-threaded BLAS blocks (see ``edf.DOT_BLOCK``)."""
+    return _edf.blocked_dot(b, b)
+
+
 def _d2_sumsq(v: np.ndarray, lag: int, center: float = 0.0) -> tuple[float, int]:
     """Σ_k (v_{k+2lag} − 2v_{k+lag} + v_k − center)² over k = 0 … len(v)−2lag−1, chunked.
 
@@ -416,7 +423,7 @@ def _d2_sumsq(v: np.ndarray, lag: int, center: float = 0.0) -> tuple[float, int]
         np.add(b, v[s : s + c], out=b)
         if center:
             b -= center
-        ss += float(np.dot(b, b))
+        ss += _sumsq(b)
     return ss, n
 
 
@@ -439,7 +446,7 @@ def _d3_sumsq(v: np.ndarray, lag: int, center: float = 0.0) -> tuple[float, int]
         b -= t
         if center:
             b -= center
-        ss += float(np.dot(b, b))
+        ss += _sumsq(b)
     return ss, n
 
 
@@ -517,7 +524,7 @@ def _mod_sumsq(v: np.ndarray, m: int) -> tuple[float, int]:
             t *= 3.0
             b[1:c] -= t
         np.cumsum(b, out=b)
-        ss += float(np.dot(b, b))
+        ss += _sumsq(b)
         j = s + c - 1  # e_j carries into the next chunk, if there is one
         if anchor is None and j <= n - 2:
             carry = float(b[c - 1]) + float(
@@ -558,7 +565,7 @@ def _tot_sumsq(v: np.ndarray, m: int) -> tuple[float, int]:
         for s in range(0, edge.size, CHUNK):
             i = edge[s : s + CHUNK]
             t = _ext(v, i - m) - 2.0 * v[i] + _ext(v, i + m)
-            ss += float(np.dot(t, t))
+            ss += _sumsq(t)
     return ss, N - 2
 
 
@@ -718,8 +725,8 @@ def _mtot_blocks(v: np.ndarray, m: int, starts: np.ndarray, B: int) -> float:
         P2[:, 3::2] = np.cumsum(V[:, 1::2], axis=1)
         anti = P2[:, ihi + 2] - P2[:, ilo]
         q = (
-            float(np.sum((U * U) @ cU))
-            + float(np.sum((V * V) @ cV))
+            float(np.einsum("ij,ij,j->", U, U, cU))
+            + float(np.einsum("ij,ij,j->", V, V, cV))
             + m * float(np.sum(W0 * W0))
             + s_pi2 * sum_s2
             + 2.0 * float(np.sum(W0 * (bu0 + bv0)))

@@ -146,3 +146,19 @@ def test_oavar_helper_matches_allantools():
     _, devs, _, _ = allantools.oadev(r.rate_dph, rate=10.0, data_type="freq",
                                      taus=np.array(ms) / 10.0)
     np.testing.assert_allclose(np.sqrt(oavar(r.rate_dph, 0.1, ms)), devs, rtol=1e-9)
+
+
+def test_single_record_within_deviation_confidence_intervals():
+    """One FOG record: the closed form lies inside the chi-square interval (95 %) that
+    gyrotest.noise.deviations gives, at most tau up to T/10."""
+    dev = pytest.importorskip("gyrotest.noise.deviations")
+    r = simulate(scen(50.0, 2**17, {"N": 0.005, "B": 0.01, "B_f0_hz": 1.0, "K": 0.003}),
+                 seed=1).run
+    d = dev.compute_deviation(r.rate_dph, r.tau0, input_kind="rate", kind="oadev",
+                              taus="decade", confidence=0.95)
+    keep = d.tau <= r.n * r.tau0 / 10
+    th = np.sqrt(mixture_avar(d.tau[keep], r.truth["noise"]["components"]))
+    inside = (th >= d.sigma_lo[keep]) & (th <= d.sigma_hi[keep])
+    assert inside.mean() >= 0.8, (d.sigma[keep] / th, inside)
+    np.testing.assert_allclose(d.sigma[keep], np.sqrt(oavar(r.rate_dph, r.tau0, d.m[keep])),
+                               rtol=1e-9)

@@ -473,6 +473,9 @@ def test_multi_run_files(tmp_path):
     summary = json.loads((tmp_path / "r.truth.json").read_text())
     assert len(summary["runs"]) == 2 and summary["files"][1]["log"] == "r_run2.parquet"
     assert summary["bias_repeatability"]["one_sigma_dph"] > 0
+    res = simulate(sc, seed=1)
+    d = json.loads(json.dumps(res.to_dict(include_data=True), allow_nan=False))
+    assert d["runs"][1]["run"] == 2 and len(d["runs"][0]["data"]["omega_dph"]) == 600
 
 
 def test_faults_gaps_duplicates_iso_time(tmp_path):

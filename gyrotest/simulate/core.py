@@ -30,6 +30,7 @@ import numpy as np
 from ..earth import OMEGA_E_DPH
 from ..errors import InputError
 from ..noise.terms import TERMS, quantization_from_scale_factor
+from ..output import jsonable
 from ..profile import profile_from_dict
 from ..units import rate_factor
 from . import environment as env
@@ -83,12 +84,13 @@ class SimRun:
         return int(self.t.size)
 
     def to_dict(self, include_data: bool = False) -> dict[str, Any]:
+        """JSON-safe summary (truth, profile, column names; the data only on request)."""
         d: dict[str, Any] = {"run": self.index, "samples": self.n, "tau0_s": self.tau0,
                              "columns": list(self.columns), "truth": self.truth,
                              "profile": self.profile}
         if include_data:
             d["data"] = {k: np.asarray(v).tolist() for k, v in self.columns.items()}
-        return d
+        return jsonable(d)
 
 
 @dataclass
@@ -131,8 +133,9 @@ class SimResult:
         return self.runs[0].truth if len(self.runs) == 1 else self.summary
 
     def to_dict(self, include_data: bool = False) -> dict[str, Any]:
-        return {"name": self.name, "seed": self.seed, "summary": self.summary,
-                "runs": [r.to_dict(include_data) for r in self.runs]}
+        """JSON-safe: name, seed, multi-run summary and every run's :meth:`SimRun.to_dict`."""
+        return jsonable({"name": self.name, "seed": self.seed, "summary": self.summary,
+                         "runs": [r.to_dict(include_data) for r in self.runs]})
 
 
 # ------------------------------------------------------------------------------------------
@@ -318,7 +321,9 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
     eps = _eps_k(sc, I, temps, sf_off, i_fs)
     gain = 1.0 / (1.0 + 1e-6 * np.asarray(eps))
     x_det = np.array(np.broadcast_to(I + det, (n,)), dtype=np.float64)
-    noise_free = np.broadcast_to(_lock_in(x_det, sf.lock_in_dph) * gain, (n,)).copy()
+    noise_free = _lock_in(x_det, sf.lock_in_dph) * gain
+    if noise_free.shape != (n,):
+        noise_free = np.broadcast_to(noise_free, (n,)).copy()
     if rand is not None:
         rand += x_det
         ideal = _lock_in(rand, sf.lock_in_dph)
@@ -434,9 +439,9 @@ def _encode(sc: Scenario, seed: int, run: int, ideal: np.ndarray, tau0: float) -
     out: dict[str, Any] = {"kind": kind}
     if kind == "rate":
         f = rate_factor(g.rate_unit)
-        col = ideal / f
+        col = ideal / f if f != 1.0 else ideal
         out["values"] = {"rate": col}
-        out["rate_dph"] = col * f
+        out["rate_dph"] = col * f if f != 1.0 else col
         return out
     s0 = float(g.scale_factor)
     if kind == "voltage":
@@ -761,11 +766,11 @@ def _columns(sc, seed, run, out, t_end, tau0, pos, table, sensors, H, V
     def aux(v: np.ndarray) -> np.ndarray:
         return np.concatenate((v[:1], v)) if counter else v
 
-    t_rel = np.concatenate(([0.0], t_end)) if counter else t_end.copy()
+    t_rel = np.concatenate(([0.0], t_end)) if counter else t_end
     tcol = None
     if fspec.time != "none":
         tcol = fspec.time_column or ("timestamp" if fspec.time == "iso" else "t_s")
-        cols[tcol] = t_rel + fspec.t0_s
+        cols[tcol] = t_rel + fspec.t0_s if fspec.t0_s else t_rel
     vals = out["values"]
     if kind == "rate":
         name = fspec.output_column or _RATE_COLUMN.get(g.rate_unit, "omega")

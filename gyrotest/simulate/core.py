@@ -234,7 +234,6 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
     tm = t_end - 0.5 * tau0
     comps: dict[str, np.ndarray] = {}
     envd: dict[str, Any] = {}
-    truth: dict[str, Any] = {}
 
     # ---- input: earth rate (positions) + rate table
     pos = env.position_schedule(sc.site.positions, sc.site.ia, sc.site.latitude_deg, tm)
@@ -320,7 +319,7 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
         i_fs = 3600.0
     eps = _eps_k(sc, I, temps, sf_off, i_fs)
     gain = 1.0 / (1.0 + 1e-6 * np.asarray(eps))
-    x_det = np.array(np.broadcast_to(I + det, (n,)), dtype=np.float64)
+    x_det = np.asarray(I + det, dtype=np.float64)  # I is a full-length array: a new array
     noise_free = _lock_in(x_det, sf.lock_in_dph) * gain
     if noise_free.shape != (n,):
         noise_free = np.broadcast_to(noise_free, (n,)).copy()

@@ -8,13 +8,15 @@ core lags the sensor). Each candidate model is scored by
    see :func:`gyrotest.envmodel.fit.holdout_folds`): what matters is prediction of data the fit
    did not see, so a term that only follows noise does not help;
 2. **significance robust to autocorrelation**: a HAC Wald test of the added coefficient(s)
-   (for a lag replacement: of the extra regressor T_core(τ̂) − T), with the p-value multiplied
+   (for a lag replacement: of T_core(τ̂) in a model that keeps T), referred to a t/F
+   distribution with the regressor's effective degrees of freedom (a transient that lives in a
+   few blocks cannot be "significant" on the strength of 10⁴ blocks), the p-value multiplied
    by the number of candidates and by the effective number of trials of a searched nonlinear
    parameter (ln(τ_max/τ_min) for a time constant, (f_max − f_min)·T for a frequency):
    p_adj = min(1, p · M · n_candidates).
 
 Ranking is by held-out RMS with a small complexity penalty, RMS_ho · (1 + p/n_blocks). A
-candidate counts as a **missing effect** when p_adj < α (0.01) and it lowers the held-out RMS
+candidate counts as a **missing effect** when p_adj < α (0.001) and it lowers the held-out RMS
 by at least 1 %. With none, the verdict compares the held-out residual with the Allan-predicted
 noise floor (white + flicker level of the residual at the working resolution, see
 :func:`gyrotest.envmodel.stats.noise_floor`) and says "no missing effect found".
@@ -32,7 +34,7 @@ from . import stats as st
 from .fit import FitResult, WorkData, fit_model
 from .terms import TermSpec, candidate_terms, describe, nonlinear_bounds, parse_terms, resolve_terms
 
-ALPHA = 0.01
+ALPHA = 0.001
 MIN_IMPROVEMENT = 0.01
 
 
@@ -205,26 +207,28 @@ def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
 
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
                   ) -> tuple[float, float]:
-    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model."""
-    names = r.param_names
+    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model,
+    against a t/F reference with the effective degrees of freedom of the added regressor(s)
+    (:func:`gyrotest.envmodel.stats.effective_df`)."""
+    fitter = r._fitter  # type: ignore[attr-defined]
+    th = r._thetas  # type: ignore[attr-defined]
+    X = fitter.X(th)
     if replaces is None:
         idx = [i for i, cf in enumerate(r.coefficients)
                if cf.term == c.label and cf.kind == "linear"]
         beta = np.array([r.coefficients[i].value for i in idx])
         cov = r.cov[np.ix_(idx, idx)]
-        _, p, z = st.wald(beta, cov)
+        df = st.effective_df(X, idx, st.integrated_time(r.resid))
+        _, p, z = st.wald_t(beta, cov, df)
         return z, p
     # lag replacement: test the core-temperature column in the model that also has the plain
     # sensor temperature (a lag effect means T_core explains what T does not)
-    fitter = r._fitter  # type: ignore[attr-defined]
-    th = r._thetas  # type: ignore[attr-defined]
-    X = fitter.X(th)
     a, _b = fitter._offsets()[c.label]
     xb_plain = fitter.d.block(TermSpec("T", c.channels), None)
     Xa = np.column_stack([X, xb_plain])
     beta, _ = st.lstsq(Xa, wd.y)
     e = wd.y - Xa @ beta
-    cov, _ = st.hac_covariance(Xa, e)
-    _, p, z = st.wald(beta[a:a + 1], cov[a:a + 1, a:a + 1])
-    del names
+    cov, info = st.hac_covariance(Xa, e)
+    df = st.effective_df(Xa, [a], st.integrated_time(e))
+    _, p, z = st.wald_t(beta[a:a + 1], cov[a:a + 1, a:a + 1], df)
     return z, p

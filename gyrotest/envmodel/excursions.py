@@ -1,9 +1,9 @@
 """Where a model fails: stretches of large residual, described by what the channels did.
 
 Rule: the block residual is smoothed with a centred moving mean over w blocks (w ≈ 1 min,
-at least 3 blocks); its typical size is σ_w = 1.4826·MAD of the smoothed series (robust, and
-already includes the residual's own autocorrelation); an excursion is a run where
-|smoothed residual| > k·σ_w (k = 3 by default), runs closer than w blocks are merged. Each
+at least 3 blocks); σ is the Allan-predicted noise floor of the residual at the working
+resolution (or, without one, 1.4826·MAD of the smoothed series); an excursion is a run where
+|smoothed residual| > k·σ (k = 4 on the command line), runs closer than w blocks are merged. Each
 excursion is described from the channels over the same time: temperature ramp up/down or
 turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,
 and the warm-up period after power-on.
@@ -27,14 +27,19 @@ def _moving_mean(x: np.ndarray, w: int) -> np.ndarray:
     return (c[hi] - c[lo]) / (hi - lo)
 
 
-def excursion_runs(resid: np.ndarray, resolution_s: float, k_sigma: float = 3.0
+def excursion_runs(resid: np.ndarray, resolution_s: float, k_sigma: float = 3.0,
+                   sigma: float | None = None
                    ) -> tuple[list[tuple[int, int]], np.ndarray, float]:
-    """Runs (start, stop block indices) where the smoothed residual exceeds k·σ_w; also
-    returns the smoothed residual and σ_w (deg/h)."""
+    """Runs (start, stop block indices) where the smoothed residual exceeds k·σ; σ is the
+    noise floor when given (``sigma``), else 1.4826·MAD of the smoothed residual. Also returns
+    the smoothed residual and σ (deg/h)."""
     n = len(resid)
     w = int(max(3, min(round(60.0 / resolution_s), max(3, n // 20))))
     rs = _moving_mean(resid, w)
-    sig = 1.4826 * float(np.median(np.abs(rs - np.median(rs))))
+    if sigma is not None and np.isfinite(sigma) and sigma > 0:
+        sig = float(sigma)
+    else:
+        sig = 1.4826 * float(np.median(np.abs(rs - np.median(rs))))
     if not sig > 0:
         return [], rs, sig
     over = np.abs(rs) > k_sigma * sig
@@ -120,7 +125,8 @@ def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
     chronological, at most ``max_items`` (the largest)."""
     from .fit import Excursion
 
-    runs, rs, sig = excursion_runs(res.resid, res.resolution_s, k_sigma)
+    floor = res.floor.rms_dph if res.floor is not None else None
+    runs, rs, sig = excursion_runs(res.resid, res.resolution_s, k_sigma, floor)
     if not runs:
         return []
     t = res.t

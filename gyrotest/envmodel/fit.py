@@ -25,10 +25,12 @@ Linear terms by least squares; terms with a time constant or frequency by variab
 by bounded Brent minimisation of the residual sum of squares, the linear coefficients solved
 exactly at each step). Uncertainties: HAC (see :mod:`.stats`) on the Gauss–Newton Jacobian
 (linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty propagates. Held-out
-validation: the blocks are cut into ``folds × chunks_per_fold`` contiguous time chunks; chunk
-c belongs to fold c mod folds; each fold is predicted from a fit (nonlinear parameters
-re-optimised locally) on the other folds, leaving out a buffer of 10 % of a chunk on either side
-of each held-out chunk against leakage through autocorrelated noise.
+validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
+max(6·W, duration/500) (at least 2·folds chunks); chunk c belongs to fold c mod folds; each
+fold is predicted from a fit on the other folds (linear coefficients re-fitted, a searched
+frequency searched afresh on the training folds, time constants kept at the full-data value, which a fold
+without the start-up could not pin down), leaving out 2·W on either side of each held-out chunk so that neither the smoother nor
+short-memory noise carries held-out data into the training set.
 """
 
 from __future__ import annotations
@@ -192,7 +194,8 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
 
     Rule: W = max(60 s, 4·dt_f, W_noise), W_noise = the window at which the derivative noise of
     the noisiest temperature sensor, σ_T·√(2·dt/W³)·3600 degC/h (σ_T from second differences
-    on the fine grid), falls to 1 % of the RMS of that sensor's dT/dt; at most duration/20.
+    on the fine grid), falls to 1 % of the RMS of that sensor's dT/dt (sensors whose dT/dt is at
+    the noise level are ignored); at most duration/20.
     Because S_W is applied to the gyro rate and to every regressor alike, W costs time
     resolution but never biases a coefficient.
     """
@@ -208,9 +211,16 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
         if sig <= 0:
             sig = float(np.std(d2)) / math.sqrt(6.0)
         rate = smoothed_rate(x, frame.dt, w0, frame.bounds)
-        rms = float(np.sqrt(np.mean(rate ** 2)))
-        if not (rms > 0 and sig > 0):
+        edge = 2 * smoothing_half(w0, frame.dt)
+        inner = np.zeros(len(rate), bool)
+        for a, b in frame.bounds:
+            inner[a + edge:b - edge] = True
+        if not inner.any():
             continue
+        rms = float(np.sqrt(np.mean(rate[inner] ** 2)))
+        noise0 = sig * 3600.0 * math.sqrt(2 * frame.dt / w0 ** 3)
+        if not (rms > 0 and sig > 0) or rms < 3.0 * noise0:
+            continue  # no measurable temperature change: nothing to resolve
         w = (sig * 3600.0 * math.sqrt(2 * frame.dt) / (0.01 * rms)) ** (2.0 / 3.0)
         if w > need:
             need = w
@@ -218,7 +228,7 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
                    f"of its dT/dt RMS ({rms:.3g} °C/h)")
     cap = max(w0, duration_s / 20.0)
     W = min(need, cap)
-    W = float(np.ceil(W / frame.dt) * frame.dt)
+    W = float(np.ceil(W / frame.dt - 1e-9) * frame.dt)
     return W, f"smoothing window W = {W:g} s ({why})"
 
 
@@ -305,6 +315,10 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
                   info=info, log=log)
     wd.t = wd.bmean(frame.t)
     wd.y = wd.bmean(wd.smooth(frame.rate))
+    tm = details.get("tau_min_s")
+    wd.resolution_short = (f"{tb:g} s blocks after a W = {W:g} s matched smoother"
+                           + (f" (Allan minimum {details['sigma_min_dph']:.3g} deg/h at "
+                              f"{tm:.3g} s)" if tm else " (given)"))
     wd.t_eff = effective_averaging_time(frame.dt, h, m)
     return wd
 
@@ -518,15 +532,29 @@ class _Fitter:
         return st.lstsq(X, y)
 
     def optimise(self, thetas0: dict[str, dict] | None, mask: np.ndarray | None,
-                 local: bool = False) -> dict[str, dict]:
+                 local: bool = False, kinds: tuple[str, ...] = ("tau", "freq"),
+                 fresh: tuple[str, ...] = ()) -> dict[str, dict]:
+        """Variable projection over the nonlinear parameters of the kinds ``kinds``;
+        parameters of the kinds in ``fresh`` are searched from scratch (no leak of a value found
+        on other data), known ones locally when ``local``."""
         thetas: dict[str, dict] = {k: dict(v) for k, v in (thetas0 or {}).items()}
-        if not self.nl:
+        nl = [s for s in self.nl if s.effect.nonlinear[0].kind in kinds
+              or s.label not in thetas]
+        if not nl:
             return thetas
-        rounds = 1 if len(self.nl) == 1 else 2
-        for _ in range(rounds):
-            for s in self.nl:
-                thetas[s.label] = self._opt_one(s, thetas, mask,
-                                                local=local and s.label in (thetas0 or {}))
+        known = {k for k in (thetas0 or {})
+                 if not any(x.label == k and x.effect.nonlinear[0].kind in fresh for x in nl)}
+        for s in nl:  # provisional values for parameters not yet known
+            if s.label not in thetas:
+                (pname, (lo, hi)), = self.bounds[s.label].items()
+                thetas[s.label] = {pname: math.sqrt(lo * hi) if s.effect.nonlinear[0].kind
+                                   == "tau" else 0.5 * (lo + hi)}
+        order = [s for s in nl if s.label not in known] + [s for s in nl if s.label in known]
+        rounds = 1 if len(nl) == 1 else 2
+        for rnd in range(rounds):
+            for s in order:
+                thetas[s.label] = self._opt_one(
+                    s, thetas, mask, local=(local and s.label in known) or rnd > 0)
         return thetas
 
     def _opt_one(self, s: TermSpec, thetas: dict[str, dict], mask, local: bool) -> dict:
@@ -614,38 +642,58 @@ class _Fitter:
         return out
 
 
-def holdout_folds(nb: int, folds: int = 5, chunks_per_fold: int = 4,
-                  buffer_frac: float = 0.1) -> tuple[np.ndarray, list[np.ndarray]]:
+def holdout_folds(nb: int, folds: int = 5, *, chunk_blocks: int | None = None,
+                  buffer_blocks: int = 0) -> tuple[np.ndarray, list[np.ndarray]]:
     """Blocked cross-validation: fold id per block, and the training mask of each fold.
 
-    The nb blocks are cut into folds·chunks_per_fold contiguous chunks; chunk c is in fold
-    c mod folds; a training mask leaves out its fold plus ``buffer_frac`` of a chunk on both
-    sides of every held-out chunk.
+    The nb blocks are cut into contiguous chunks of ``chunk_blocks`` (default nb/(4·folds));
+    chunk c is in fold c mod folds; the training mask of a fold leaves out its chunks plus
+    ``buffer_blocks`` on both sides of each (so that the smoother and autocorrelated noise do
+    not carry held-out data into the training set).
     """
-    n_chunks = max(folds, min(folds * chunks_per_fold, nb // 4))
+    if chunk_blocks is None:
+        chunk_blocks = max(1, nb // (4 * folds))
+    n_chunks = max(folds, int(round(nb / chunk_blocks)))
     edges = np.linspace(0, nb, n_chunks + 1).astype(int)
     fold = np.empty(nb, dtype=int)
     for c in range(n_chunks):
         fold[edges[c]:edges[c + 1]] = c % folds
-    buf = int(round(buffer_frac * nb / n_chunks))
     masks = []
     for f in range(folds):
-        held = fold == f
-        excl = held.copy()
-        if buf > 0:
-            for c in range(n_chunks):
-                if c % folds != f:
-                    continue
+        excl = fold == f
+        if buffer_blocks > 0:
+            excl = excl.copy()
+            for c in range(f, n_chunks, folds):
                 a, b = edges[c], edges[c + 1]
-                excl[max(0, a - buf):a] = True
-                excl[b:min(nb, b + buf)] = True
+                excl[max(0, a - buffer_blocks):a] = True
+                excl[b:min(nb, b + buffer_blocks)] = True
         masks.append(~excl)
     return fold, masks
 
 
+def cv_layout(wd: WorkData, folds: int = 5) -> tuple[int, int, str]:
+    """Chunk and buffer sizes (blocks) for :func:`holdout_folds` on this data.
+
+    Chunks last max(6·W, duration/500, 2·T_b) so a start-up transient is predicted from data
+    close to it rather than extrapolated over a long stretch, with at least 2·folds chunks;
+    the buffer spans the smoother's full width 2·W on each side (at most a quarter chunk).
+    """
+    W = wd.refs.smoothing_s
+    tb = wd.resolution_s
+    chunk_s = max(6.0 * W, wd.duration_s / 500.0, 2.0 * tb)
+    chunk = max(1, int(round(chunk_s / tb)))
+    chunk = min(chunk, max(1, wd.nb // (2 * folds)))
+    buf = min(int(math.ceil(2.0 * W / tb)), chunk // 4)
+    n_chunks = max(folds, int(round(wd.nb / chunk)))
+    desc = (f"{folds}-fold blocked cross-validation: {n_chunks} contiguous chunks of "
+            f"{chunk * tb:g} s (chunk c in fold c mod {folds}), {buf * tb:g} s left out of "
+            "the training set on each side of a held-out chunk")
+    return chunk, buf, desc
+
+
 def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bool = True,
-              folds: int = 5, chunks_per_fold: int = 4, thetas0: dict | None = None,
-              light: bool = False, k_sigma: float = 3.0) -> FitResult:
+              folds: int = 5, thetas0: dict | None = None,
+              light: bool = False, k_sigma: float = 4.0) -> FitResult:
     """Fit ``terms`` (plus a bias) to prepared data; see the module docstring.
 
     Returns a :class:`FitResult` with coefficients in physical units ± HAC 1σ, residual RMS
@@ -704,13 +752,14 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             if mt.spec.label == s.label:
                 mt.theta_stderr[pname] = float(se[p_lin + i])
     # ---- held-out validation
-    fold, masks = holdout_folds(nb, folds, chunks_per_fold)
+    chunk, buf, cv_desc = cv_layout(wd, folds)
+    fold, masks = holdout_folds(nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
     hres = np.full(nb, np.nan)
     fold_rms = []
     for f, m in enumerate(masks):
         if m.sum() < n_params + 2:
             continue
-        th_f = fitter.optimise(thetas, m, local=True)
+        th_f = fitter.optimise(thetas, m, local=True, kinds=("freq",), fresh=("freq",))
         Xf = fitter.X(th_f)
         bf, _ = st.lstsq(Xf[m], wd.y[m])
         held = fold == f
@@ -736,9 +785,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
                     n_params=n_params, resolution_s=wd.resolution_s,
                     resolution_note=wd.resolution_note, rms_fit=rms_fit, rms_holdout=rms_hold,
                     holdout_fold_rms=fold_rms,
-                    holdout_scheme=(f"{folds}-fold blocked cross-validation over "
-                                    f"{int((np.diff(fold) != 0).sum()) + 1} contiguous time "
-                                    "chunks (10 % buffer)"),
+                    holdout_scheme=cv_desc,
                     aic=aic, bic=bic, condition_number=cond, vif=vif, warnings=warnings,
                     hac=hinfo, rms_raw=rms_raw, data=dict(wd.info), t=wd.t, y=wd.y, yhat=yhat,
                     resid=resid, holdout_resid=hres, fold_of_block=fold, cov=cov,
@@ -746,7 +793,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     res._thetas = thetas  # type: ignore[attr-defined]
     res._fitter = fitter  # type: ignore[attr-defined]
     if not light:
-        finish(res)
+        finish(res, k_sigma=k_sigma)
     return res
 
 
@@ -763,7 +810,7 @@ def fine_residual(res: FitResult) -> np.ndarray:
     return wd.frame.rate - pred
 
 
-def finish(res: FitResult, k_sigma: float = 3.0) -> None:
+def finish(res: FitResult, k_sigma: float = 4.0) -> None:
     """Residual Allan deviation, noise floor and excursions (the slower diagnostics)."""
     from .excursions import find_excursions
 

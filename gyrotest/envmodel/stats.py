@@ -169,6 +169,79 @@ def wald(beta: np.ndarray, cov: np.ndarray) -> tuple[float, float, float]:
     return W, p, z
 
 
+def integrated_time(e: np.ndarray, max_lag: int | None = None) -> float:
+    """Integrated autocorrelation time of a residual series, in samples.
+
+    Formula: τ_int = 1 + 2·Σ_{k≥1} ρ_k, summed until the first k with ρ_k ≤ 0 (or k ≥
+    ``max_lag``, default n/10): the number of consecutive samples worth one independent one.
+    Source: Sokal (1997) "Monte Carlo methods in statistical mechanics", §3.
+    """
+    x = np.asarray(e, float) - float(np.mean(e))
+    n = len(x)
+    v = float(x @ x)
+    if n < 4 or v <= 0:
+        return 1.0
+    max_lag = max_lag or max(1, n // 10)
+    nfft = 1 << int(math.ceil(math.log2(2 * n)))
+    f = np.fft.rfft(x, nfft)
+    acf = np.fft.irfft(f * np.conj(f), nfft)[:max_lag + 1] / v
+    tau = 1.0
+    for k in range(1, max_lag + 1):
+        if acf[k] <= 0:
+            break
+        tau += 2.0 * acf[k]
+    return float(tau)
+
+
+def effective_df(X: np.ndarray, idx: list[int], tau_int: float) -> float:
+    """Effective degrees of freedom behind the coefficients ``idx`` of a design ``X``.
+
+    Formula: for each column j in ``idx``, x̃_j = the part of column j not explained by the
+    other columns; n_eff,j = (Σ x̃²)² / Σ x̃⁴ (participation ratio: how many observations carry
+    the regressor); df = min_j n_eff,j / τ_int with τ_int the residual's integrated
+    autocorrelation time (:func:`integrated_time`). A regressor that lives in a few blocks (a
+    short transient) then gets a Student-t/F reference with few degrees of freedom instead of
+    the normal one, for which the HAC asymptotics would be far too optimistic. Source:
+    gyrotest (small-sample guard in the spirit of fixed-b HAC inference, Kiefer & Vogelsang
+    2005).
+    """
+    k = X.shape[1]
+    others = [j for j in range(k) if j not in idx]
+    best = math.inf
+    for j in idx:
+        x = X[:, j]
+        if others:
+            b, _ = lstsq(X[:, others], x)
+            x = x - X[:, others] @ b
+        s2 = float(np.sum(x * x))
+        s4 = float(np.sum(x ** 4))
+        if s4 > 0:
+            best = min(best, s2 * s2 / s4)
+    if not math.isfinite(best):
+        return 1.0
+    return max(1.0, best / max(1.0, tau_int))
+
+
+def wald_t(beta: np.ndarray, cov: np.ndarray, df: float) -> tuple[float, float, float]:
+    """Wald test with a small-sample reference: t (q = 1) or F(q, df) (q > 1).
+
+    Formula: W = βᵀ Cov⁻¹ β; p = P(|t_df| > √W) for q = 1, P(F_{q,df} > W/q) otherwise.
+    Returns (W, p, z) with z the normal quantile of the same two-sided p.
+    """
+    beta = np.atleast_1d(beta)
+    cov = np.atleast_2d(cov)
+    q = len(beta)
+    W, _, _ = wald(beta, cov)
+    if not math.isfinite(W):
+        return W, float("nan"), float("nan")
+    if q == 1:
+        p = float(2 * stats.t.sf(math.sqrt(W), df))
+    else:
+        p = float(stats.f.sf(W / q, q, df))
+    z = float(stats.norm.isf(max(p, 1e-300) / 2))
+    return W, p, z
+
+
 def collinearity(X: np.ndarray, names: list[str]) -> tuple[float, dict[str, float], np.ndarray]:
     """Condition number of the column-normalised design (Belsley), variance inflation
     factors VIF_j = 1/(1 − R²_j) of each non-constant column regressed on the others, and the
@@ -234,20 +307,21 @@ def oadev(rate: np.ndarray, tau0: float, taus: np.ndarray | None = None,
     rate = np.asarray(rate, dtype=np.float64)
     if segments is None:
         segments = [(0, len(rate))]
-    if taus is None:
-        longest = max(b - a for a, b in segments)
-        taus = octave_taus(tau0, longest)
-    try:  # the shared Allan core, when present
+    try:  # the shared Allan core (gyrotest.noise.deviations)
         from ..noise.deviations import compute_deviation  # type: ignore
 
-        res = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus=taus,
-                                segments=segments)
+        res = compute_deviation(rate, tau0, input_kind="rate", kind="oadev",
+                                taus="octave" if taus is None else list(taus),
+                                segments=segments, noise_id=False)
         tau = np.asarray(res.tau, float)
         sig = np.asarray(res.sigma, float)
         ok = np.isfinite(sig)
         return tau[ok], sig[ok]
-    except Exception:
+    except Exception:  # pragma: no cover - fallback when the Allan core cannot serve the grid
         pass
+    if taus is None:
+        longest = max(b - a for a, b in segments)
+        taus = octave_taus(tau0, longest)
     ms = np.unique(np.maximum(1, np.round(np.asarray(taus) / tau0).astype(int)))
     tau_out, sig_out = [], []
     thetas = []
@@ -297,8 +371,8 @@ def noise_floor(tau: np.ndarray, sigma: np.ndarray, resolution_s: float,
     """Allan-predicted RMS of working-resolution residuals if they were white + flicker only.
 
     Fit σ²(τ) = N²/τ + B² (non-negative LS on relative errors weighted by √(T/τ)) over the short-τ part of the
-    residual's Allan curve: τ up to the Allan minimum (at least three points; at most
-    ``fit_upto_s``), where slow unmodelled effects have not yet entered. Then the RMS of mean-removed residuals at an
+    residual's Allan curve: τ up to the point before the Allan minimum (at least three points;
+    at most ``fit_upto_s``), where slow unmodelled effects have not yet entered. Then the RMS of mean-removed residuals at an
     effective averaging time T_eff (``resolution_s``; the block mean combined with the working
     smoother) over a record of length T is predicted as
 
@@ -316,7 +390,9 @@ def noise_floor(tau: np.ndarray, sigma: np.ndarray, resolution_s: float,
         return NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0), "no Allan data")
     # fit only up to the Allan minimum (beyond it drift, misfit or random walk take over)
     imin = int(np.argmin(sigma))
-    upto = tau[max(imin, min(2, len(tau) - 1))]
+    # the minimum itself may already carry the drift that ends the fall: stop one octave short
+    # of it when enough points remain
+    upto = tau[imin - 1] if imin >= 4 else tau[max(imin, min(2, len(tau) - 1))]
     if fit_upto_s is not None:
         upto = min(upto, max(fit_upto_s, tau[min(2, len(tau) - 1)]))
     sel = tau <= upto

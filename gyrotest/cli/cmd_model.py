@@ -1,0 +1,483 @@
+"""``gyrotest model``: the model workbench (fit, diagnose, history).
+
+Also hosts the option decorators and renderers shared by ``thermal-fit``, ``mag-fit`` and
+``compensate``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from ..units import format_duration, parse_duration
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    load_log,
+    note,
+    warn,
+    with_ingest,
+)
+
+# ----------------------------------------------------------------------------- shared options
+
+
+def prep_options(f):
+    """Options that control how a log is prepared for model fitting."""
+    opts = [
+        click.option("--axis", default=None, help="Gyro axis (rate column) to model; default the "
+                     "first."),
+        click.option("--skip", default="0", show_default=True,
+                     help="Drop the start of the log (e.g. 10min); the warm-up term then counts "
+                          "time from the true power-on."),
+        click.option("--t-ref", "t_ref", type=float, default=None,
+                     help="Reference temperature T_ref, degC (default: mean of each sensor)."),
+        click.option("--v-ref", "v_ref", type=float, default=None,
+                     help="Reference supply voltage, V (default: mean)."),
+        click.option("--resolution", default="auto", show_default=True,
+                     help="Working resolution: block length (e.g. 30s) or 'auto' (from the "
+                          "noise level)."),
+        click.option("--smooth", default="auto", show_default=True,
+                     help="Smoother window W for dT/dt and the matched smoothing (e.g. 120s) or "
+                          "'auto'."),
+        click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
+                     help="Folds of the blocked cross-validation (held-out RMS)."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def term_options(f):
+    opts = [
+        click.option("--terms", "terms", multiple=True,
+                     help="Model terms, comma-separated: T, T2, T3, dTdt, dGdt, Tlag, Hx, Hy, Hz, "
+                          "V, g, g2, ramp, warmup, sin, hyst, rate, rateT; a channel in "
+                          "parentheses, e.g. T2(T_coil) or dGdt(T_a,T_b). Repeatable."),
+        click.option("--term", "custom", multiple=True,
+                     help="A custom term NAME:EXPRESSION from any channel, e.g. "
+                          "\"vib:extra.vib_g**2\" (see 'gyrotest model fit --help'). Repeatable."),
+    ]
+    for o in reversed(opts):
+        f = o(f)
+    return f
+
+
+def _dur_or_auto(text: str, what: str) -> float | None:
+    if text is None or str(text).strip().lower() in ("auto", ""):
+        return None
+    v = parse_duration(text, what=what)
+    if v <= 0:
+        raise InputError(f"{what} must be > 0 (got {text!r})")
+    return v
+
+
+def collect_terms(terms: tuple[str, ...], custom: tuple[str, ...]) -> list:
+    """Parse --terms and --term into TermSpecs (InputError on bad text)."""
+    from ..envmodel.terms import parse_terms
+
+    texts = [t for t in terms if t.strip()]
+    out = parse_terms(texts) if texts else []
+    for c in custom:
+        if ":" not in c:
+            raise InputError(f"--term {c!r}: write NAME:EXPRESSION, e.g. vib:extra.vib_g**2")
+        out += parse_terms([c])
+    return out
+
+
+_ROLE_WORDS = {"temperature": ("temperature",), "temperature2": ("temperature",),
+               "table+temp": ("temperature", "table", "rate-table"),
+               "field": ("field", "magnetic"), "supply": ("supply",),
+               "table_rate": ("table", "rate-table"), "extra": ()}
+
+
+def load_for_terms(path: str, ingest_opts: dict, specs: list, *, announce: bool = True):
+    """Read a log; when ingest rejects a channel a term needs, name the term(s) too."""
+    try:
+        return load_log(path, ingest_opts, announce=announce)
+    except InputError as e:
+        msg = str(e)
+        low = msg.lower()
+        hit = []
+        for s in specs:
+            if s.key == "custom":
+                if any(ref.name.lower() in low for ref in _expr_refs(s)):
+                    hit.append(s.label)
+                continue
+            words = _ROLE_WORDS.get(s.effect.needs, ())
+            if any(w in low for w in words) or any(c.lower() in low for c in s.channels):
+                hit.append(s.label)
+        if hit:
+            raise InputError(f"term{'s' if len(hit) > 1 else ''} {', '.join(hit)}: {msg}") from None
+        raise
+
+
+def _expr_refs(spec):
+    from ..envmodel.expr import parse_expression
+
+    try:
+        return parse_expression(spec.expr or "").channels
+    except InputError:
+        return []
+
+
+def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
+    """Validate an output path before any work (suffix and directory)."""
+    if path is None:
+        return None
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise InputError(f"{what} {p}: unknown format {p.suffix or '(none)'!r}; use "
+                         + " or ".join(suffixes))
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{what} {p}: directory {parent} does not exist")
+    return p
+
+
+def prepare_log(log, path: str, opts: dict):
+    """Trim, then prepare a log for fitting with the CLI options (returns WorkData)."""
+    from ..envmodel.fit import file_provenance, prepare
+
+    skip_s = parse_duration(opts.get("skip") or "0", what="--skip")
+    if skip_s > 0:
+        if skip_s >= log.duration_s:
+            raise InputError(f"--skip {opts['skip']} is longer than the log "
+                             f"({format_duration(log.duration_s)})")
+        log = log.skip(skip_s)
+    prov = file_provenance(path) if path != "-" else {"file": "<stdin>"}
+    return prepare(log, axis=opts.get("axis"),
+                   resolution=_dur_or_auto(opts.get("resolution"), "--resolution"),
+                   t_ref=opts.get("t_ref"), v_ref=opts.get("v_ref"),
+                   smoothing_s=_dur_or_auto(opts.get("smooth"), "--smooth"),
+                   t_on_s=-skip_s, provenance=prov)
+
+
+# ----------------------------------------------------------------------------- rendering
+def _short(res) -> str:
+    wd = getattr(res, "wd", None)
+    return getattr(wd, "resolution_short", None) or res.resolution_note
+
+
+def _pm(c) -> str:
+    return f"{fmt_num(c.value)} ± {fmt_num(c.stderr, 2)}"
+
+
+def render_fit(res, *, title: str = "model fit") -> None:
+    """Rich text of a FitResult on stdout."""
+    from rich.table import Table
+
+    out = console()
+    d = res.data
+    out.print(f"[bold]{title}[/bold]: {d.get('file') or d.get('source')} (axis {d.get('axis')}, "
+              f"{d.get('samples', 0):,} samples, {format_duration(d.get('duration_s', 0))})")
+    out.print(f"  working resolution: {_short(res)}")
+    t = Table(title="coefficients (± 1σ HAC, robust to autocorrelated residuals)")
+    for col, just in (("term", "left"), ("coefficient ± 1σ", "right"), ("unit", "left"),
+                      ("significance (|z|)", "left")):
+        t.add_column(col, justify=just)
+    for c in res.coefficients:
+        z = abs(c.z)
+        t.add_row(c.name, _pm(c), c.unit,
+                  f"{c.significance} ({z:.3g})" if math.isfinite(z) else "n/a")
+    out.print(t)
+    out.print(f"  residual RMS: fit [bold]{fmt_num(res.rms_fit)}[/bold] deg/h, held-out "
+              f"[bold]{fmt_num(res.rms_holdout)}[/bold] deg/h (no model: {fmt_num(res.rms_raw)})")
+    out.print(f"  held-out scheme: {res.holdout_scheme}")
+    if res.floor:
+        f = res.floor
+        out.print(f"  noise floor (Allan-predicted at this resolution): {fmt_num(f.rms_dph)} deg/h "
+                  f"(white N = {fmt_num(f.arw_deg_rt_h, 3)} deg/√h, flicker plateau "
+                  f"{fmt_num(f.flicker_B, 3)} deg/h); held-out / floor = "
+                  f"{fmt_num(res.rms_holdout / f.rms_dph, 3)}")
+    out.print(f"  AIC {res.aic:.1f}, BIC {res.bic:.1f} ({res.n_params} parameters, "
+              f"{res.n_blocks} blocks; compare models on the same log only)")
+    out.print(f"  uncertainty: {res.hac.method}, bandwidth {res.hac.bandwidth:.3g} blocks; "
+              f"condition number {fmt_num(res.condition_number, 3)}")
+    if res.adev_tau is not None and len(res.adev_tau):
+        import numpy as np
+
+        picks = []
+        for target in (1, 10, 100, 1000, 10000):
+            i = int(np.argmin(np.abs(np.log(res.adev_tau / target))))
+            if abs(math.log(res.adev_tau[i] / target)) < 0.8 and i not in picks:
+                picks.append(i)
+        if picks:
+            out.print("  residual Allan deviation: " + ", ".join(
+                f"σ({res.adev_tau[i]:g} s) = {fmt_num(res.adev_sigma[i], 3)}" for i in picks)
+                + " deg/h")
+    if res.excursions:
+        out.print(f"  where it fails ({len(res.excursions)} excursion(s) of the residual):")
+        for i, e in enumerate(res.excursions[:10], 1):
+            out.print(f"    {i}. {format_duration(e.t_start_s)} – {format_duration(e.t_end_s)}: "
+                      f"peak {e.peak_dph:+.3g} deg/h — {e.description}")
+    for w in res.warnings:
+        warn(w)
+
+
+def render_diagnosis(diag, top: int = 12) -> None:
+    from rich.table import Table
+
+    out = console()
+    b = diag.base
+    out.print(f"[bold]model diagnose[/bold]: base terms {' + '.join(b.terms)}; held-out RMS "
+              f"{fmt_num(b.rms_holdout)} deg/h, noise floor {fmt_num(diag.noise_floor_dph)} deg/h")
+    out.print(f"  working resolution: {_short(b)}")
+    t = Table(title="candidate terms, best first (held-out residual; HAC significance)")
+    for col, just in (("#", "right"), ("term", "left"), ("physical effect", "left"),
+                      ("held-out RMS", "right"), ("improvement", "right"), ("evidence", "left"),
+                      ("missing?", "left")):
+        t.add_column(col, justify=just)
+    for i, c in enumerate(diag.candidates[:top], 1):
+        t.add_row(str(i), c.term, c.effect, fmt_num(c.rms_holdout),
+                  f"{c.improvement_pct:+.1f} %" if math.isfinite(c.improvement_pct) else "—",
+                  c.evidence, "[green]yes[/green]" if c.significant else "no")
+    out.print(t)
+    style = "green" if diag.found else "bold"
+    out.print(f"[{style}]{diag.verdict}[/{style}]")
+    out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
+              f"and HAC p × trials × candidates < {diag.alpha:g}")
+    if b.excursions:
+        out.print("  where the base model fails:")
+        for i, e in enumerate(b.excursions[:8], 1):
+            out.print(f"    {i}. {format_duration(e.t_start_s)} – {format_duration(e.t_end_s)}: "
+                      f"peak {e.peak_dph:+.3g} deg/h — {e.description}")
+
+
+def render_history(steps, *, logs: int = 1) -> None:
+    from rich.table import Table
+
+    out = console()
+    if logs > 1:
+        note(f"the history holds {logs} different logs; showing the latest (use --all)")
+    t = Table(title=f"model history: {steps[0].log}" if steps else "model history")
+    for col, just in (("step", "right"), ("change", "left"), ("terms", "left"),
+                      ("params", "right"), ("RMS fit", "right"), ("RMS held-out", "right"),
+                      ("floor", "right"), ("AIC", "right"), ("ΔAIC", "right")):
+        t.add_column(col, justify=just)
+    prev_aic = None
+    for s in steps:
+        change = " ".join([f"+{a}" for a in s.added] + [f"−{r}" for r in s.removed]) or "(same)"
+        daic = "" if prev_aic is None else f"{s.aic - prev_aic:+.1f}"
+        t.add_row(str(s.step), change, ", ".join(s.terms) or "(bias only)", str(s.n_params),
+                  fmt_num(s.rms_fit_dph), fmt_num(s.rms_holdout_dph),
+                  fmt_num(s.noise_floor_dph), f"{s.aic:.1f}", daic)
+        prev_aic = s.aic
+    out.print(t)
+
+
+def write_plot(figs, path) -> None:
+    from ..envmodel.plots import write_figures
+
+    paths = write_figures(figs, path)
+    note("plot written: " + ", ".join(str(p) for p in paths))
+
+
+# ----------------------------------------------------------------------------- commands
+@click.group("model")
+def command():
+    """Model workbench: fit a drift model, find the missing effect, watch the error fall.
+
+    \b
+      gyrotest model fit LOG --terms T,T2 -o model.json     fit and save (history kept)
+      gyrotest model diagnose LOG --terms T,T2              which effect is missing?
+      gyrotest model fit LOG --terms T,T2,dTdt -o model.json
+      gyrotest model history model.json --plot hist.png     the steps, error falling
+    """
+
+
+@command.command("fit")
+@click.argument("log", type=str)
+@term_options
+@prep_options
+@click.option("-o", "--output", "output", default=None,
+              help="Write the model (.json or .toml); a history is kept beside it.")
+@click.option("--session", default=None, type=click.Path(file_okay=False),
+              help="Keep every step's model and the history in this directory instead.")
+@click.option("--no-history", is_flag=True, help="Do not append to the model history.")
+@click.option("--k", "k_sigma", type=float, default=4.0, show_default=True,
+              help="Excursion threshold: |smoothed residual| > k·σ.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Residual plots (.png/.svg: several files; .pdf: one document).")
+@ingest_options
+@json_option
+@with_ingest
+def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds, output,
+            session, no_history, k_sigma, plot_path, as_json, ingest_opts):
+    """Fit a drift model with the given terms and show where it fails.
+
+    The gyro rate (minus the rate-table rate, if any) is modelled as a bias plus the TERMS, in
+    physical units: D_T (deg/h)/degC, D_Tdot (deg/h)/(degC/h), w_x deg/h per 100 uT, ...
+    Fitting runs on smoothed block means (the working resolution is chosen from the noise
+    level and stated); uncertainties are HAC (robust to autocorrelated noise); the held-out RMS
+    comes from blocked cross-validation. Custom terms (--term NAME:EXPR) use temp.NAME,
+    field.NAME, extra.NAME, supply, table_rate, t, t_h, + - * / **, abs sqrt exp log log10
+    sin cos tan tanh arctan sign square minimum maximum clip, ddt(x) and lag(x, tau_s).
+
+    \b
+    Examples:
+      gyrotest model fit chamber.csv --profile bench.toml --terms T,T2,dTdt -o model.json
+      gyrotest model fit run.csv --terms "T(T_coil),Tlag(T_case),Hx,Hy,Hz" --plot fit.png
+      gyrotest model fit run.csv --terms T --term "vib:extra.vib_g**2" --json
+    """
+    from ..envmodel.fit import finish, fit_model
+    from ..envmodel.history import append_history, session_paths
+
+    specs = collect_terms(terms, custom)
+    out_path = check_output(output, (".json", ".toml"), "model file")
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
+    if session:
+        sp = Path(session)
+        if sp.exists() and not sp.is_dir():
+            raise InputError(f"--session {session}: not a directory")
+        parent = sp.parent if str(sp.parent) else Path(".")
+        if not parent.is_dir():
+            raise InputError(f"--session {session}: directory {parent} does not exist")
+    g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+    wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
+                              "resolution": resolution, "smooth": smooth})
+    res = fit_model(wd, specs, folds=folds, light=True)
+    finish(res, k_sigma=k_sigma)
+    written: dict = {}
+    if session:
+        from ..envmodel.history import load_history
+
+        sp = Path(session)
+        sp.mkdir(exist_ok=True)
+        hist_file = sp / "history.json"
+        n = len(load_history(hist_file)) + 1 if hist_file.is_file() else 1
+        mpath, hpath = session_paths(sp, n, out_path.suffix if out_path else ".json")
+        res.model.save(mpath)
+        step = append_history(hpath, res, model_file=mpath.name)
+        written.update(model_file=str(mpath), history_file=str(hpath), step=step.step)
+    if out_path:
+        res.model.save(out_path)
+        written["model_file"] = str(out_path)
+        if not no_history and not session:
+            from ..envmodel.history import history_path_for
+
+            hp = history_path_for(out_path)
+            step = append_history(hp, res, model_file=out_path.name)
+            written.update(history_file=str(hp), step=step.step)
+    if plot_path:
+        from ..envmodel.plots import fit_figures
+
+        write_plot(fit_figures(res), plot_path)
+    if as_json:
+        d = res.to_dict()
+        d["written"] = written
+        emit_json(d)
+        return
+    render_fit(res)
+    if written.get("model_file"):
+        extra = (f"; history {written['history_file']} step {written['step']}"
+                 if written.get("history_file") else "")
+        console().print(f"  model written to {written['model_file']}{extra}")
+    if not out_path and not session and not as_json:
+        note("add -o model.json to keep the model and its history; run 'gyrotest model "
+             "diagnose' to find a missing effect")
+
+
+@command.command("diagnose")
+@click.argument("log", type=str)
+@term_options
+@prep_options
+@click.option("--candidates", default=None,
+              help="Only try these terms (comma-separated); default every term the channels "
+                   "allow.")
+@click.option("--alpha", type=float, default=None,
+              help="Family-wise significance level (default 0.001).")
+@click.option("--min-improvement", type=float, default=1.0, show_default=True,
+              help="Smallest held-out RMS improvement (%) that counts as a missing effect.")
+@click.option("--top", type=int, default=12, show_default=True, help="Rows to show.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Base residual and candidate bar chart (.png/.svg/.pdf).")
+@ingest_options
+@json_option
+@with_ingest
+def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds,
+                 candidates, alpha, min_improvement, top, plot_path, as_json, ingest_opts):
+    """Which physical effect does the model lack? Try every candidate and rank them.
+
+    Each candidate term (every library term the log's channels allow, not in the model) is
+    added in turn and scored by how much it lowers the held-out residual RMS, with a HAC
+    significance test corrected for the number of candidates and for searched time constants
+    or frequencies. Says "no missing effect found" when none passes, and compares the
+    residual with the Allan-predicted noise floor.
+
+    \b
+    Examples:
+      gyrotest model diagnose chamber.csv --profile bench.toml --terms T,T2
+      gyrotest model diagnose run.csv --terms T --candidates dTdt,Tlag,dGdt --json
+    """
+    from ..envmodel.diagnose import ALPHA, diagnose
+    from ..envmodel.terms import split_terms
+
+    specs = collect_terms(terms, custom)
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
+    cand = split_terms(candidates) if candidates else None
+    g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+    wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
+                              "resolution": resolution, "smooth": smooth})
+    diag = diagnose(wd, specs, cand, alpha=ALPHA if alpha is None else alpha,
+                    min_improvement=min_improvement / 100.0, folds=folds)
+    if plot_path:
+        from ..envmodel.plots import diagnosis_figures
+
+        write_plot(diagnosis_figures(diag), plot_path)
+    if as_json:
+        emit_json(diag.to_dict())
+        return
+    render_diagnosis(diag, top=top)
+    for w in diag.base.warnings:
+        warn(w)
+
+
+@command.command("history")
+@click.argument("path", type=str, default="model.json")
+@click.option("--all", "show_all", is_flag=True, help="Show the steps of every log.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Residual RMS and AIC per step (.png/.svg/.pdf).")
+@json_option
+def history_cmd(path, show_all, plot_path, as_json):
+    """Show the successive fits of a log: terms added, residual RMS, held-out RMS, AIC.
+
+    PATH is a model file (its MODEL.history.json is read), a history file, or a --session
+    directory.
+
+    \b
+    Example:
+      gyrotest model history model.json --plot history.png
+    """
+    from ..envmodel.history import load_history, steps_for_log
+
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
+    steps = load_history(path)
+    logs = len({s.sha256 or s.log for s in steps})
+    shown = steps if show_all else steps_for_log(steps)
+    if not shown:
+        raise InputError(f"{path}: the history is empty")
+    if plot_path:
+        from ..envmodel.plots import history_figures
+
+        write_plot(history_figures(shown), plot_path)
+    if as_json:
+        emit_json({"history": str(path), "logs": logs, "steps": [s.to_dict() for s in shown]})
+        return
+    render_history(shown, logs=1 if show_all else logs)
+

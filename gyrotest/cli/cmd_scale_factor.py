@@ -1,0 +1,341 @@
+"""``gyrotest scale-factor``: scale factor from rate-table runs (IEEE 952 §12.9.4)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    load_logs,
+    note,
+    warn,
+    with_ingest,
+)
+
+
+def _duration(ctx, param, value):
+    if value is None:
+        return None
+    from ..units import parse_duration
+
+    try:
+        return parse_duration(value, what=f"--{param.name.replace('_', '-')}")
+    except InputError as e:
+        raise click.BadParameter(str(e)) from None
+
+
+def _rates(value: str | None) -> list[float] | None:
+    if value is None:
+        return None
+    try:
+        out = [abs(float(v)) for v in value.replace(";", ",").split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"--rates {value!r}: write rates in deg/s separated by commas, e.g. "
+                         "1,2,5,10,20,50,100,200,500") from None
+    if not out or not all(math.isfinite(v) for v in out):
+        raise InputError(f"--rates {value!r}: no usable rate")
+    return out
+
+
+def _terms(value: str):
+    v = value.strip().lower()
+    if v in ("auto", "linear", "none"):
+        return v if v != "none" else "linear"
+    return [t.strip() for t in v.split(",") if t.strip()]
+
+
+@click.command("scale-factor")
+@click.argument("logs", nargs=-1, type=str)
+@click.option("--table", "table_path", type=click.Path(dir_okay=False), default=None,
+              help="Ready plateau table (CSV: table_rate_dps, output_dph|output_pps|output_v "
+                   "[, stderr_*, temperature_degC, run]) instead of logs.")
+@click.option("--settle", default="10s", show_default=True, callback=_duration,
+              help="Settling time excluded after each rate change (e.g. 10s, 1min).")
+@click.option("--trim-end", default="0s", show_default=True, callback=_duration,
+              help="Time excluded before the end of each plateau.")
+@click.option("--min-dwell", default="2s", show_default=True, callback=_duration,
+              help="Constant stretches shorter than this are transitions, not plateaus.")
+@click.option("--detect", type=click.Choice(["auto", "table", "output"]), default="auto",
+              show_default=True,
+              help="Plateaus from the commanded-rate column (table) or from steps in the output.")
+@click.option("--rates", "rates", default=None,
+              help="Commanded rates, deg/s (comma-separated, ± implied) for plateaus detected in "
+                   "the output; default: snap to round values.")
+@click.option("--stderr", "stderr_method", type=click.Choice(["allan", "batch"]), default="allan",
+              show_default=True,
+              help="Plateau standard error: Allan deviation at the plateau length (pooled noise "
+                   "model) or batch means.")
+@click.option("--snap-tol", type=float, default=3e-3, show_default=True,
+              help="Relative tolerance when matching detected levels to rates.")
+@click.option("--full-scale", type=float, default=None,
+              help="Full-scale input rate, deg/s (default: the largest |rate| tested).")
+@click.option("--terms", default="auto", show_default=True,
+              help="Nonlinearity terms: auto (chosen by the data), linear, or a list of "
+                   "asymmetry,quadratic,cubic,quartic,quintic,lockin,periodic.")
+@click.option("--alpha", type=float, default=0.05, show_default=True,
+              help="Significance level for adding a term (F-test, Bonferroni-corrected).")
+@click.option("--weighted-line", is_flag=True,
+              help="Weight the IEEE straight line by 1/SE² (default: unweighted, as §12.9.4.1).")
+@click.option("--unweighted", is_flag=True, help="Do not weight the nonlinearity model fit.")
+@click.option("--no-lock-in", is_flag=True, help="Do not look for a low-rate dead band.")
+@click.option("--no-periodic", is_flag=True, help="Do not look for a rate-periodic error.")
+@click.option("--common-rates", is_flag=True,
+              help="Runs tested at different rate sets: keep only the rates all runs share.")
+@click.option("--points", "points_path", type=click.Path(dir_okay=False), default=None,
+              help="Write the plateau table (CSV) to this file.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Residuals vs input rate and output vs time (.png, .svg or .pdf).")
+@ingest_options
+@json_option
+@with_ingest
+def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr_method,
+            snap_tol, full_scale,
+            terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, common_rates,
+            points_path, plot_path, as_json, ingest_opts):
+    """Scale factor, linearity, asymmetry and nonlinearity from rate-table LOGS (IEEE 952 §12.9.4).
+
+    Each LOG is one run (a continuous rate-table log); several runs give repeatability,
+    stability and, at different temperatures, the temperature sensitivity. Plateaus come from
+    the commanded-rate column (--table-col) or are detected in the output; the settling time
+    is excluded. The input is the table rate plus the earth rate along the IA (--latitude,
+    --ia). The scale factor is in the log's units: arcsec/pulse for pulse output, (deg/h)/V for
+    analog, 1 for rate output (input per unit output).
+
+    \b
+    Examples:
+      gyrotest scale-factor run1.csv run2.csv run3.csv --profile bench.toml --settle 10s
+      gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
+          --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
+      gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
+    """
+    from .. import scalefactor as sfm
+
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
+    if points_path:
+        parent = Path(points_path).parent
+        if str(parent) and not parent.is_dir():
+            raise InputError(f"points file {points_path}: directory {parent} does not exist")
+    if min(settle, trim_end, min_dwell) < 0:
+        raise InputError("--settle, --trim-end and --min-dwell must not be negative")
+    if not 0 < alpha < 1:
+        raise InputError(f"--alpha {alpha} must be between 0 and 1")
+    if not snap_tol > 0:
+        raise InputError(f"--snap-tol {snap_tol} must be positive")
+    if full_scale is not None and not full_scale > 0:
+        raise InputError(f"--full-scale {full_scale} must be a positive rate in deg/s")
+    rate_list = _rates(rates)
+    term_sel = _terms(terms)
+    kw = dict(full_scale_dps=full_scale, terms=term_sel, alpha=alpha,
+              weighted=not unweighted, weighted_line=weighted_line, lock_in=not no_lock_in,
+              periodic=not no_periodic, common_rates=common_rates)
+    loaded = []
+    if table_path:
+        if logs:
+            raise InputError("give either rate-table logs or --table FILE, not both")
+        er = None
+        if ingest_opts.get("latitude") is not None:
+            from ..earth import check_latitude, earth_rate_component, parse_ia
+
+            az, el, _ = parse_ia(ingest_opts.get("ia") or "up")
+            er = earth_rate_component(check_latitude(ingest_opts["latitude"]), az, el)
+        runs, kind, s0, tnotes = sfm.read_points_table(
+            table_path, earth_rate_dph=er, scale_factor=ingest_opts.get("scale_factor"))
+        for n in tnotes:
+            note(n)
+        result = sfm.analyse(runs, output_kind=kind, nominal_scale_factor=s0, **kw)
+    else:
+        if not logs:
+            raise InputError("no input: give one rate-table log per run, or --table FILE")
+        loaded = load_logs(logs, ingest_opts, announce=not as_json)
+        sfm.check_runs_match(loaded)
+        runs = [sfm.extract_plateaus(lg, sfm.run_name(lg.source), settle_s=settle,
+                                     trim_end_s=trim_end, min_dwell_s=min_dwell, detect=detect,
+                                     rates_dps=rate_list, snap_tol=snap_tol,
+                                     stderr=stderr_method) for lg in loaded]
+        g = loaded[0].gyro
+        result = sfm.analyse(runs, output_kind=g.output_kind,
+                             nominal_scale_factor=g.scale_factor, **kw)
+    # files last, so that an error leaves nothing behind
+    if plot_path:
+        from ..scalefactor.plot import plot_scale_factor
+
+        plot_scale_factor(result, plot_path, logs=loaded or None)
+    if points_path:
+        sfm.write_points_csv(result, points_path)
+    if as_json:
+        d = result.to_dict()
+        d["command"] = "scale-factor"
+        if plot_path:
+            d["plot"] = str(plot_path)
+        if points_path:
+            d["points_file"] = str(points_path)
+        emit_json(d)
+        for n in result.notes:
+            if n.startswith("asymmetry not computed"):
+                warn(n)
+        return
+    for n in result.notes:
+        (warn if ("χ²/dof" in n or "asymmetry not" in n or "lock-in" in n) else note)(n)
+    _render(result, plot_path, points_path)
+
+
+# ----------------------------------------------------------------------------- rendering
+def _pm(v: float, s: float, digits: int = 6) -> str:
+    if v is None or not math.isfinite(v):
+        return "—"
+    if s is None or not math.isfinite(s) or s == 0:
+        return fmt_num(v, digits)
+    # digits to show: two significant digits of the uncertainty
+    e = max(0, -int(math.floor(math.log10(abs(s)))) + 1)
+    return f"{v:.{e}f} ± {s:.{e}f}" if e < 12 else f"{v:.6g} ± {s:.2g}"
+
+
+def _render(res, plot_path, points_path) -> None:
+    from rich.table import Table
+
+    c = console()
+    u = res.sf_unit
+    kinds = {"counts": "pulse counts", "updown": "up/down pulses", "counter": "pulse counter",
+             "voltage": "analog voltage", "rate": "rate"}
+    c.print(f"[bold]Scale factor (IEEE 952 §12.9.4)[/bold] — {len(res.runs)} run(s), "
+            f"{kinds.get(res.output_kind, res.output_kind)} output, nominal S0 = "
+            f"{res.nominal_scale_factor:g} {u}, full scale ±{res.full_scale_dph / 3600:g} deg/s")
+    t = Table(title=f"scale factor SF ({u}), least-squares line §12.9.4.1", title_justify="left")
+    have_t = any(math.isfinite(r.temperature_mean_degC) for r in res.runs)
+    cols = ["run", "pts"] + (["T °C"] if have_t else []) + ["SF", "σ ppm", "ε0 ppm", "ε0 model",
+                                                             "bias deg/h"]
+    for col in cols:
+        t.add_column(col, justify="left" if col == "run" else "right",
+                     overflow="fold" if col == "run" else "ellipsis", no_wrap=col != "run")
+
+    def sfrow(name, n, temp, sf, ssf, e0, sfm, bias, sbias):
+        digits = max(6, int(-math.floor(math.log10(abs(ssf / sf)))) + 2) if ssf and sf else 9
+        row = [name, n] + ([temp] if have_t else [])
+        return row + [f"{sf:.{digits}g}", fmt_num(ssf / abs(sf) * 1e6, 2), f"{e0:.2f}",
+                      f"{(sfm / res.nominal_scale_factor - 1) * 1e6:.2f}",
+                      _pm(bias, sbias).replace(" ± ", "±")]
+
+    for r in res.runs:
+        t.add_row(*sfrow(r.run, str(r.n_used), fmt_num(r.temperature_mean_degC, 4),
+                         r.scale_factor, r.scale_factor_sigma, r.scale_factor_error_ppm,
+                         r.scale_factor_model, r.bias_model_dph, r.bias_model_sigma_dph))
+    if len(res.runs) > 1:
+        t.add_row(*sfrow("[bold]all[/bold]", "", "", res.scale_factor, res.scale_factor_sigma,
+                         res.scale_factor_error_ppm, res.scale_factor_model, res.bias_dph,
+                         res.bias_sigma_dph))
+    c.print(t)
+    c.print("  ε0 = (SF/S0 − 1)·1e6; ε0 model: linear coefficient with f(I) fitted; bias D_F "
+            "input-referred, earth rate removed")
+    # linearity per rate (pooled over runs)
+    import numpy as np
+
+    pt = res.point_table
+    tab = np.array([p.table_rate_dph for p in res.points]) / 3600.0
+    locked = np.array([p.locked for p in res.points], dtype=bool)
+    lt = Table(title="linearity error per rate, ppm FS unless noted (§12.9.4.2.1; mean of runs)",
+               title_justify="left")
+    for col in ("rate deg/s", "n", "ppm FS", "± SE", "ppm output", "after model"):
+        lt.add_column(col, justify="right")
+    for rate in sorted(set(np.round(tab, 9).tolist())):
+        m = np.isclose(tab, rate) & np.isfinite(pt["model_residual_ppm_fs"])
+        if not m.any():
+            lk = np.isclose(tab, rate) & locked
+            lt.add_row(f"{rate:+g}", str(int(lk.sum())), "locked", "", "", "")
+            continue
+        se = pt["stderr_ppm_fs"][m]
+        lt.add_row(f"{rate:+g}", str(int(m.sum())), fmt_num(float(np.mean(pt["linearity_ppm_fs"][m])), 3),
+                   fmt_num(float(np.sqrt(np.sum(se ** 2)) / m.sum()), 2),
+                   fmt_num(float(np.nanmean(pt["linearity_ppm_output"][m])), 3)
+                   if np.any(np.isfinite(pt["linearity_ppm_output"][m])) else "—",
+                   fmt_num(float(np.mean(pt["model_residual_ppm_fs"][m])), 3))
+    c.print(lt)
+    li = res.linearity
+    c.print(f"  linearity: max {fmt_num(li.max_ppm_fs, 4)} ppm FS (at {li.max_at_input_dps:+.4g} "
+            f"deg/s), 1σ {fmt_num(li.sigma_ppm_fs, 4)} ppm FS; max {fmt_num(li.max_ppm_output, 4)} "
+            f"ppm of output, 1σ {fmt_num(li.sigma_ppm_output, 4)}; after the model: max "
+            f"{fmt_num(res.linearity_after_model.max_ppm_fs, 3)} ppm FS")
+    # model history
+    ht = Table(title="nonlinearity model: add a term, watch the residual fall",
+               title_justify="left")
+    for col in ("step", "RMS ppm FS", "χ²/dof", "ΔAICc", "p (F-test)", "kept"):
+        ht.add_column(col, justify="left" if col == "step" else "right")
+    for h in res.model.history:
+        kept = "[dim]no[/dim]"
+        if h.accepted:
+            kept = "lower order" if "lower order" in h.note else "[green]yes[/green]"
+        ht.add_row(("+ " + h.added) if h.terms else "straight line", fmt_num(h.rms_ppm_fs, 3),
+                   fmt_num(h.chi2_per_dof, 3), fmt_num(h.delta_aicc, 3), fmt_num(h.p_value, 2),
+                   kept)
+    c.print(ht)
+    if res.model.coefficients:
+        ct = Table(title="f(I) of ε_K, ppm (u = I/FS)", title_justify="left")
+        for col in ("term", "f(I)", "coefficient, ppm", "kept"):
+            ct.add_column(col, justify="right" if col == "coefficient, ppm" else "left")
+        for cf in res.model.coefficients:
+            extra = ""
+            if "period_dps" in cf.extra:
+                extra = f" (P {cf.extra['period_dps']:.4g} deg/s, φ {cf.extra['phase_deg']:.3g}°)"
+            if "lock_in_rate_dps" in cf.extra:
+                extra = (f" (Ω_L {_pm(cf.extra['lock_in_rate_dps'], cf.extra['lock_in_rate_sigma_dps'])}"
+                         " deg/s)")
+            formula = cf.formula.split(" (")[0]
+            value = _pm(cf.coef_ppm, cf.sigma_ppm) + extra
+            if "lock_in_rate_dps" in cf.extra:  # Ω_L says more than e_L
+                formula = "Adler √(I²−Ω_L²)"
+                value = extra.strip(" ()")
+            ct.add_row(cf.name, formula, value, "yes" if cf.supported else "no")
+        c.print(ct)
+    c.print(f"  [bold]{res.model.statement}[/bold]")
+    a = res.asymmetry
+    if a.status == "ok":
+        c.print(f"  asymmetry (§12.9.4.2.2, SF = output/input, {a.method.split(' (')[0]}): "
+                f"{_pm(a.asymmetry_ppm, a.asymmetry_sigma_ppm)} ppm; through the common "
+                f"intercept {_pm(a.common_intercept_ppm, a.common_intercept_sigma_ppm)} ppm; "
+                f"model term A {_pm(a.model_ppm, a.model_sigma_ppm)} ppm "
+                f"({'supported' if a.supported else 'not supported'} by the data)")
+    else:
+        c.print(f"  asymmetry: {a.status}")
+    p = res.periodic
+    c.print("  rate-periodic error: " + (
+        f"A = {_pm(p.amplitude_ppm, p.amplitude_sigma_ppm)} ppm, period {p.period_dps:.4g} deg/s "
+        f"(p = {p.p_value:.2g})" if p.supported else p.status))
+    if res.repeatability:
+        rp = res.repeatability
+        c.print(f"  repeatability (§12.9.4.2.3, {rp.n_runs} runs): 1σ {fmt_num(rp.sigma_ppm, 4)} ppm, "
+                f"max spread {fmt_num(rp.max_spread_ppm, 4)} ppm")
+    for r in res.runs:
+        if r.stability:
+            s = r.stability
+            c.print(f"  stability {r.run} (§12.9.4.2.4, {s.n_sweeps} sweeps): 1σ "
+                    f"{fmt_num(s.sigma_ppm, 3)} ppm, max spread {fmt_num(s.max_spread_ppm, 3)} ppm, "
+                    f"last − first {fmt_num(s.last_minus_first_ppm, 3)} ppm, drift "
+                    f"{_pm(s.drift_ppm_per_h, s.drift_sigma_ppm_per_h)} ppm/h")
+    ts = res.temperature
+    if ts.status == "ok":
+        c.print(f"  temperature sensitivity (§12.9.4.3.1, {ts.t_min_degC:.3g}…{ts.t_max_degC:.3g} °C): "
+                f"{_pm(ts.slope_ppm_per_degC, ts.slope_sigma_ppm_per_degC)} ppm/°C (max change / "
+                f"range {fmt_num(ts.max_change_per_range_ppm_per_degC, 3)} ppm/°C)")
+    else:
+        c.print(f"  temperature sensitivity: {ts.status}")
+    if res.lock_in.detected:
+        li2 = res.lock_in
+        c.print(f"  lock-in dead band: output collapsed up to {li2.dead_band_below_dps:g} deg/s"
+                + (f", free from {li2.dead_band_above_dps:g} deg/s" if math.isfinite(
+                    li2.dead_band_above_dps) else "")
+                + (f"; Adler fit Ω_L = {_pm(li2.fitted_dps, li2.fitted_sigma_dps)} deg/s"
+                   if math.isfinite(li2.fitted_dps) else ""))
+    if plot_path:
+        note(f"plot written to {plot_path}")
+    if points_path:
+        note(f"plateau table written to {points_path}")

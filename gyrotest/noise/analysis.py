@@ -1,0 +1,436 @@
+"""The whole Allan noise analysis of a bench log, as one pure function.
+
+:func:`analyse_allan` is what ``gyrotest allan`` and the spec-sheet report both call: it takes a
+:class:`~gyrotest.data.GyroLog` and returns an :class:`AllanAnalysis` (dataclass, ``to_dict()``
+for JSON) without printing anything. Per rate axis it computes
+
+1. the deviation table (default overlapping Allan deviation, IEEE 952 Annex C; NIST SP1065
+   eq. 11) with noise identification, EDF and χ² confidence interval per τ
+   (:mod:`gyrotest.noise.deviations`), gap-aware over the log's contiguous segments;
+2. the joint noise-model fit (:mod:`gyrotest.noise.fit`), the classic slope-line read-offs
+   and Krobka's bounds, and unit conversions for other tools;
+3. model vs measurement and the diagnosis of missing terms (:mod:`gyrotest.noise.diagnose`),
+   helped by the Welch PSD lines and the autocorrelation (:mod:`gyrotest.noise.spectral`);
+4. Krobka's warnings (:mod:`gyrotest.noise.warnings`), with the Allan–Krobka and Hadamard
+   deviations at long τ for the trend check;
+5. the platform vs strapdown attitude-error prediction (:mod:`gyrotest.noise.impact`);
+
+and, for multi-axis logs, the cross-correlation of the axes.
+
+Input kind (never a silent default): rate outputs (``rate``, ``voltage``) are analysed as rate
+samples; pulse outputs (``counts``, ``updown``, ``counter``) as angle increments ΔΘ = N·S0 per
+sample (arcsec), the form in which the quantization noise Q = S0/√12 is white angle noise.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..data import GyroLog
+from ..errors import AnalysisError, InputError
+from .deviations import DEVIATION_KINDS, DeviationResult, compute_deviation
+from .diagnose import Diagnosis, diagnose
+from .fit import (
+    MIN_EDF,
+    NoiseFit,
+    conversions,
+    fit_deviation,
+    parse_terms,
+    sanitize_edf,
+    slope_readoffs,
+)
+from .impact import ImpactResult, attitude_impact
+from .spectral import (
+    Autocorrelation,
+    CrossCorrelation,
+    PsdEstimate,
+    SpectralLine,
+    autocorrelation,
+    cross_correlation,
+    find_lines,
+    welch_psd,
+)
+from .warnings import KrobkaWarning, krobka_checks
+
+__all__ = ["AllanAnalysis", "AxisAnalysis", "analyse_allan", "input_kind_of", "parse_taus"]
+
+PULSE_KINDS = ("counts", "updown", "counter")
+#: deviations whose expectation is the Allan variance, so the IEEE closed forms fit them
+ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
+#: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
+MAX_JITTER = 0.1
+_PER_DECADE = re.compile(r"^\s*(\d+)\s*/\s*decade\s*$")
+
+
+def parse_taus(spec: str | Sequence[float] | None) -> str | list[float]:
+    """τ grid spec: ``octave``, ``decade``, ``10/decade`` (default; any ``N/decade``), ``all``,
+    or an explicit list ``"0.1,1,10"`` (seconds). Returns what
+    :func:`gyrotest.noise.taus.tau_grid` accepts."""
+    if spec is None:
+        return "decade10"
+    if not isinstance(spec, str):
+        return [float(v) for v in spec]
+    s = spec.strip().lower()
+    m = _PER_DECADE.match(s)
+    if m:
+        return f"decade{int(m.group(1))}"
+    if s in ("octave", "decade", "all") or re.fullmatch(r"decade\d+", s):
+        return s
+    try:
+        vals = [float(v) for v in re.split(r"[,\s]+", s) if v]
+    except ValueError:
+        raise InputError(f"bad --taus {spec!r}; use octave, decade, 10/decade, all or a list of "
+                         "τ in seconds like 0.1,1,10,100") from None
+    if not vals:
+        raise InputError("empty --taus list")
+    return vals
+
+
+def input_kind_of(log: GyroLog) -> tuple[str, str]:
+    """(input kind for :mod:`deviations`, explanation) from the log's output kind."""
+    kind = log.gyro.output_kind
+    if kind in PULSE_KINDS:
+        q = log.gyro.angle_quantum_arcsec
+        return "increment", (f"pulse output ({kind}, S0 = {q:g} arcsec/pulse): analysed as angle "
+                             "increments per sample; σ in arcsec/s = deg/h")
+    if kind in ("rate", "voltage"):
+        return "rate", f"{kind} output: analysed as rate samples (average rate per interval), deg/h"
+    raise InputError(f"{log.source}: output kind {kind!r} cannot be analysed (rate, voltage, "
+                     "counts, updown or counter)")
+
+
+@dataclass
+class AxisAnalysis:
+    """Everything computed for one rate axis of one log (see :func:`analyse_allan`)."""
+
+    axis: str
+    input_kind: str
+    input_note: str
+    dev: DeviationResult
+    fit_dev: DeviationResult
+    edf: np.ndarray
+    sigma_lo: np.ndarray
+    sigma_hi: np.ndarray
+    fit: NoiseFit
+    readoffs: dict[str, Any]
+    conversions: dict[str, Any]
+    diagnosis: Diagnosis | None
+    warnings: list[KrobkaWarning]
+    impact: ImpactResult | None
+    psd: PsdEstimate | None
+    lines: list[SpectralLine]
+    acf: Autocorrelation | None
+    akdev: DeviationResult | None = None
+    ohdev: DeviationResult | None = None
+    detrend: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def table(self) -> dict[str, np.ndarray]:
+        """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
+        sigma, sigma_hi (EDF and interval after :func:`sanitize_edf`), plus model σ and the
+        residual in CI units when the table is the fitted one."""
+        d = self.dev
+        out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),
+               "alpha": np.asarray(d.alpha), "edf": self.edf, "sigma_lo": self.sigma_lo,
+               "sigma": np.asarray(d.sigma, float), "sigma_hi": self.sigma_hi}
+        if self.dev is self.fit_dev:
+            out["model"] = self.fit.model_sigma()
+            out["residual_ci"] = self.fit.residuals()
+            out["fitted"] = self.fit.used
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        tab = self.table()
+        rows = []
+        for i in range(len(tab["tau"])):
+            row = {"tau": float(tab["tau"][i]), "m": int(tab["m"][i]), "n": int(tab["n"][i]),
+                   "alpha": int(tab["alpha"][i]), "edf": _num(tab["edf"][i]),
+                   "sigma_lo": _num(tab["sigma_lo"][i]), "sigma": _num(tab["sigma"][i]),
+                   "sigma_hi": _num(tab["sigma_hi"][i])}
+            if "model" in tab:
+                row["model"] = _num(tab["model"][i])
+                row["residual_ci"] = _num(tab["residual_ci"][i])
+                row["fitted"] = bool(tab["fitted"][i])
+            rows.append(row)
+        d = self.dev
+        return {
+            "axis": self.axis,
+            "input_kind": self.input_kind,
+            "input": self.input_note,
+            "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
+                          "ci_method": d.ci_method, "alpha_method": list(d.alpha_method),
+                          "notes": list(d.notes)},
+            "table": rows,
+            "fit_deviation": self.fit_dev.kind,
+            "fit": self.fit.to_dict(),
+            "slope_readoffs": self.readoffs,
+            "conversions": self.conversions,
+            "diagnosis": None if self.diagnosis is None else self.diagnosis.to_dict(),
+            "warnings": [w.to_dict() for w in self.warnings],
+            "impact": None if self.impact is None else self.impact.to_dict(),
+            "psd": None if self.psd is None else self.psd.to_dict(),
+            "psd_lines": [ln.to_dict() for ln in self.lines],
+            "autocorrelation": None if self.acf is None else self.acf.to_dict(),
+            "trend_check": {
+                "akdev": None if self.akdev is None else {
+                    "tau": self.akdev.tau.tolist(), "sigma": self.akdev.sigma.tolist()},
+                "ohdev": None if self.ohdev is None else {
+                    "tau": self.ohdev.tau.tolist(), "sigma": self.ohdev.sigma.tolist()},
+            },
+            "detrend": self.detrend,
+            "notes": list(self.notes),
+        }
+
+
+def _num(v) -> float | None:
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+@dataclass
+class AllanAnalysis:
+    """The Allan analysis of one log: settings, one :class:`AxisAnalysis` per rate axis, the
+    cross-correlation of the axes (multi-axis logs) and notes."""
+
+    source: str
+    tau0: float
+    n_samples: int
+    duration_s: float
+    settings: dict[str, Any]
+    axes: list[AxisAnalysis]
+    cross: CrossCorrelation | None
+    notes: list[str] = field(default_factory=list)
+
+    def axis(self, name: str | None = None) -> AxisAnalysis:
+        if name is None:
+            return self.axes[0]
+        for a in self.axes:
+            if a.axis == name:
+                return a
+        raise KeyError(name)
+
+    @property
+    def warnings(self) -> list[KrobkaWarning]:
+        return [w for a in self.axes for w in a.warnings]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "source": self.source,
+            "tau0_s": self.tau0,
+            "sample_rate_hz": 1.0 / self.tau0,
+            "n_samples": self.n_samples,
+            "duration_s": self.duration_s,
+            "settings": self.settings,
+            "units": {"sigma": "deg/h", "tau": "s", "N": "deg/sqrt(h)", "B": "deg/h",
+                      "K": "deg/h/sqrt(h)", "R": "deg/h/h", "Q": "arcsec",
+                      "q_c": "deg/h/sqrt(h)", "T_c": "s", "Omega0": "deg/h", "f0": "Hz",
+                      "attitude": "deg"},
+            "axes": [a.to_dict() for a in self.axes],
+            "cross_correlation": None if self.cross is None else self.cross.to_dict(),
+            "notes": list(self.notes),
+        }
+
+
+def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, dict[str, Any]]:
+    """Remove the least-squares line a + b·t (over all gap-free samples; the mean is kept)."""
+    idx = np.concatenate([np.arange(a, b) for a, b in segs])
+    tt = t[idx]
+    x = rate[idx]
+    tm = float(tt.mean())
+    dt = tt - tm
+    b = float(np.dot(dt, x - x.mean()) / np.dot(dt, dt))
+    out = rate - b * (t - tm)
+    return out, {"method": "linear", "slope_dph_per_s": b, "R_removed_deg_h_per_h": b * 3600.0,
+                 "note": "a least-squares straight line was removed from the rate before the "
+                         "analysis (it also removes part of any rate random walk at the "
+                         "longest τ)"}
+
+
+def _long_taus(tau: np.ndarray, count: int = 8) -> list[float]:
+    t = np.asarray(tau, float)
+    sel = t[t >= t.max() / 30.0]
+    return sel[-count:].tolist()
+
+
+def analyse_allan(
+    log: GyroLog,
+    *,
+    dev: str = "oadev",
+    taus: str | Sequence[float] | None = "10/decade",
+    terms: str | Sequence[str] | None = None,
+    vehicle_rates: Sequence[float] = (),
+    axes: Sequence[str] | None = None,
+    confidence: float = 0.683,
+    stop_ratio: float | None = None,
+    min_edf: float = MIN_EDF,
+    detrend: str | None = None,
+    run_diagnosis: bool = True,
+    spectral: bool = True,
+    trend_check: bool = True,
+    impact_horizon_s: float = 3600.0,
+    bi_cutoff_hz: float | None = None,
+    max_steps: int = 3,
+    allow_irregular: bool = False,
+) -> AllanAnalysis:
+    """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
+    printing, no files.
+
+    Parameters
+    ----------
+    dev : deviation for the table: oadev (default), adev, mdev, tdev, hdev, ohdev, totdev,
+        mtotdev, akdev, hkdev. The noise model is fitted to it when it is Allan-type (oadev,
+        adev, totdev, akdev), otherwise to an OADEV computed on the same τ (noted).
+    taus : ``octave``, ``decade``, ``N/decade`` (default 10/decade), ``all`` or a list of τ (s).
+    terms : noise terms to fit (default Q,N,B,K,R; see :func:`gyrotest.noise.fit.parse_terms`).
+    vehicle_rates : strapdown vehicle rates in rad/s for the impact prediction.
+    axes : rate axes to analyse (default all).
+    confidence : of the χ² intervals (0.683 as Stable32).
+    stop_ratio : max τ = T/stop_ratio for generated grids (default Stable32's per deviation).
+    min_edf : fit floor (τ with fewer EDF are shown, not fitted).
+    detrend : None/"none" or "linear" (remove a least-squares ramp first).
+    run_diagnosis, spectral, trend_check : switch the diagnosis, the PSD/ACF and the
+        Allan–Krobka/Hadamard trend comparison.
+    impact_horizon_s : time at which σ_att is reported (default 1 h).
+    bi_cutoff_hz : fit the full bias-instability template with this cut-off.
+    max_steps : at most this many terms added by the diagnosis ladder.
+    allow_irregular : analyse on the nominal τ0 even when the sample interval jitters by more
+        than 10 % (otherwise an InputError).
+
+    Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
+    cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
+    """
+    if dev not in DEVIATION_KINDS:
+        raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
+    tau_spec = parse_taus(taus)
+    keys = parse_terms(terms)
+    if detrend not in (None, "none", "linear"):
+        raise InputError(f"unknown --detrend {detrend!r}; use none or linear")
+    if not 0.0 < confidence < 1.0:
+        raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
+    notes: list[str] = []
+    tim = log.timing
+    if tim.irregular:
+        if tim.jitter_rel > MAX_JITTER and not allow_irregular:
+            raise InputError(
+                f"{log.source}: the sample interval varies by {100 * tim.jitter_rel:.3g} % of "
+                f"τ0 = {log.tau0:g} s; the Allan deviation needs uniform sampling. Resample the "
+                "log to a fixed interval (average into bins), or pass --allow-irregular to "
+                "analyse on the sample index with the nominal τ0")
+        notes.append(f"irregular timestamps (interval jitter {100 * tim.jitter_rel:.2g} % of τ0): "
+                     f"analysed on the sample index with the nominal τ0 = {log.tau0:g} s")
+    segs = log.segments
+    if len(segs) > 1:
+        notes.append(f"{len(segs)} gap-free segments ({len(tim.gaps)} gap(s)): deviations pooled "
+                     "over segments (sums of squares and term counts; no difference spans a gap)")
+    in_kind, in_note = input_kind_of(log)
+    quantum = log.gyro.angle_quantum_arcsec
+    names = list(axes) if axes else log.axes
+    for a in names:
+        if a not in log.rates:
+            raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
+    results: list[AxisAnalysis] = []
+    rates_used: dict[str, np.ndarray] = {}
+    for name in names:
+        rate = np.asarray(log.rates[name], dtype=np.float64)
+        det_info = None
+        if detrend == "linear":
+            rate, det_info = _detrend_linear(rate, log.t, segs)
+        rates_used[name] = rate
+        results.append(_analyse_axis(
+            name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev, tau_spec=tau_spec,
+            keys=keys, vehicle_rates=vehicle_rates, confidence=confidence,
+            stop_ratio=stop_ratio, min_edf=min_edf, run_diagnosis=run_diagnosis,
+            spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
+            bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
+            det_info=det_info, source=log.source))
+    cross = None
+    if len(names) > 1:
+        cross = cross_correlation(rates_used, log.tau0, segments=segs)
+    settings = {
+        "deviation": dev, "taus": tau_spec if isinstance(tau_spec, str) else list(tau_spec),
+        "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
+        "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
+        "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
+        "diagnosis": run_diagnosis,
+    }
+    return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
+                         duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
+                         notes=notes)
+
+
+def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau_spec, keys,
+                  vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
+                  trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
+                  source) -> AxisAnalysis:
+    notes: list[str] = []
+    data = rate * tau0 if in_kind == "increment" else rate
+
+    def deviation(kind: str, grid, **kw) -> DeviationResult:
+        return compute_deviation(data, tau0, input_kind=in_kind, kind=kind, taus=grid,
+                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                                 unit="deg/h", **kw)
+
+    try:
+        table_dev = deviation(dev, tau_spec)
+    except AnalysisError as e:
+        raise AnalysisError(f"{source} [{name}]: {e}") from None
+    if dev in ALLAN_TYPE:
+        fit_dev = table_dev
+    else:
+        fit_dev = deviation("oadev", [float(t) for t in table_dev.tau])
+        notes.append(f"the IEEE 952 noise model is the Allan variance: fitted to an OADEV on the "
+                     f"same τ; the table shows {dev.upper()}")
+    edf, changed = sanitize_edf(table_dev.edf)
+    lo, hi = np.asarray(table_dev.sigma_lo, float).copy(), np.asarray(table_dev.sigma_hi,
+                                                                      float).copy()
+    if changed:
+        from .edf import chi2_interval
+
+        lo[changed], hi[changed] = chi2_interval(table_dev.sigma[changed], edf[changed],
+                                                 confidence)
+    psd = None
+    lines: list[SpectralLine] = []
+    acf = None
+    if spectral:
+        try:
+            psd = welch_psd(rate, tau0, segments=segs, f_min=1.0 / max(float(fit_dev.tau.max()),
+                                                                       tau0))
+            lines = find_lines(psd)
+        except ValueError:
+            psd = None
+        longest = max(segs, key=lambda s: s[1] - s[0])
+        acf = autocorrelation(rate[longest[0]:longest[1]], tau0, max_samples=1 << 20,
+                              max_lag=min(100_000, (longest[1] - longest[0]) // 10))
+    hints = [ln.f_hz for ln in lines]
+    fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
+                        line_hints=hints)
+    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma)
+    diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
+    ak = oh = None
+    if trend_check:
+        long_t = _long_taus(fit_dev.tau)
+        if len(long_t) >= 2:
+            try:
+                ak = deviation("akdev", long_t, noise_id=False)
+                oh = deviation("ohdev", long_t, noise_id=False)
+            except (InputError, AnalysisError) as e:
+                notes.append(f"trend check skipped: {e}")
+    warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
+                          diagnosis=diag, record_s=record_s)
+    impact = attitude_impact(fit, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
+                             record_s=record_s)
+    if diag is not None and not diag.no_missing_term and diag.final is not fit:
+        notes.append(f"the impact prediction uses the fitted terms {','.join(keys)}; the "
+                     f"diagnosis suggests --terms {','.join(diag.final.requested)}")
+    return AxisAnalysis(
+        axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
+        edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
+        conversions=conversions(fit), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
+        lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
+        notes=notes + list(fit.notes))

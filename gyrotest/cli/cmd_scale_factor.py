@@ -237,6 +237,9 @@ def _render(res, plot_path, points_path) -> None:
     c.print(t)
     c.print("  ε0 = (SF/S0 − 1)·1e6; ε0 model: linear coefficient with f(I) fitted; bias D_F "
             "input-referred, earth rate removed")
+    if math.isfinite(res.bias_zero_rate_dph):
+        c.print(f"  bias at the zero-rate plateaus (§12.11.4.1.1, model-free): "
+                f"{_pm(res.bias_zero_rate_dph, res.bias_zero_rate_sigma_dph)} deg/h")
     # linearity per rate (pooled over runs)
     import numpy as np
 

@@ -115,6 +115,8 @@ class RunResult:
     linearity: LinearityStats
     stability: StabilityResult | None
     sf_key: str = "dimensionless"
+    bias_zero_rate_dph: float = math.nan  # IEEE §12.11.4.1.1 at the zero-rate plateaus
+    bias_zero_rate_sigma_dph: float = math.nan
 
     def to_dict(self) -> dict:
         k = self.sf_key
@@ -129,6 +131,8 @@ class RunResult:
             "slope_output_per_input": self.slope, "slope_sigma": self.slope_sigma,
             "bias_dph": self.bias_model_dph, "bias_sigma_dph": self.bias_model_sigma_dph,
             "bias_line_dph": self.bias_dph, "bias_line_sigma_dph": self.bias_sigma_dph,
+            "bias_zero_rate_dph": self.bias_zero_rate_dph,
+            "bias_zero_rate_sigma_dph": self.bias_zero_rate_sigma_dph,
             "line_chi2_per_dof": self.chi2_per_dof,
             f"scale_factor_model_{k}": self.scale_factor_model,
             f"scale_factor_model_sigma_{k}": self.scale_factor_model_sigma,
@@ -290,6 +294,8 @@ class ScaleFactorResult:
     scale_factor_error_ppm: float
     bias_dph: float
     bias_sigma_dph: float
+    bias_zero_rate_dph: float
+    bias_zero_rate_sigma_dph: float
     linearity: LinearityStats
     linearity_after_model: LinearityStats
     model: NonlinearityModel
@@ -328,6 +334,11 @@ class ScaleFactorResult:
             "bias_sigma_dph": self.bias_sigma_dph,
             "bias_definition": "D_F = b/k from the nonlinearity model (zero-rate output, "
                                "input-referred, earth rate removed), mean over runs",
+            "bias_zero_rate_dph": self.bias_zero_rate_dph,
+            "bias_zero_rate_sigma_dph": self.bias_zero_rate_sigma_dph,
+            "bias_zero_rate_definition": "IEEE 952 §12.11.4.1.1 at the zero-rate plateaus: "
+                                         "mean of output/k - earth rate (model-free; null "
+                                         "without zero-rate plateaus)",
             "full_scale_dps": self.full_scale_dph / DPS,
             "weighted_fit": self.weighted,
             "settings": self.settings,
@@ -619,6 +630,17 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         temps = P.temp[m]
         tmean = float(np.nanmean(temps)) if np.any(np.isfinite(temps)) else math.nan
         stab = _stability(P, r, rp.run, model, k, weighted_line)
+        # IEEE 952 §12.11.4.1.1 at zero table rate: D = y/k − Ω_IA (model-free)
+        z0 = m & (P.table == 0)
+        bz, sbz = math.nan, math.nan
+        if z0.any():
+            d = P.y[z0] / km - P.I[z0]
+            if P.weighted:
+                w = (km / P.se[z0]) ** 2
+                bz, sbz = float(np.sum(w * d) / np.sum(w)), float(1 / math.sqrt(np.sum(w)))
+            else:
+                bz = float(np.mean(d))
+                sbz = float(np.std(d, ddof=1) / math.sqrt(len(d))) if len(d) > 1 else math.nan
         run_results.append(RunResult(
             run=rp.run, source=rp.source, method=rp.method, n_plateaus=len(rp.plateaus),
             n_used=int(m.sum()), n_sweeps=len(np.unique(P.sweep[m])),
@@ -629,7 +651,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
             scale_factor_model=sfm, scale_factor_model_sigma=ssfm,
             bias_model_dph=bm / km, bias_model_sigma_dph=sbm * birge_m / abs(km),
             linearity=linearity_stats(P.I[m], lin_fs[m], lin_out[m]), stability=stab,
-            sf_key=key))
+            sf_key=key, bias_zero_rate_dph=bz, bias_zero_rate_sigma_dph=sbz))
     sfs = np.array([rr.scale_factor for rr in run_results])
     ssf = np.array([rr.scale_factor_sigma for rr in run_results])
     sfm = np.array([rr.scale_factor_model for rr in run_results])
@@ -645,6 +667,12 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
     sfm_mean, sfm_sig = combine(sfm, ssfm)
     bias_mean, bias_sig = combine(np.array([rr.bias_model_dph for rr in run_results]),
                                   np.array([rr.bias_model_sigma_dph for rr in run_results]))
+    bz = np.array([rr.bias_zero_rate_dph for rr in run_results])
+    if np.all(np.isfinite(bz)):
+        bz_mean, bz_sig = combine(bz, np.array([rr.bias_zero_rate_sigma_dph
+                                                for rr in run_results]))
+    else:
+        bz_mean, bz_sig = math.nan, math.nan
     rep = None
     if R >= 2:
         rel = (sfs / np.mean(sfs) - 1) * 1e6
@@ -813,7 +841,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         full_scale_dph=fs, weighted=weighted, settings=settings, runs=run_results,
         scale_factor=sf_mean, scale_factor_sigma=sf_sig, scale_factor_model=sfm_mean,
         scale_factor_model_sigma=sfm_sig, scale_factor_error_ppm=(sf_mean / s0 - 1) * 1e6,
-        bias_dph=bias_mean, bias_sigma_dph=bias_sig,
+        bias_dph=bias_mean, bias_sigma_dph=bias_sig, bias_zero_rate_dph=bz_mean,
+        bias_zero_rate_sigma_dph=bz_sig,
         linearity=linearity_stats(P.I, lin_fs, lin_out),
         linearity_after_model=linearity_stats(P.I, after_fs, after_out),
         model=nl, asymmetry=asym, periodic=per, repeatability=rep, temperature=ts,

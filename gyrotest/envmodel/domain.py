@@ -96,7 +96,9 @@ def thermal_fit(wd: WorkData, *, sensor: str | None = None,
                 gradient: tuple[str, str] | None = None, folds: int = 5) -> ThermalResult:
     """Fit Δω = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (ΔT from the reference temperature of
     ``wd``, i.e. t0) to a continuous chamber run, and the IEEE E terms D_T, D_Ṫ (the same
-    numbers) plus D_∇Ṫ when a second temperature channel exists.
+    numbers) plus D_∇Ṫ when a second temperature channel exists. Without ``sensor``, the
+    temperature channel whose model predicts held-out data best is used (the paper's model is
+    in the ambient temperature; a lagging coil sensor fits worse).
 
     Returns coefficients in the paper's units with HAC 1σ, the fits, and a heating/cooling
     hysteresis check of the residual (mean residual on heating minus cooling branches).
@@ -106,7 +108,24 @@ def thermal_fit(wd: WorkData, *, sensor: str | None = None,
     if not temps:
         raise InputError(f"{wd.info.get('source')}: thermal-fit needs a temperature channel; "
                          "name it with --temp-col")
-    sensor = sensor or temps[0]
+    notes = []
+    if sensor is None:
+        if len(temps) == 1:
+            sensor = temps[0]
+        else:  # the sensor that sees the temperature driving the drift fits best
+            scores = {}
+            for c in temps:
+                try:
+                    r = fit_model(wd, [f"T({c})", f"T2({c})", f"dTdt({c})"], folds=folds,
+                                  light=True)
+                    scores[c] = r.rms_holdout
+                except (InputError, AnalysisError):
+                    continue
+            if not scores:
+                raise InputError(f"{wd.info.get('source')}: no usable temperature channel")
+            sensor = min(scores, key=scores.get)
+            notes.append("sensor chosen by held-out RMS: " + ", ".join(
+                f"{c} {v:.4g} deg/h" for c, v in sorted(scores.items(), key=lambda x: x[1])))
     if sensor not in temps:
         raise InputError(f"{wd.info.get('source')}: no temperature channel {sensor!r} "
                          f"(temperature channels: {', '.join(temps)})")
@@ -118,9 +137,10 @@ def thermal_fit(wd: WorkData, *, sensor: str | None = None,
     ieee = None
     ieee_c = [Coef("D_T", coefs[1].value, coefs[1].stderr, "(deg/h)/degC"),
               Coef("D_Tdot", coefs[3].value, coefs[3].stderr, "(deg/h)/(degC/h)")]
-    notes = []
     if gradient is None and len(temps) >= 2:
-        gradient = (temps[0], temps[1]) if sensor == temps[0] else (sensor, temps[0])
+        other = next((c for c in temps if c != sensor and np.ptp(
+            wd.frame.temperature[c] - wd.frame.temperature[sensor]) > 1e-6), None)
+        gradient = (sensor, other) if other else None
     if gradient is not None:
         a, b = gradient
         for c in (a, b):
@@ -461,10 +481,13 @@ def mag_fit(wd: WorkData, *, extra_terms: list[str] | None = None, settle_s: flo
                 if abs(p_up.level_uT - p_dn.level_uT) < 5.0:
                     diffs.append(p_up.rate_dph - p_dn.rate_dph)
         if diffs:
-            pm = np.array([p.rate_std_dph for p in pa])
-            ns = np.array([p.n for p in pa])
-            tau = st.integrated_time(fr.rate - corr_f) if len(fr.rate) > 8 else 1.0
-            se_one = float(np.median(pm / np.sqrt(np.maximum(ns / max(tau, 1.0), 1.0))))
+            # a plateau mean's 1σ from the residual noise model: white N over the dwell plus
+            # the flicker plateau B
+            fl = res.floor
+            dwell = float(np.median([p.n for p in pa])) * fr.dt
+            se_one = (math.sqrt(fl.white_N ** 2 / dwell + fl.flicker_B ** 2)
+                      if fl is not None and math.isfinite(fl.white_N) else
+                      float(np.median([p.rate_std_dph for p in pa])))
             m = float(np.mean(diffs))
             se = se_one * math.sqrt(2.0 / len(diffs))
             hyst[ax] = {"up_minus_down_dph": m, "stderr_dph": se, "pairs": len(diffs),

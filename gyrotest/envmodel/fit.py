@@ -818,8 +818,13 @@ def finish(res: FitResult, k_sigma: float = 4.0) -> None:
     r = fine_residual(res)
     tau, sig = st.oadev(r, wd.frame.dt, segments=wd.frame.bounds)
     res.adev_tau, res.adev_sigma = tau, sig
-    res.floor = st.noise_floor(tau, sig, getattr(wd, "t_eff", wd.resolution_s), wd.duration_s,
-                               fit_upto_s=None)
+    # the floor: white noise from the raw residual's differences (robust to misfit spikes),
+    # flicker from the Allan deviation of the matched-smoothed residual beyond 2·W, where the
+    # smoothed derivative regressors are exact
+    nw = st.robust_white(r, wd.frame.dt, wd.frame.bounds)
+    ts, ss = st.oadev(wd.smooth(r), wd.frame.dt, segments=wd.frame.bounds)
+    res.floor = st.noise_floor(ts, ss, getattr(wd, "t_eff", wd.resolution_s), wd.duration_s,
+                               white_N=nw, fit_from_s=2.0 * wd.refs.smoothing_s)
     res.excursions = find_excursions(res, k_sigma=k_sigma)
     res.model.fit["noise_floor_dph"] = res.floor.rms_dph
 

@@ -235,3 +235,125 @@ def history_figures(steps) -> list[tuple[str, object]]:
     ax.set_xticks(x)
     ax.legend(loc="best")
     return [("history", fig)]
+
+
+def thermal_figures(th) -> list[tuple[str, object]]:
+    """Rate against temperature, heating and cooling coloured, with the Antonova–Matveev
+    static curve; then the fit's time/residual figures."""
+    from .terms import temperature_rate
+
+    res = th.am
+    wd = res.wd
+    T = wd.bmean(wd.frame.temperature[th.sensor])
+    rate = wd.bmean(temperature_rate(wd.frame.temperature[th.sensor], wd.frame.dt,
+                                     wd.refs.smoothing_s, wd.frame.bounds))
+    thr = th.hysteresis.get("threshold_degC_per_h", 0.5)
+    fig, axes = new_figure(1, 2, size=(12, 4.8))
+    ax = axes[0]
+    for code, col, lab in ((0, "#999999", "steady"), (1, COLORS[1], "heating"),
+                           (-1, COLORS[0], "cooling")):
+        m = np.where(rate > thr, 1, np.where(rate < -thr, -1, 0)) == code
+        if m.any():
+            ax.scatter(T[m], res.y[m], s=5, color=col, alpha=0.6, lw=0, label=lab)
+    c = {x.name: x.value for x in th.coefficients}
+    tt = np.linspace(T.min(), T.max(), 200)
+    dT = tt - th.t0_c
+    ax.plot(tt, c["w0"] + c["w1"] * dT + c["w2"] * dT ** 2, color="k", lw=1.5,
+            label="w0 + w1·ΔT + w2·ΔT² (dT/dt = 0)")
+    ax.set_xlabel(f"{th.sensor}, °C")
+    ax.set_ylabel("rate − input, deg/h")
+    ax.set_title("drift vs temperature: loops = rate/lag effects", loc="left")
+    ax.legend(loc="best", markerscale=3)
+    ax = axes[1]
+    part = res.y - (c["w0"] + c["w1"] * (T - th.t0_c) + c["w2"] * (T - th.t0_c) ** 2)
+    ax.scatter(rate, part, s=5, color=COLORS[2], alpha=0.6, lw=0, label="data − static part")
+    rr = np.linspace(rate.min(), rate.max(), 50)
+    ax.plot(rr, c["w_dV"] * rr, color="k", lw=1.5, label=f"w_ΔV = {c['w_dV']:.4g} deg/°C")
+    ax.set_xlabel("temperature rate dT/dt, °C/h")
+    ax.set_ylabel("deg/h")
+    ax.set_title("temperature-rate term", loc="left")
+    ax.legend(loc="best", markerscale=3)
+    return [("thermal", fig)] + fit_figures(res, title="Antonova–Matveev model fit")
+
+
+def setpoint_figures(sp) -> list[tuple[str, object]]:
+    """Set-point table with the fitted quadratic and the paper's published curve."""
+    from .domain import ANTONOVA_MATVEEV_PAPER as P
+
+    fig, ax = new_figure(size=(7.5, 4.8))
+    T = np.array([p["temperature_degC"] for p in sp.points])
+    y = np.array([p["dw_dph"] for p in sp.points])
+    err = np.array([p.get("sigma_dph", 0.0) for p in sp.points])
+    ax.errorbar(T, y, yerr=err if err.any() else None, fmt="o", color=COLORS[0], capsize=3,
+                label="set-points (±σ of the output)")
+    c = {x.name: x.value for x in sp.coefficients}
+    tt = np.linspace(min(T.min(), sp.t0_c), T.max(), 200)
+    d = tt - sp.t0_c
+    ax.plot(tt, c["w0"] + c["w1"] * d + c["w2"] * d ** 2, color=COLORS[1],
+            label=f"fit: w0 {c['w0']:.3g}, w1 {c['w1']:.3g}, w2 {c['w2']:.3g}")
+    ax.plot(tt, P["w0"] + P["w1"] * d + P["w2"] * d ** 2, "--", color="#777777",
+            label="Antonova & Matveev published coefficients")
+    ax.set_xlabel("thermostat temperature, °C")
+    ax.set_ylabel("Δω (from the unheated value), deg/h")
+    ax.set_title(f"steady-state set-points, ΔT from t0 = {sp.t0_c:g} °C", loc="left")
+    ax.legend(loc="best")
+    return [("setpoints", fig)]
+
+
+def mag_figures(mg) -> list[tuple[str, object]]:
+    """Plateau means against the applied level per axis (up/down sweeps marked) with the
+    fitted slope; then the fit's time/residual figures."""
+    figs = []
+    axes_present = [a for a in "xyz" if any(p.axis == a for p in mg.plateaus)]
+    if axes_present:
+        fig, axs = new_figure(1, len(axes_present), size=(4.2 * len(axes_present), 4.2))
+        axs = np.atleast_1d(axs)
+        coef = {c.name: c for c in mg.coefficients}
+        for ax, a in zip(axs, axes_present):
+            pa = [p for p in mg.plateaus if p.axis == a]
+            base = np.mean([p.rate_dph for p in pa if p.level_uT == 0.0] or
+                           [np.mean([p.rate_dph for p in pa])])
+            for d, mk, col in (("up", "^", COLORS[1]), ("down", "v", COLORS[0]),
+                               ("start", "o", "#777777")):
+                q = [p for p in pa if p.direction == d]
+                if q:
+                    ax.plot([p.level_uT for p in q], [p.rate_dph - base for p in q], mk,
+                            color=col, ms=5, ls="none", label=f"{d} sweep" if d != "start"
+                            else "start")
+            if f"w{a}" in coef:
+                c = coef[f"w{a}"]
+                hh = np.linspace(min(p.level_uT for p in pa), max(p.level_uT for p in pa), 10)
+                ax.plot(hh, c.value * hh / 100.0, color="k", lw=1.2,
+                        label=f"w{a} = {c.value:.4g} ± {c.stderr:.2g}")
+            ax.set_xlabel(f"applied field along {a.upper()}, µT")
+            ax.set_ylabel("plateau mean − zero level, deg/h")
+            ax.legend(loc="best", fontsize=7.5)
+        fig.suptitle("Helmholtz sequence: drift per level (deg/h per 100 µT slopes)",
+                     fontsize=10)
+        figs.append(("levels", fig))
+    return figs + fit_figures(mg.fit, title="magnetic model fit")
+
+
+def compensation_figures(cp) -> list[tuple[str, object]]:
+    """Before/after drift (working-resolution block means) and Allan deviation."""
+    fig, axes = new_figure(2, 1, size=(9, 7.5), height_ratios=[1, 1.1])
+    t = cp.t_blocks
+    tx, tl = _time_axis(t)
+    ax = axes[0]
+    ax.plot(tx, cp.y_before - np.mean(cp.y_before), color="#999999", lw=0.9,
+            label=f"before: RMS {cp.rms_before_dph:.3g} deg/h")
+    ax.plot(tx, cp.y_after - np.mean(cp.y_after), color=COLORS[0], lw=1.0,
+            label=f"after: RMS {cp.rms_after_dph:.3g} deg/h (predicted "
+                  f"{cp.predicted_rms_after_dph:.3g})")
+    ax.set_xlabel(tl)
+    ax.set_ylabel("drift (mean removed), deg/h")
+    ax.set_title(f"compensation: drift reduced ×{cp.factor:.3g} (model predicts "
+                 f"×{cp.predicted_factor:.3g})", loc="left")
+    ax.legend(loc="best")
+    ax = axes[1]
+    ax.loglog(cp.adev_tau, cp.adev_before, "o-", ms=3, color="#999999", label="before")
+    ax.loglog(cp.adev_tau, cp.adev_after, "o-", ms=3, color=COLORS[0], label="after")
+    ax.set_xlabel("averaging time τ, s")
+    ax.set_ylabel("Allan deviation σ(τ), deg/h")
+    ax.legend(loc="best")
+    return [("compensation", fig)]

@@ -1,0 +1,158 @@
+"""``gyrotest thermal-fit``: the Antonova–Matveev thermal model and the IEEE E terms."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from ..errors import InputError
+from .cmd_model import check_output, load_for_terms, prepare_log, render_fit, write_plot
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    note,
+    warn,
+    with_ingest,
+)
+
+
+def _coef_table(title, coefs):
+    from rich.table import Table
+
+    t = Table(title=title)
+    for col, just in (("coefficient", "left"), ("value ± 1σ", "right"), ("unit", "left")):
+        t.add_column(col, justify=just)
+    for c in coefs:
+        err = fmt_num(c.stderr, 2) if math.isfinite(c.stderr) else "—"
+        t.add_row(c.name, f"{fmt_num(c.value)} ± {err}", c.unit)
+    return t
+
+
+@click.command("thermal-fit")
+@click.argument("log", type=str, required=False)
+@click.option("--setpoints", type=click.Path(dir_okay=False), default=None,
+              help="Table of steady-state set-points (CSV: temperature, dw[, sigma][, dTdt]).")
+@click.option("--t0", type=float, default=21.0, show_default=True,
+              help="Reference temperature t0, degC (ΔT = T − t0; the paper's lab: 21).")
+@click.option("--sensor", default=None,
+              help="Temperature channel of the model (default: the one that fits held-out "
+                   "data best).")
+@click.option("--gradient", default=None,
+              help="Two temperature channels A,B for D_gradTdot = d(T_A − T_B)/dt.")
+@click.option("--weighted", is_flag=True,
+              help="Weight set-points by 1/sigma² (default: equal weights).")
+@click.option("--axis", default=None, help="Gyro axis (rate column); default the first.")
+@click.option("--skip", default="0", show_default=True, help="Drop the start of the log.")
+@click.option("--resolution", default="auto", show_default=True,
+              help="Working resolution (block length) or 'auto'.")
+@click.option("--smooth", default="auto", show_default=True,
+              help="Smoother window W for dT/dt or 'auto'.")
+@click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
+              help="Folds of the blocked cross-validation.")
+@click.option("-o", "--output", default=None,
+              help="Write the fitted model (.json/.toml) for 'gyrotest compensate'.")
+@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+              help="Drift vs temperature and residual plots (.png/.svg/.pdf).")
+@ingest_options
+@json_option
+@with_ingest
+def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resolution, smooth,
+            folds, output, plot_path, as_json, ingest_opts):
+    """Thermal drift model of Antonova & Matveev: dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt.
+
+    From a continuous chamber run LOG (ΔT = T − t0, dT/dt in degC/h; w0 deg/h, w1 deg/(h·degC),
+    w2 deg/(h·degC²), w_ΔV deg/degC) with the IEEE 952 E terms D_T, D_Tdot and, with two
+    temperature channels, D_gradTdot; plus a heating-vs-cooling hysteresis check. And/or from a
+    table of steady-state set-points (--setpoints), like the paper's 31…55 °C thermostat test;
+    there dT/dt = 0, so w_ΔV needs a chamber run.
+
+    \b
+    Examples:
+      gyrotest thermal-fit chamber.csv --profile bench.toml --t0 21 -o thermal.json
+      gyrotest thermal-fit --setpoints thermostat.csv --t0 21
+    """
+    from ..envmodel.domain import read_setpoints, thermal_fit, thermal_fit_setpoints
+
+    if log is None and setpoints is None:
+        raise InputError("give a chamber log, --setpoints TABLE, or both")
+    out_path = check_output(output, (".json", ".toml"), "model file")
+    if output and log is None:
+        raise InputError("-o needs a chamber log (a set-point table gives no full model)")
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
+    grad = None
+    if gradient:
+        parts = [p.strip() for p in gradient.split(",") if p.strip()]
+        if len(parts) != 2:
+            raise InputError(f"--gradient {gradient!r}: give two channels, e.g. T_case,T_coil")
+        grad = (parts[0], parts[1])
+    sp = None
+    if setpoints:
+        tab = read_setpoints(setpoints)
+        sp = thermal_fit_setpoints(tab["temp"], tab["drift"], tab.get("sigma"), tab.get("dtdt"),
+                                   t0_c=t0, weighted=weighted)
+    th = None
+    if log is not None:
+        from ..envmodel.terms import parse_terms
+
+        specs = parse_terms(["T", "dTdt"])
+        g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+        if not g.temperature:
+            raise InputError(f"{g.source}: thermal-fit needs a temperature channel; name it "
+                             "with --temp-col")
+        wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t0,
+                                  "resolution": resolution, "smooth": smooth})
+        th = thermal_fit(wd, sensor=sensor, gradient=grad, folds=folds)
+        if out_path:
+            th.am.model.save(out_path)
+    if plot_path:
+        from ..envmodel.plots import setpoint_figures, thermal_figures
+
+        figs = (thermal_figures(th) if th else []) + (setpoint_figures(sp) if sp else [])
+        write_plot(figs, plot_path)
+    if as_json:
+        emit_json({"chamber": th.to_dict() if th else None,
+                   "setpoints": sp.to_dict() if sp else None,
+                   "model_file": str(out_path) if out_path else None})
+        return
+    c = console()
+    if th:
+        c.print(f"[bold]thermal-fit[/bold]: Antonova–Matveev model on {th.sensor}, "
+                f"ΔT from t0 = {th.t0_c:g} °C")
+        for n in th.notes:
+            note(n)
+        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ HAC)",
+                            th.coefficients))
+        c.print(_coef_table("IEEE 952 E terms", th.ieee_coefficients))
+        h = th.hysteresis
+        if "heating_minus_cooling_dph" in h:
+            c.print(f"  heating − cooling residual: {fmt_num(h['heating_minus_cooling_dph'])} ± "
+                    f"{fmt_num(h['stderr_dph'], 2)} deg/h — {h['verdict']}")
+        else:
+            c.print(f"  hysteresis check: {h.get('note')}")
+        render_fit(th.am, title="fit details")
+        if out_path:
+            c.print(f"  model written to {out_path}")
+    if sp:
+        c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from t0 = {sp.t0_c:g} °C"
+                + (" (weighted by 1/σ²)" if sp.weighted else ""))
+        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² (± 1σ from the scatter)",
+                            sp.coefficients))
+        from rich.table import Table
+
+        t = Table(title="points")
+        for col in ("T, °C", "ΔT", "dw, deg/h", "model", "residual"):
+            t.add_column(col, justify="right")
+        for p in sp.points:
+            t.add_row(f"{p['temperature_degC']:g}", f"{p['dT_degC']:g}", fmt_num(p["dw_dph"]),
+                      fmt_num(p["model_dph"]), fmt_num(p["residual_dph"], 2))
+        c.print(t)
+        c.print(f"  residual RMS {fmt_num(sp.rms_dph)} deg/h, {sp.dof} degrees of freedom")
+        for n in sp.notes:
+            warn(n) if "not identifiable" in n else note(n)

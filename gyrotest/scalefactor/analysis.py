@@ -129,6 +129,7 @@ class RunResult:
             f"scale_factor_sigma_{k}": self.scale_factor_sigma,
             "scale_factor_error_ppm": self.scale_factor_error_ppm,
             "slope_output_per_input": self.slope, "slope_sigma": self.slope_sigma,
+            "slope_error_ppm": (self.slope - 1.0) * 1e6,
             "bias_dph": self.bias_model_dph, "bias_sigma_dph": self.bias_model_sigma_dph,
             "bias_line_dph": self.bias_dph, "bias_line_sigma_dph": self.bias_sigma_dph,
             "bias_zero_rate_dph": self.bias_zero_rate_dph,
@@ -330,6 +331,11 @@ class ScaleFactorResult:
             f"scale_factor_model_{k}": self.scale_factor_model,
             f"scale_factor_model_sigma_{k}": self.scale_factor_model_sigma,
             "scale_factor_error_ppm": self.scale_factor_error_ppm,
+            "scale_factor_error_definition": "(SF/S0 - 1) * 1e6 = epsilon_0 of the model "
+                                             "equation (input per output); the output-per-input "
+                                             "slope error slope_error_ppm = (k - 1) * 1e6 has "
+                                             "the opposite sign",
+            "slope_error_ppm": float(np.mean([(r.slope - 1.0) * 1e6 for r in self.runs])),
             "bias_dph": self.bias_dph,
             "bias_sigma_dph": self.bias_sigma_dph,
             "bias_definition": "D_F = b/k from the nonlinearity model (zero-rate output, "

@@ -99,9 +99,16 @@ def test_plot_formats(three, suffix):
     assert out.stat().st_size > 1000
 
 
-def test_no_negative_rates_is_a_note_not_an_error(tmp_path):
+def test_no_negative_rates(tmp_path):
+    """Issue #4: no negative rates is bad input for an asymmetry test (exit 2, say so); with
+    --no-asymmetry the rest of the reduction goes ahead and the asymmetry says why it is absent."""
     logs, prof = make(tmp_path, "pos", rates_dps=[0, 1, 10, 100, 300])
-    r = run_cli(["scale-factor", *logs, "--profile", prof, "--settle", "5s", "--json"])
+    r = run_cli(["scale-factor", *logs, "--profile", prof, "--settle", "5s",
+                 "--plot", tmp_path / "np.png"])
+    r.assert_clean_error("no negative input rates", "--no-asymmetry")
+    no_files(tmp_path, "np.png")
+    r = run_cli(["scale-factor", *logs, "--profile", prof, "--settle", "5s", "--json",
+                 "--no-asymmetry"])
     assert r.code == 0, r.err
     d = json.loads(r.out)
     assert d["asymmetry"]["status"].startswith("skipped: no negative input rates")

@@ -87,6 +87,8 @@ def _terms(value: str):
 @click.option("--unweighted", is_flag=True, help="Do not weight the nonlinearity model fit.")
 @click.option("--no-lock-in", is_flag=True, help="Do not look for a low-rate dead band.")
 @click.option("--no-periodic", is_flag=True, help="Do not look for a rate-periodic error.")
+@click.option("--no-asymmetry", is_flag=True,
+              help="Accept a table without negative rates (asymmetry is then not computed).")
 @click.option("--common-rates", is_flag=True,
               help="Runs tested at different rate sets: keep only the rates all runs share.")
 @click.option("--points", "points_path", type=click.Path(dir_okay=False), default=None,
@@ -98,8 +100,8 @@ def _terms(value: str):
 @with_ingest
 def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr_method,
             snap_tol, full_scale,
-            terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, common_rates,
-            points_path, plot_path, as_json, ingest_opts):
+            terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, no_asymmetry,
+            common_rates, points_path, plot_path, as_json, ingest_opts):
     """Scale factor, linearity, asymmetry and nonlinearity from rate-table LOGS (IEEE 952 §12.9.4).
 
     Each LOG is one run (a continuous rate-table log); several runs give repeatability,
@@ -166,6 +168,10 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
         g = loaded[0].gyro
         result = sfm.analyse(runs, output_kind=g.output_kind,
                              nominal_scale_factor=g.scale_factor, **kw)
+    if not no_asymmetry and any(n.startswith("asymmetry not computed") for n in result.notes):
+        raise InputError("no negative input rates: the asymmetry (IEEE 952 §12.9.4.2.2) cannot be "
+                         "computed; add negative rates to the table sequence, or pass "
+                         "--no-asymmetry to reduce without it")
     # files last, so that an error leaves nothing behind
     if plot_path:
         from ..scalefactor.plot import plot_scale_factor

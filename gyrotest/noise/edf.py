@@ -565,9 +565,9 @@ def b1_noise_id(
 ACF_MIN_POINTS = 30
 B1_MIN_POINTS = 8
 #: At most this many averaged points per segment enter the identification (the first ones);
-#: the lag-1 estimate then has a standard error of about 2e-3, far below the ±0.25 decision
-#: margin, and the extra memory stays a few MB even for 10^8-sample records.
-NOISE_ID_MAX_POINTS = 1 << 18
+#: the lag-1 estimate then has a standard error of about 4e-3, far below the ±0.25 decision
+#: margin, and the extra memory stays below 1 MB even for 10^8-sample records.
+NOISE_ID_MAX_POINTS = 1 << 16
 
 
 def identify_noise(

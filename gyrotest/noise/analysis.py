@@ -131,6 +131,11 @@ class AxisAnalysis:
     detrend: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
 
+    @property
+    def best_fit(self) -> NoiseFit:
+        """The diagnosed model when the diagnosis added terms, else the requested fit."""
+        return self.diagnosis.final if self.diagnosis is not None else self.fit
+
     def table(self) -> dict[str, np.ndarray]:
         """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
         sigma, sigma_hi (EDF and interval after :func:`sanitize_edf`), plus model σ and the
@@ -410,7 +415,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     hints = [ln.f_hz for ln in lines]
     fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
                         line_hints=hints)
-    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma)
+    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None
     if trend_check:
@@ -423,14 +428,16 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                 notes.append(f"trend check skipped: {e}")
     warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
                           diagnosis=diag, record_s=record_s)
-    impact = attitude_impact(fit, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
+    best = diag.final if diag is not None else fit
+    impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
                              record_s=record_s)
-    if diag is not None and not diag.no_missing_term and diag.final is not fit:
-        notes.append(f"the impact prediction uses the fitted terms {','.join(keys)}; the "
-                     f"diagnosis suggests --terms {','.join(diag.final.requested)}")
+    impact.model_terms = list(best.requested)
+    if best is not fit:
+        notes.append(f"the impact prediction uses the diagnosed model --terms "
+                     f"{','.join(best.requested)} (the requested terms misfit)")
     return AxisAnalysis(
         axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
         edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
-        conversions=conversions(fit), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
+        conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
         lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
         notes=notes + list(fit.notes))

@@ -125,7 +125,7 @@ def misfit_regions(fit: NoiseFit, threshold: float = MISFIT_CI) -> list[MisfitRe
             j += 1
         regions.append((i, j, sgn))
         i = j + 1
-    alternating = len(regions) >= 4 and all(
+    alternating = len(regions) >= 5 and all(
         regions[k][2] != regions[k + 1][2] for k in range(len(regions) - 1))
     out = []
     for a, b, sgn in regions:

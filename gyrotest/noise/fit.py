@@ -22,19 +22,21 @@ sine       (sin²(πf0τ)/(πf0τ))²                              Ω0² ((deg/h
 blue       (3 − 4e^(−2πβτ) + e^(−4πβτ))/(4πβτ²)             α ((deg/h)²/Hz)        α, β Hz (S = αf²/(β²+f²))
 =========  ===============================================  =====================  ==========
 
-Estimation: **maximum likelihood of σ̂²(τ) given its χ² distribution**. Each overlapping Allan
-variance estimate is modelled as σ̂² ~ σ²·χ²_ν/ν with ν the equivalent degrees of freedom
-from :mod:`gyrotest.noise.edf` (Greenhall & Riley, noise type identified per τ; NIST SP1065
-§5.3). −2·log-likelihood is then, up to a constant, the Gamma deviance
+Estimation: **maximum likelihood of σ̂²(τ) given its χ² distribution**. Each Allan variance
+estimate is modelled as σ̂² ~ σ²·χ²_ν/ν with ν the equivalent degrees of freedom from
+:mod:`gyrotest.noise.edf` (Greenhall & Riley, noise type identified per τ; NIST SP1065 §5.3),
+used through the log-normal approximation with the exact moments of ln(χ²_ν/ν): with
+y = ln σ̂² − (ψ(ν/2) − ln(ν/2)) (unbiased for ln σ²) and v = ψ₁(ν/2) (≈ 2/ν), −2·log-likelihood is
 
-    D = Σ_i ν_i [ σ̂²_i/s_i − ln(σ̂²_i/s_i) − 1 ],   s_i = σ²_model(τ_i),
+    L = Σ_i (y_i − ln s_i)² / v_i,   s_i = σ²_model(τ_i)
 
-minimised over c ≥ 0 by iteratively re-weighted non-negative least squares (Fisher scoring:
-weights ν_i/(2 s_i²), i.e. the weighted form Σ[(s_i − σ̂²_i)/δ_i]² with δ_i = s_i·√(2/ν_i) the
-model-based standard deviation of σ̂²_i, re-evaluated at each iteration; scipy NNLS) and over
-the nonlinear shape parameters (T_c, f0, β) by a log-grid search then bounded refinement of the
-profile deviance. Not unweighted σ², not slope lines (those are reported separately by
-:func:`slope_readoffs`, for comparison with other tools).
+(= Σ[(s − σ̂²)/δ]² to first order, δ = s·√(2/ν): the confidence-weighted form; symmetric in
+ln(σ̂²/s), so it neither lets the model float above the data, as the raw χ² likelihood of a
+misspecified model does, nor ignores the confidence of each point, as relative-error fits
+do). L is minimised over c ≥ 0 by Gauss–Newton steps that are each a non-negative least
+squares problem (scipy NNLS), and over the nonlinear shape parameters (T_c, f0, β) by a
+log-grid search then bounded refinement of the profile objective. Not unweighted σ², not slope
+lines (those are reported separately by :func:`slope_readoffs`, for comparison).
 
 Uncertainty: the estimates at neighbouring τ come from the same record and are strongly
 correlated (overlapping estimates at τ and 2τ: ρ ≈ 0.5 for white rate noise, ≈ 0.9 for rate
@@ -50,12 +52,15 @@ correction), the χ² goodness of fit uses a Satterthwaite-scaled reference dist
 BIC uses n_eff = n²/Σρ_ij.
 
 Identified vs upper bound (Krobka's rule: "a coefficient the graph cannot establish is an upper
-bound", seed 001 §6): a term is *identified* when dropping it raises the scaled deviance by at
-least χ²_k(0.95) (k = 1 for Q, N, B, K, R; 2 for the two-parameter terms) — i.e. its
-contribution is significant somewhere and its confidence interval excludes 0. Otherwise it is
-an *upper bound*: the value printed after "≤" is the 95 % one-sided profile-likelihood limit
-(deviance + 2.71 × design effect, with every other coefficient re-fitted); for a two-parameter term that
-was not found, the limit is the largest over its shape-parameter range.
+bound", seed 001 §6): terms are tested by likelihood ratio — the increase of L when a term is
+dropped (the others re-fitted), divided by the term's design effect, against χ²_k(0.95) (k = 1
+for Q, N, B, K, R; 2 for the two-parameter terms): its contribution must be significant
+somewhere and its confidence interval must exclude 0. Non-significant terms are removed by
+backward elimination (weakest first, while the reduced model stays consistent with the full
+one), so collinear pairs such as K and R do not hide each other. Remaining significant terms
+are *identified*; the others are *upper bounds*: the value printed after "≤" is the 95 %
+one-sided profile-likelihood limit (L + 2.71 × design effect, every other coefficient
+re-fitted); for a two-parameter term that was not found, the largest over its shape range.
 """
 
 from __future__ import annotations
@@ -66,7 +71,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize, special, stats
 from scipy.optimize import nnls
 
 from ..errors import AnalysisError, InputError
@@ -90,7 +95,8 @@ __all__ = [
     "estimate_correlation",
     "fit_deviation",
     "fit_noise_model",
-    "gamma_deviance",
+    "log_chi2_moments",
+    "log_chi2_objective",
     "parse_terms",
     "sanitize_edf",
     "slope_readoffs",
@@ -118,14 +124,15 @@ ZERO_DC = {"Q", "sine", "blue"}
 MIN_EDF = 2.0
 _LRT_P = 0.95
 FIT_METHOD = ("maximum likelihood of the Allan variance estimates given their chi-square(EDF) "
-              "distribution (Gamma deviance), i.e. IRLS of sum[(s_model - s_hat)/delta]^2 with "
-              "delta = s_model*sqrt(2/EDF); non-negative coefficients (NNLS); nonlinear "
-              "parameters by log-grid search + bounded refinement of the profile deviance")
+              "distribution, log-normal form with exact ln-chi2 moments: minimise "
+              "sum (ln s_hat - b(EDF) - ln s_model)^2 / trigamma(EDF/2) (~ sum[(s_model - "
+              "s_hat)/delta]^2, delta = s*sqrt(2/EDF)); non-negative coefficients (Gauss-Newton "
+              "NNLS); nonlinear parameters by log-grid search + bounded refinement")
 UNCERTAINTY_METHOD = ("1 sigma from the sandwich covariance A^-1 B A^-1 of that likelihood "
                       "(weighted Jacobian A; B with the model-implied correlation of the Allan "
                       "variance estimates between tau); upper bounds: 95 % one-sided profile "
                       "likelihood with the Rao-Scott design-effect correction")
-STATUS_RULE = ("identified when dropping the term raises the deviance/design effect by >= "
+STATUS_RULE = ("identified when dropping the term raises -2 log-likelihood/design effect by >= "
                "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue); else upper bound only (printed "
                "with '<=')")
 
@@ -222,11 +229,23 @@ def _model_psd(cols, coefs, f, tau0, bi_f0) -> np.ndarray:
     return out
 
 
-def gamma_deviance(x: np.ndarray, s: np.ndarray, nu: np.ndarray) -> float:
-    """−2 log-likelihood (up to a constant) of Allan-variance estimates x given model s:
-    ``D = Σ ν (x/s − ln(x/s) − 1)`` (σ̂² ~ s·χ²_ν/ν; NIST SP1065 §5.3 χ² model). ≥ 0."""
-    r = x / s
-    return float(np.sum(nu * (r - np.log(r) - 1.0)))
+def log_chi2_moments(x, nu) -> tuple[np.ndarray, np.ndarray]:
+    """Unbiased log estimate and its variance for σ̂² ~ σ²·χ²_ν/ν (NIST SP1065 §5.3):
+    ``y = ln σ̂² − (ψ(ν/2) − ln(ν/2))`` has mean ln σ² and variance ``v = ψ₁(ν/2)`` (ψ digamma,
+    ψ₁ trigamma; v ≈ 2/ν for large ν)."""
+    x = np.asarray(x, float)
+    h = 0.5 * np.asarray(nu, float)
+    return np.log(x) - (special.digamma(h) - np.log(h)), special.polygamma(1, h)
+
+
+def log_chi2_objective(x, s, nu) -> float:
+    """The fit objective ``L = Σ (ln σ̂² − b(ν) − ln s)²/ψ₁(ν/2)`` (b(ν) = ψ(ν/2) − ln(ν/2)):
+    −2 log-likelihood of the estimates under the log-normal approximation of their χ²_ν/ν
+    distribution with its exact log-moments (:func:`log_chi2_moments`). Symmetric in
+    ln(σ̂²/s), so a model that is too high costs as much as one that is too low."""
+    y, v = log_chi2_moments(x, nu)
+    r = y - np.log(np.asarray(s, float))
+    return float(np.sum(r * r / v))
 
 
 def estimate_correlation(tau, psd, tau0: float, *, n_freq: int = 1200) -> np.ndarray:
@@ -316,60 +335,82 @@ class _Col:
 
 
 class _Engine:
-    """σ̂² data on the fit range and the IRLS-NNLS solver."""
+    """σ̂² data on the fit range and the Gauss–Newton NNLS solver of the log-χ² objective."""
 
     def __init__(self, tau, x, nu, bi_f0):
         self.tau = np.asarray(tau, float)
         self.x = np.asarray(x, float)
         self.nu = np.asarray(nu, float)
         self.bi_f0 = bi_f0
-        self.floor = 1e-9 * self.x
+        self.floor = 1e-12 * self.x
+        self.y, self.v = log_chi2_moments(self.x, self.nu)
+        self.w = 1.0 / np.sqrt(self.v)
+        self._lin: dict[str, np.ndarray] = {}
+
+    def objective(self, s: np.ndarray) -> float:
+        r = (self.y - np.log(s)) * self.w
+        return float(np.dot(r, r))
+
+    def column(self, c: _Col) -> np.ndarray:
+        if c.key in LINEAR_KEYS:
+            col = self._lin.get(c.key)
+            if col is None:
+                col = self._lin[c.key] = _basis(c.key, self.tau, None, self.bi_f0)
+            return col
+        return _basis(c.key, self.tau, c.shape, self.bi_f0)
 
     def design(self, cols: list[_Col]) -> np.ndarray:
-        return np.column_stack([_basis(c.key, self.tau, c.shape, self.bi_f0) for c in cols])
+        G = np.empty((self.tau.size, len(cols)))
+        for j, c in enumerate(cols):
+            G[:, j] = self.column(c)
+        return G
 
     def solve(self, G: np.ndarray, offset: np.ndarray | None = None, max_iter: int = 60,
               s0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float]:
-        """min over c ≥ 0 of the Gamma deviance with s = G c + offset (IRLS/Fisher scoring,
-        step-halving on increase; ``s0`` warm-starts the weights). Returns (c, s, D)."""
-        x, nu = self.x, self.nu
-        off = np.zeros_like(x) if offset is None else offset
+        """min over c ≥ 0 of L = Σ (y − ln s)²/v with s = G c + offset: Gauss–Newton on the
+        linearisation ln s ≈ ln s0 + (s − s0)/s0 (each step an NNLS, scipy), step-halving on
+        increase; ``s0`` warm-starts. Returns (c, s, L)."""
+        y, w = self.y, self.w
+        off = np.zeros_like(y) if offset is None else offset
         p = G.shape[1]
         if p == 0:
             s = np.maximum(off, self.floor)
-            return np.zeros(0), s, gamma_deviance(x, s, nu)
-        s = np.maximum(x if s0 is None else s0, self.floor)
+            return np.zeros(0), s, self.objective(s)
+        s = np.maximum(self.x if s0 is None else s0, self.floor)
         c_old: np.ndarray | None = None
-        D_old = math.inf
+        L_old = math.inf
         c = np.zeros(p)
         for _ in range(max_iter):
-            w = np.sqrt(nu / (2.0 * s * s))
-            A = G * w[:, None]
+            ws = w / s
+            A = G * ws[:, None]
             scale = np.sqrt(np.sum(A * A, axis=0))
             scale[scale == 0] = 1.0
-            y = (x - off) * w
+            rhs = (y - np.log(s) + 1.0) * w - off * ws
             try:
-                c_new, _ = nnls(A / scale, y, maxiter=50 * p)
+                c_new, _ = nnls(A / scale, rhs, maxiter=50 * p)
             except RuntimeError:
                 c_new = c if c_old is not None else np.zeros(p)
             else:
                 c_new = c_new / scale
             s_new = np.maximum(G @ c_new + off, self.floor)
-            D_new = gamma_deviance(x, s_new, nu)
-            if c_old is not None and D_new > D_old:
+            L_new = self.objective(s_new)
+            if c_old is not None and L_new > L_old:
                 for _ in range(12):
                     c_new = 0.5 * (c_new + c_old)
                     s_new = np.maximum(G @ c_new + off, self.floor)
-                    D_new = gamma_deviance(x, s_new, nu)
-                    if D_new <= D_old:
+                    L_new = self.objective(s_new)
+                    if L_new <= L_old:
                         break
-            done = c_old is not None and abs(D_old - D_new) <= 1e-8 * max(D_new, 1.0)
+            done = c_old is not None and abs(L_old - L_new) <= 1e-7 * max(L_new, 1.0)
             c, s = c_new, s_new
-            if D_new <= D_old:
-                c_old, D_old = c, D_new
+            if L_new <= L_old:
+                c_old, L_old = c, L_new
             if done:
                 break
-        return c, s, D_old if c_old is not None else gamma_deviance(x, s, nu)
+        if c_old is None:
+            return c, s, self.objective(s)
+        s_best = np.maximum(G @ c_old + off, self.floor)
+        return c_old, s_best, L_old
 
 
 def _shape_range(key: str, tau_lo: float, tau_hi: float, tau0: float) -> tuple[float, float]:
@@ -490,12 +531,12 @@ class _Analysis:
 
     def __init__(self, eng: _Engine, st: _State, tau0: float, bi_f0: float | None):
         self.eng, self.st = eng, st
-        tu, nu = eng.tau, eng.nu
+        tu = eng.tau
         n = tu.size
         R = estimate_correlation(tu, lambda f: _model_psd(st.cols, st.c, f, tau0, bi_f0), tau0)
         self.n_eff = float(n * n / np.sum(R))
         self.satt = float(np.sum(R * R) / n)
-        delta = st.s * np.sqrt(2.0 / nu)
+        delta = st.s * np.sqrt(eng.v)  # sd of σ̂² implied by the log-χ² variance
         self.W = 1.0 / delta**2
         self.C = R * np.outer(delta, delta)
         self.G = eng.design(st.cols)
@@ -571,10 +612,8 @@ _UNITS = {
     "blue": {"alpha": "(deg/h)^2/Hz", "beta": "Hz"},
 }
 _TITLES = {
-    "Q": "quantization / white angle noise", "N": "angle random walk",
-    "B": "bias instability", "K": "rate random walk", "R": "rate ramp",
-    "markov": "first-order Gauss-Markov", "sine": "sinusoid",
-    "blue": "blue noise alpha f^2/(beta^2+f^2)",
+    "Q": "quantization", "N": "ARW", "B": "bias instability", "K": "RRW", "R": "rate ramp",
+    "markov": "Gauss-Markov", "sine": "sinusoid", "blue": "blue, S(0)=0",
 }
 _MAIN = {"Q": "Q", "N": "N", "B": "B", "K": "K", "R": "R", "markov": "q_c", "sine": "Omega0",
          "blue": "alpha"}
@@ -761,8 +800,9 @@ class NoiseFit:
     """A joint noise-model fit (see the module docstring for the method).
 
     Arrays ``tau``, ``sigma``, ``sigma_lo``, ``sigma_hi``, ``edf`` cover the whole deviation
-    table; ``used`` marks the τ that entered the fit. Goodness of fit: ``deviance`` (Gamma
-    deviance), ``chi2`` (Pearson Σ ν(σ̂² − s)²/(2s²) = Σ[(s − σ̂²)/δ]²), ``dof`` (used τ − free
+    table; ``used`` marks the τ that entered the fit. Goodness of fit: ``deviance`` = ``chi2`` =
+    the objective L = Σ (y − ln s)²/v at its minimum (−2 log-likelihood; ≈ Σ[(s − σ̂²)/δ]²,
+    module docstring), ``dof`` (used τ − free
     parameters), ``chi2_dof``; ``n_eff`` = n²/Σρ (effective number of independent τ) and
     ``design_effect`` = n/n_eff from the model-implied correlation ``corr`` of the estimates;
     ``p_value`` of χ² against a Satterthwaite-scaled χ² (scale tr(ρ²)/n); ``aic``/``bic`` =
@@ -1040,7 +1080,7 @@ def fit_noise_model(
             st = _solve_state(eng, active)
         an = _Analysis(eng, st, tau0, bi_cutoff_hz)
     n_u = tu.size
-    chi2 = float(np.sum(nuu * (xu - st.s) ** 2 / (2.0 * st.s**2)))
+    chi2 = st.D  # Σ standardized log residuals² (the objective at its minimum)
     n_free = len(an.labels)
     fit = NoiseFit(
         terms=[], requested=list(keys), tau=tau, sigma=sigma, sigma_lo=sigma_lo,
@@ -1219,10 +1259,11 @@ def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=Non
 # ---------------------------------------------------------------------------------------------
 
 
-def slope_readoffs(tau, sigma) -> dict[str, Any]:
+def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, Any]:
     """The slope-line read-offs other tools report, for comparison (not fits).
 
-    Local log–log slope by central differences (MATLAB "allanvar" example; allan_variance_ros):
+    Local log–log slope by central differences (MATLAB "allanvar" example; allan_variance_ros),
+    searched only where the EDF ≥ ``min_edf`` (noisy slopes at long τ would otherwise win):
 
     * ``N_slope`` = σ(τ_i)·√τ_i/60 deg/√h at the point whose slope is closest to −½ (the −½ line
       through it read at τ = 1 s, /60 for deg/√h; IEEE 952 Annex C);
@@ -1237,16 +1278,22 @@ def slope_readoffs(tau, sigma) -> dict[str, Any]:
     t = np.asarray(tau, float)
     s = np.asarray(sigma, float)
     ok = np.isfinite(s) & (s > 0)
-    t, s = t[ok], s[ok]
-    out: dict[str, Any] = {"method": "slope-line read-offs (MATLAB allanvar example style) and "
-                           "Krobka bounds; for comparison only"}
+    e = np.full(t.shape, np.inf) if edf is None else np.asarray(edf, float)
+    t, s, e = t[ok], s[ok], e[ok]
+    out: dict[str, Any] = {"method": "slope-line read-offs (MATLAB allanvar example style, slopes "
+                           f"only where EDF >= {min_edf:g}) and Krobka bounds; for comparison "
+                           "only"}
     if t.size < 3:
         return out
     lt, ls = np.log(t), np.log(s)
     slope = np.gradient(ls, lt)
-    iN = int(np.argmin(np.abs(slope + 0.5)))
-    iK = int(np.argmin(np.abs(slope - 0.5)))
-    iB = int(np.argmin(np.abs(slope)))
+    rel = e >= min_edf
+    if np.count_nonzero(rel) < 3:
+        rel = np.ones_like(rel)
+    big = np.where(rel, 0.0, np.inf)
+    iN = int(np.argmin(np.abs(slope + 0.5) + big))
+    iK = int(np.argmin(np.abs(slope - 0.5) + big))
+    iB = int(np.argmin(np.abs(slope) + big))
     imin = int(np.argmin(s))
     iup = int(np.argmin(s * np.sqrt(t)))
     out.update({

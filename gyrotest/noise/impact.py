@@ -252,6 +252,7 @@ class ImpactResult:
     components: list[dict[str, Any]]
     flags: list[dict[str, Any]]
     assumptions: list[str] = field(default_factory=list)
+    model_terms: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         rows = []
@@ -269,6 +270,7 @@ class ImpactResult:
                       "3*S(0)*t, strapdown [S(0) + 2 S(f_w)]*t plus bounded S(0)=0 terms and "
                       "exact forms for RRW, ramp, sinusoid (Krobka, seeds 001/003)",
             "horizon_s": self.horizon_s,
+            "model_terms": list(self.model_terms),
             "platform": {"sigma_att_deg": self.platform_sigma_deg,
                          "sigma_att_arcsec": self.platform_sigma_deg * 3600.0,
                          "conservative_sigma_att_deg": self.conservative_platform_sigma_deg},
@@ -346,14 +348,16 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
                                        for pr in per_rate]}
         comp_rows.append(row)
     flags = []
-    for comp, t in zip(comps, fit.terms):
+    for comp, ccomp, t in zip(comps, cons, fit.terms):
         if comp.zero_dc_psd:
-            diff = [2.0 * comp.psd(w / (2 * math.pi), tau0) * RAD_PER_ARCSEC**2 for w in rates]
+            use = comp if comp.c > 0 else ccomp  # a bound-only term: its diffusion at the bound
+            diff = [2.0 * use.psd(w / (2 * math.pi), tau0) * RAD_PER_ARCSEC**2 for w in rates]
             flags.append({
                 "term": comp.label, "label": PLATFORM_BENIGN_LABEL, "status": t.status,
                 "strapdown_diffusion_rad2_per_s": diff,
                 "text": (f"{t.label} ({t.text()}): S(0) = 0 — bounded angle error on a platform, "
-                         "grows ∝ t in strapdown" + ("" if not rates else ": diffusion 2·S(f_ω) = "
+                         "grows ∝ t in strapdown" + ("" if not rates else ": diffusion 2·S(f_ω) "
+                         + ("= " if comp.c > 0 else "≤ ")
                          + ", ".join(f"{d:.3g} rad²/s at {math.degrees(w):g} deg/s"
                                      for d, w in zip(diff, rates))))})
         elif comp.key == "markov" and rates:
@@ -361,7 +365,7 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
                           "status": t.status,
                           "text": f"{t.label}: S(f_ω) < S(0), strapdown rotation averages it"})
     return ImpactResult(
-        horizon_s=float(horizon_s), rates_rad_s=rates,
+        model_terms=list(fit.requested), horizon_s=float(horizon_s), rates_rad_s=rates,
         platform_sigma_deg=math.sqrt(p0["platform"]) / ARCSEC_PER_DEG,
         strapdown_sigma_deg=sd, ratio=ratio,
         conservative_platform_sigma_deg=math.sqrt(c0["platform"]) / ARCSEC_PER_DEG,

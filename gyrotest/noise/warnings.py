@@ -16,7 +16,8 @@ KROBKA-M4      B from the zero-slope tangent at the minimum: report B_fit and B_
                σ_min/0.664; warn when B_fit/B_tangent < 0.5 (the tangent over-estimates B
                in a mixture, ×4 and ×20 in the paper) or when there is no plateau (the
                minimum is a crossover of −½ and +½ lines: B is not the dominant term there).
-KROBKA-M5      a hump (significant local maximum, +½ → −½) screens white noise: the
+KROBKA-M5      a hump (significant local maximum or a flattening followed by a return to
+               −½, or a Markov term in the fitted/diagnosed model) screens white noise: the
                leftmost-point white-noise bound and the long-τ effective ARW N_eq are
                reported separately.
 KROBKA-R11     local slope outside [−1, +1] beyond its CI: periodic content (sinusoid nulls)
@@ -209,22 +210,42 @@ def _significant_hump(fit: NoiseFit) -> tuple[int, int, int] | None:
     return best
 
 
-def _hump_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) -> None:
-    hump = _significant_hump(fit)
-    markovs = [t for t in fit.terms if t.key == "markov" and t.identified]
-    sines = [t for t in fit.terms if t.key == "sine" and t.identified]
+def _shoulder(fit: NoiseFit) -> tuple[int, int, int] | None:
+    """A flattening then a return to ≤ −½: the local slope rises significantly above −½ (to
+    ≥ −0.2) and, at longer τ, falls significantly below −0.35 again — the +½ → −½ transition
+    of a Markov hump riding on white noise, which need not make a local maximum."""
+    sl = local_slopes(fit.tau, fit.sigma, fit.sigma_lo, fit.sigma_hi, min_ratio=2.0)
+    for i, a in enumerate(sl):
+        if a["slope"] - 2.5 * a["sigma"] < -0.2:
+            continue
+        before = [b for b in sl[:i] if b["slope"] + 2.5 * b["sigma"] < -0.35]
+        after = [b for b in sl[i + 1:] if b["tau_lo"] >= a["tau_hi"]
+                 and b["slope"] + 2.5 * b["sigma"] < -0.35]
+        if before and after:
+            idx = lambda t: int(np.argmin(np.abs(fit.tau - t)))  # noqa: E731
+            return idx(before[-1]["tau_lo"]), idx(a["tau_lo"]), idx(after[0]["tau_hi"])
+    return None
+
+
+def _hump_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning],
+                 best: NoiseFit | None = None) -> None:
+    best = best or fit
+    hump = _significant_hump(fit) or _shoulder(fit)
+    markovs = [t for t in best.terms if t.key == "markov" and t.identified]
+    sines = [t for t in best.terms if t.key == "sine" and t.identified]
     if hump is not None and not markovs and any(
             fit.tau[hump[0]] <= 0.37101 / t.shape <= fit.tau[hump[2]] for t in sines):
         hump = None  # the lobe of an identified sinusoid, not a Markov hump
     if hump is None and not markovs:
         return
-    N = fit.term("N")
+    N = best.term("N")
     n_white = N.value if (N is not None and N.identified) else (N.upper if N else None)
     n_left = ro.get("N_leftmost")
-    s_eq = (N.coef if N is not None else 0.0) + sum(t.coef for t in fit.terms if t.key == "markov")
+    s_eq = (N.coef if N is not None else 0.0) + sum(t.coef for t in best.terms
+                                                     if t.key == "markov")
     n_eq = math.sqrt(s_eq) / 60.0 if s_eq > 0 else None
-    where = (f"σ rises from τ = {_g(fit.tau[hump[0]])} s to a maximum at τ = "
-             f"{_g(fit.tau[hump[1]])} s and falls again by τ = {_g(fit.tau[hump[2]])} s"
+    where = (f"the graph flattens or rises after τ = {_g(fit.tau[hump[0]])} s (around τ = "
+             f"{_g(fit.tau[hump[1]])} s) and falls again by τ = {_g(fit.tau[hump[2]])} s"
              if hump else "the fit needs a Markov term (" + "; ".join(t.text() for t in markovs)
              + ")")
     msg = (f"{where}: a short-correlation (Markov) hump screens the white noise. White rate "
@@ -409,7 +430,8 @@ def krobka_checks(fit: NoiseFit, readoffs: dict[str, Any], *, akdev=None, ohdev=
     out: list[KrobkaWarning] = []
     _arw_checks(fit, readoffs, out)
     _bias_checks(fit, readoffs, out)
-    _hump_checks(fit, readoffs, out)
+    _hump_checks(fit, readoffs, out,
+                 diagnosis.final if diagnosis is not None else None)
     _slope_checks(fit, out)
     _minus_one_checks(fit, out, quantum_arcsec)
     _cluster_checks(fit, out)

@@ -173,8 +173,8 @@ def _numeric(v) -> bool:
 def bias(n: int) -> np.ndarray:
     """Constant bias regressor.
 
-    Formula: x = 1. Coefficient D_F in deg/h (includes the earth-rate component along the IA
-    unless removed). Source: IEEE Std 952-1997 §8.3, drift term D = D_F + ...
+    Formula: x = 1. Units: dimensionless; coefficient D_F in deg/h (includes the earth-rate
+    component along the IA unless removed). Source: IEEE Std 952-1997 §8.3, drift term D = D_F + ...
     """
     return np.ones(n)
 
@@ -370,7 +370,8 @@ def warmup_transient(t_s: np.ndarray, tau_w_s: float, t_on_s: float = 0.0) -> np
 def sinusoid(t_s: np.ndarray, freq_hz: float) -> np.ndarray:
     """Sinusoid at frequency f (cos and sin columns).
 
-    Formula: x = [cos 2πft, sin 2πft]; coefficients a, b in deg/h; amplitude √(a²+b²). f is
+    Formula: x = [cos 2πft, sin 2πft]. Units: dimensionless, f in Hz; coefficients a, b in
+    deg/h; amplitude √(a²+b²). f is
     detected from the residual periodogram and refined by least squares. Source: IEEE 952
     Annex C sinusoidal noise Ω0·sin(2πf0t) (σ peak 0.7246·Ω0 at τ = 0.371/f0).
     """

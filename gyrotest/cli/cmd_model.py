@@ -141,8 +141,21 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
     return p
 
 
-def prepare_log(log, path: str, opts: dict):
-    """Trim, then prepare a log for fitting with the CLI options (returns WorkData)."""
+def prepare_log(log, path: str, opts: dict, specs: list | None = None):
+    """Trim, then prepare a log for fitting with the CLI options (returns WorkData); when the
+    log is too short, the message names the terms that were asked for."""
+    from ..errors import AnalysisError
+
+    try:
+        return _prepare_log(log, path, opts)
+    except AnalysisError as e:
+        if specs:
+            names = ", ".join(s.label for s in specs)
+            raise AnalysisError(f"terms {names}: {e}") from None
+        raise
+
+
+def _prepare_log(log, path: str, opts: dict):
     from ..envmodel.fit import file_provenance, prepare
 
     skip_s = parse_duration(opts.get("skip") or "0", what="--skip")
@@ -344,7 +357,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
             raise InputError(f"--session {session}: directory {parent} does not exist")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
     wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
-                              "resolution": resolution, "smooth": smooth})
+                              "resolution": resolution, "smooth": smooth}, specs)
     res = fit_model(wd, specs, folds=folds, light=True)
     finish(res, k_sigma=k_sigma)
     written: dict = {}
@@ -430,7 +443,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     cand = split_terms(candidates) if candidates else None
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
     wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
-                              "resolution": resolution, "smooth": smooth})
+                              "resolution": resolution, "smooth": smooth}, specs)
     diag = diagnose(wd, specs, cand, alpha=ALPHA if alpha is None else alpha,
                     min_improvement=min_improvement / 100.0, folds=folds)
     if plot_path:

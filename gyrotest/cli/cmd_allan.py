@@ -220,7 +220,7 @@ def _render(r) -> None:
                     "nf = not fitted (EDF < floor)")
         _render_fit(a)
     if r.cross is not None:
-        ct = Table(title="Cross-correlation of the axes (τ-averaged rates; 95 % band ±b)",
+        ct = Table(title="Axis cross-correlation ρ of τ-averaged rates (zero within ±b, 95 %)",
                    title_justify="left")
         ct.add_column("τ s", justify="right")
         ct.add_column("±b", justify="right")

@@ -42,7 +42,7 @@ from .fit import (
     conversions,
     fit_deviation,
     parse_terms,
-    sanitize_edf,
+    robust_edf,
     slope_readoffs,
 )
 from .impact import ImpactResult, attitude_impact
@@ -391,14 +391,17 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         fit_dev = deviation("oadev", [float(t) for t in table_dev.tau])
         notes.append(f"the IEEE 952 noise model is the Allan variance: fitted to an OADEV on the "
                      f"same τ; the table shows {dev.upper()}")
-    edf, changed = sanitize_edf(table_dev.edf)
+    edf, edf_notes = robust_edf(table_dev)
     lo, hi = np.asarray(table_dev.sigma_lo, float).copy(), np.asarray(table_dev.sigma_hi,
                                                                       float).copy()
-    if changed:
+    changed = np.flatnonzero(edf != np.asarray(table_dev.edf, float))
+    if changed.size:
         from .edf import chi2_interval
 
         lo[changed], hi[changed] = chi2_interval(table_dev.sigma[changed], edf[changed],
                                                  confidence)
+        if table_dev is not fit_dev:
+            notes.extend(edf_notes)
     psd = None
     lines: list[SpectralLine] = []
     acf = None

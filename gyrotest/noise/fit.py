@@ -98,6 +98,7 @@ __all__ = [
     "log_chi2_moments",
     "log_chi2_objective",
     "parse_terms",
+    "robust_edf",
     "sanitize_edf",
     "slope_readoffs",
 ]
@@ -1057,9 +1058,11 @@ def fit_noise_model(
     dropped_pos: list[tuple[int, float]] = []  # (n params, design effect) of dropped terms
     while len(active) > 1 and not scan:
         score = [an.delta_deviance(j) / thr[active[j].key] for j in range(len(active))]
-        j = int(np.argmin(score))
-        if score[j] >= 1.0:
+        weak = [k for k in range(len(active)) if score[k] < 1.0]
+        if not weak:
             break
+        # among the non-significant terms, drop the one whose removal costs the least fit
+        j = min(weak, key=lambda k: an.delta_deviance(k) * an.deff[k])
         cand = [c for k, c in enumerate(st.cols) if k != j]
         st_c = (_refine_shapes(eng, cand) if any(c.key in NONLINEAR_KEYS for c in cand)
                 else _solve_state(eng, cand))
@@ -1243,15 +1246,66 @@ def _dominance(fit: NoiseFit) -> None:
             t.dominant_tau = (float(fit.tau[sel].min()), float(fit.tau[sel].max()))
 
 
+#: noise-identification methods that rest on few averages (B1 ratio, or an α reused from a
+#: shorter τ): an angle-noise α > 0 from them is not trusted for the EDF
+_WEAK_ID = ("b1", "b1+rn", "reused")
+
+
+def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
+    """The EDF of a deviation table made safe for fitting and for the residuals.
+
+    1. Where the noise type was identified from few averages (B1 ratio or reused, typically the
+       longest τ; Riley & Greenhall 2004) and came out as angle noise (α > 0), the EDF is capped
+       at the white-rate (α = 0) value: an α = +1 at τ = T/10 gives a Greenhall EDF ~10× too
+       large when the estimate is really a scattered rate-random-walk point.
+    2. :func:`sanitize_edf`: non-increasing in τ.
+
+    Returns (edf, notes)."""
+    from .edf import edf_for
+
+    e = np.asarray(dev.edf, float).copy()
+    notes: list[str] = []
+    segs = getattr(dev, "segments", None) or [(0, int(getattr(dev, "n_samples", 0)))]
+    n_longest = max(b - a for a, b in segs) + (0 if dev.input_kind == "angle" else 1)
+    kind = "mdev" if dev.kind == "tdev" else dev.kind
+    capped = []
+    methods = list(getattr(dev, "alpha_method", [])) or [""] * len(e)
+    for i, (a, meth) in enumerate(zip(np.asarray(dev.alpha), methods)):
+        if a > 0 and meth in _WEAK_ID and math.isfinite(e[i]) and n_longest > 1:
+            try:
+                cap, _ = edf_for(kind, 0, int(dev.m[i]), n_longest)
+            except (InputError, AnalysisError):
+                continue
+            if cap < e[i]:
+                e[i] = cap
+                capped.append(float(dev.tau[i]))
+    if capped:
+        notes.append("EDF capped at the white-rate value at τ = "
+                     + ", ".join(f"{t:.4g}" for t in capped)
+                     + " s (angle-noise type identified from few averages)")
+    e2, changed = sanitize_edf(e)
+    if changed:
+        notes.append("EDF lowered to the running minimum at τ = "
+                     + ", ".join(f"{dev.tau[i]:.4g}" for i in changed) + " s")
+    return e2, notes
+
+
 def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=None,
                   line_hints=(), tau_range=None, with_bounds: bool = True) -> NoiseFit:
     """:func:`fit_noise_model` on a :class:`~gyrotest.noise.deviations.DeviationResult`
-    (its τ, σ, EDF, interval and τ0). The closed forms are those of the Allan variance: use an
-    OADEV/ADEV/TOTDEV (or Allan–Krobka) table."""
-    return fit_noise_model(dev.tau, dev.sigma, dev.edf, sigma_lo=dev.sigma_lo,
-                           sigma_hi=dev.sigma_hi, terms=terms, tau0=dev.tau0, min_edf=min_edf,
-                           bi_cutoff_hz=bi_cutoff_hz, line_hints=line_hints,
-                           tau_range=tau_range, with_bounds=with_bounds)
+    (its τ, σ, EDF made robust by :func:`robust_edf`, the χ² interval recomputed from that EDF,
+    and τ0). The closed forms are those of the Allan variance: use an OADEV/ADEV/TOTDEV (or
+    Allan–Krobka) table."""
+    from .edf import chi2_interval
+
+    edf, notes = robust_edf(dev)
+    lo, hi = chi2_interval(dev.sigma, edf, dev.confidence)
+    f = fit_noise_model(dev.tau, dev.sigma, edf, sigma_lo=lo, sigma_hi=hi, terms=terms,
+                        tau0=dev.tau0, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
+                        line_hints=line_hints, tau_range=tau_range, with_bounds=with_bounds,
+                        confidence=dev.confidence)
+    f.notes[:0] = notes
+    return f
 
 
 # ---------------------------------------------------------------------------------------------

@@ -307,8 +307,12 @@ def cross_correlation(rates: dict[str, np.ndarray], tau0: float, *,
         T = n * tau0
         taus = [tau0] + [10.0**k for k in range(-3, 7) if tau0 < 10.0**k <= T / 30]
     out_t, out_m, out_b = [], [], []
+    seen: set[int] = set()
     for tau in taus:
         m = max(1, int(round(tau / tau0)))
+        if m in seen:
+            continue
+        seen.add(m)
         blocks = []
         for a, b in segs:
             nb = (b - a) // m

@@ -175,10 +175,14 @@ def _bias_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) ->
     if not B.identified or share < 0.5:
         parts = ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(shares.items(),
                                                                     key=lambda kv: -kv[1]))
+        at_end = tmin >= fit.fit_range[1] * (1 - 1e-9)
+        what = (f"σ falls to the end of the fitted range (τ = {_g(tmin)} s) without reaching a "
+                f"plateau (model there: {parts})" if at_end else
+                f"the minimum is a crossover, not a plateau: at τ = {_g(tmin)} s the model is "
+                f"{parts}")
         out.append(KrobkaWarning(
             "KROBKA-M4", "no bias-instability plateau",
-            f"the minimum is a crossover, not a plateau: at τ = {_g(tmin)} s the model is "
-            f"{parts}; B_tangent = σ_min/0.664 = {_g(Bt)} deg/h is only an upper bound; joint "
+            f"{what}; B_tangent = σ_min/0.664 = {_g(Bt)} deg/h is only an upper bound; joint "
             f"fit: {B.text()}. {floor_txt}", reason, ev))
     elif ratio < B_RATIO_WARN:
         out.append(KrobkaWarning(
@@ -359,7 +363,8 @@ def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=Non
     K = fit.term("K")
     R_term = fit.term("R")
     T = float(record_s) if record_s else 4.0 * float(np.nanmax(fit.tau))
-    k_int = (K.value if K is not None and K.identified else 0.0) / 60.0
+    # K: its value, or its upper bound when the fit could not establish it
+    k_int = (0.0 if K is None else K.value if K.identified else (K.upper or 0.0)) / 60.0
     R_rrw = 3.0 * k_int * math.sqrt(6.0 / (5.0 * T)) * 3600.0
     if not ((R_term is not None and R_term.identified) or R_est > R_rrw):
         return
@@ -402,7 +407,9 @@ def _component_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
             continue
         sig = np.sqrt(t.avar(fit.tau))
         width = np.maximum(fit.sigma_hi - fit.sigma, 1e-300)
-        ex = np.where(np.isfinite(fit.sigma_hi) & fit.used, (sig - fit.sigma) / width, 0.0)
+        # only where the interval is reliable (EDF ≥ 10): single long-τ points scatter widely
+        ok = np.isfinite(fit.sigma_hi) & fit.used & (fit.edf >= 10.0)
+        ex = np.where(ok, (sig - fit.sigma) / width, 0.0)
         k = int(np.argmax(ex))
         if ex[k] > 3.0:
             out.append(KrobkaWarning(

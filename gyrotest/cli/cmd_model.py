@@ -173,6 +173,24 @@ def _prepare_log(log, path: str, opts: dict):
 
 
 # ----------------------------------------------------------------------------- rendering
+def fmt_t(seconds: float, span: float) -> str:
+    """A time in the unit that suits the record length."""
+    if span > 3 * 3600:
+        return f"{seconds / 3600:.2f} h"
+    if span > 300:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds:.0f} s"
+
+
+def _excursion_lines(out, res, limit: int) -> None:
+    span = float(res.data.get("duration_s") or (res.t[-1] if len(res.t) else 0.0))
+    for i, e in enumerate(res.excursions[:limit], 1):
+        out.print(f"    {i}. {fmt_t(e.t_start_s, span)} – {fmt_t(e.t_end_s, span)}: "
+                  f"peak {e.peak_dph:+.3g} deg/h — {e.description}")
+    if len(res.excursions) > limit:
+        out.print(f"    ... {len(res.excursions) - limit} more (--json for all)")
+
+
 def _short(res) -> str:
     wd = getattr(res, "wd", None)
     return getattr(wd, "resolution_short", None) or res.resolution_note
@@ -227,9 +245,7 @@ def render_fit(res, *, title: str = "model fit") -> None:
                 + " deg/h")
     if res.excursions:
         out.print(f"  where it fails ({len(res.excursions)} excursion(s) of the residual):")
-        for i, e in enumerate(res.excursions[:10], 1):
-            out.print(f"    {i}. {format_duration(e.t_start_s)} – {format_duration(e.t_end_s)}: "
-                      f"peak {e.peak_dph:+.3g} deg/h — {e.description}")
+        _excursion_lines(out, res, 10)
     for w in res.warnings:
         warn(w)
 
@@ -244,13 +260,15 @@ def render_diagnosis(diag, top: int = 12) -> None:
     out.print(f"  working resolution: {_short(b)}")
     t = Table(title="candidate terms, best first (held-out residual; HAC significance)")
     for col, just in (("#", "right"), ("term", "left"), ("physical effect", "left"),
-                      ("held-out RMS", "right"), ("improvement", "right"), ("evidence", "left"),
+                      ("held-out RMS", "right"), ("gain", "right"), ("evidence", "left"),
                       ("missing?", "left")):
         t.add_column(col, justify=just)
     for i, c in enumerate(diag.candidates[:top], 1):
-        t.add_row(str(i), c.term, c.effect, fmt_num(c.rms_holdout),
-                  f"{c.improvement_pct:+.1f} %" if math.isfinite(c.improvement_pct) else "—",
-                  c.evidence, "[green]yes[/green]" if c.significant else "no")
+        eff = c.effect.split(" [")[0] + (" (replaces T)" if c.replaces else "")
+        ev = (c.error or (f"z {c.z:.1f}, p_adj {c.p_adj:.1g}" if math.isfinite(c.z) else "—"))
+        t.add_row(str(i), c.term, eff, fmt_num(c.rms_holdout),
+                  f"{c.improvement_pct:+.1f}%" if math.isfinite(c.improvement_pct) else "—",
+                  ev, "[green]yes[/green]" if c.significant else "no")
     out.print(t)
     style = "green" if diag.found else "bold"
     out.print(f"[{style}]{diag.verdict}[/{style}]")
@@ -258,9 +276,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               f"and HAC p × trials × candidates < {diag.alpha:g}")
     if b.excursions:
         out.print("  where the base model fails:")
-        for i, e in enumerate(b.excursions[:8], 1):
-            out.print(f"    {i}. {format_duration(e.t_start_s)} – {format_duration(e.t_end_s)}: "
-                      f"peak {e.peak_dph:+.3g} deg/h — {e.description}")
+        _excursion_lines(out, b, 8)
 
 
 def render_history(steps, *, logs: int = 1) -> None:
@@ -270,17 +286,17 @@ def render_history(steps, *, logs: int = 1) -> None:
     if logs > 1:
         note(f"the history holds {logs} different logs; showing the latest (use --all)")
     t = Table(title=f"model history: {steps[0].log}" if steps else "model history")
-    for col, just in (("step", "right"), ("change", "left"), ("terms", "left"),
-                      ("params", "right"), ("RMS fit", "right"), ("RMS held-out", "right"),
-                      ("floor", "right"), ("AIC", "right"), ("ΔAIC", "right")):
-        t.add_column(col, justify=just)
+    for col, just in (("step", "right"), ("change", "left"), ("params", "right"),
+                      ("RMS fit", "right"), ("RMS held-out", "right"), ("floor", "right"),
+                      ("AIC", "right"), ("ΔAIC", "right")):
+        t.add_column(col, justify=just, overflow="fold")
     prev_aic = None
     for s in steps:
         change = " ".join([f"+{a}" for a in s.added] + [f"−{r}" for r in s.removed]) or "(same)"
         daic = "" if prev_aic is None else f"{s.aic - prev_aic:+.1f}"
-        t.add_row(str(s.step), change, ", ".join(s.terms) or "(bias only)", str(s.n_params),
-                  fmt_num(s.rms_fit_dph), fmt_num(s.rms_holdout_dph),
-                  fmt_num(s.noise_floor_dph), f"{s.aic:.1f}", daic)
+        t.add_row(str(s.step), change, str(s.n_params), fmt_num(s.rms_fit_dph, 3),
+                  fmt_num(s.rms_holdout_dph, 3), fmt_num(s.noise_floor_dph, 3),
+                  f"{s.aic:.0f}", daic)
         prev_aic = s.aic
     out.print(t)
 
@@ -302,6 +318,7 @@ def command():
       gyrotest model diagnose LOG --terms T,T2              which effect is missing?
       gyrotest model fit LOG --terms T,T2,dTdt -o model.json
       gyrotest model history model.json --plot hist.png     the steps, error falling
+      gyrotest model terms                                  the library of effects
     """
 
 
@@ -494,3 +511,29 @@ def history_cmd(path, show_all, plot_path, as_json):
         return
     render_history(shown, logs=1 if show_all else logs)
 
+
+
+@command.command("terms")
+@json_option
+def terms_cmd(as_json):
+    """List the library of physical effects (term, effect, regressor, coefficient unit, source).
+
+    Terms take an optional channel: T(T_coil), dGdt(T_a,T_b), Hx(Mag_X), g(acc_z). Groups:
+    H = Hx,Hy,Hz; poly2 = T,T2; poly3 = T,T2,T3. Custom terms: --term NAME:EXPRESSION.
+    """
+    from rich.table import Table
+
+    from ..envmodel.terms import effect_table
+
+    rows = effect_table()
+    if as_json:
+        emit_json(rows)
+        return
+    t = Table(title="model terms (gyrotest.envmodel.terms)")
+    for col in ("term", "effect", "regressor", "coefficient unit", "source"):
+        t.add_column(col, overflow="fold")
+    for r in rows:
+        reg = r["formula"] + (f"  [fitted: {', '.join(r['nonlinear'])}]" if r["nonlinear"]
+                              else "")
+        t.add_row(r["term"], r["effect"], reg, r["unit"], r["source"])
+    console().print(t)

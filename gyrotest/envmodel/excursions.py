@@ -3,7 +3,7 @@
 Rule: the block residual is smoothed with a centred moving mean over w blocks (w ≈ 1 min,
 at least 3 blocks); σ is the Allan-predicted noise floor of the residual at the working
 resolution (or, without one, 1.4826·MAD of the smoothed series); an excursion is a run where
-|smoothed residual| > k·σ (k = 4 on the command line), runs closer than w blocks are merged. Each
+|smoothed residual| > k·σ (k = 4 on the command line), runs closer than 3·w blocks are merged. Each
 excursion is described from the channels over the same time: temperature ramp up/down or
 turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,
 and the warm-up period after power-on.
@@ -50,7 +50,7 @@ def excursion_runs(resid: np.ndarray, resolution_s: float, k_sigma: float = 3.0,
             j = i
             while j < n and over[j]:
                 j += 1
-            if runs and i - runs[-1][1] < w:
+            if runs and i - runs[-1][1] < 3 * w:
                 runs[-1] = (runs[-1][0], j)
             else:
                 runs.append((i, j))
@@ -96,6 +96,11 @@ def describe_interval(frame, refs, t1: float, t2: float) -> str:
             before = (t >= t1 - 4 * refs.smoothing_s) & (t < t1)
             if before.any() and np.max(np.abs(cache[name][before])) > thr:
                 parts.append(f"settling after a temperature change ({name} {ta:.1f} °C)")
+    # steps are reported where the excursion begins (a step in the middle of a long ramp
+    # excursion is incidental)
+    onset = (t >= t1 - pad) & (t <= min(t2, t1 + max(3 * pad, 0.2 * (t2 - t1))) + pad)
+    if onset.any():
+        sel = onset
     for name, H in frame.field_uT.items():
         seg = H[sel]
         span = float(np.ptp(H)) if len(H) else 0.0

@@ -220,6 +220,10 @@ def history_figures(steps) -> list[tuple[str, object]]:
     if np.isfinite(fl).any():
         ax.plot(x, fl, ":", color="k", label="noise floor")
     ax.set_yscale("log")
+    hi = max(max(s.rms_fit_dph, s.rms_holdout_dph) for s in steps)
+    lo = min(min([s.rms_fit_dph, s.rms_holdout_dph] + [f for f in fl if np.isfinite(f)])
+             for s in steps)
+    ax.set_ylim(lo / 1.3, hi * 2.0)
     ax.set_ylabel("residual RMS, deg/h")
     ax.legend(loc="best")
     ax.set_title("model history: watch the error fall", loc="left")

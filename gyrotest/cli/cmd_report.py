@@ -1,0 +1,112 @@
+"""``gyrotest report``: the IEEE-952-style spec sheet of a test campaign."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from .common import emit_json, note, settings
+
+
+def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
+    if path is None:
+        return None
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise InputError(f"{what} {p}: expected a {' or '.join(suffixes)} file name")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{what} {p}: directory {parent} does not exist")
+    return p
+
+
+@click.command("report")
+@click.argument("campaign", type=str)
+@click.option("--pdf", "pdf_path", default=None, help="Write the sheet as PDF to this file.")
+@click.option("--html", "html_path", default=None,
+              help="Write the sheet as one self-contained HTML file (figures embedded).")
+@click.option("--md", "md_path", default=None,
+              help="Write the Markdown to this file instead of stdout.")
+@click.option("--no-figures", is_flag=True,
+              help="Leave the figures out of the HTML/PDF (faster).")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print the whole sheet as one JSON document (items with units, sources, "
+                   "limits and verdicts; provenance) instead of Markdown.")
+def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
+    """Spec sheet (IEEE 952 style) of the test campaign CAMPAIGN (a TOML file).
+
+    Runs every test of the campaign through the same analyses as the individual commands
+    (bias, allan, scale-factor, thermal-fit, mag-fit, model fit, info) and lays out, in IEEE
+    952 order: title block, the model equation with the fitted coefficients, scale factor,
+    bias and random drift (N, B, K, R, Q; ≤ for bounds) with the noise structure and the
+    platform vs strapdown note, environmental sensitivities, IA alignment, test conditions
+    with every file's SHA-256, warnings, and PASS/FAIL against the campaign's limits. A test
+    the campaign does not list reads "not tested".
+
+    The campaign file is checked completely (keys, paths, profiles, options) before any
+    analysis. Markdown goes to stdout unless --md, --html, --pdf or --json is given. The
+    campaign format is documented in gyrotest/report/campaign.py and sample_data/README.md.
+
+    \b
+    Examples:
+      gyrotest report sample_data/campaign.toml --pdf spec.pdf
+      gyrotest report campaign.toml --html spec.html --md spec.md
+      gyrotest report campaign.toml --json > spec.json
+    """
+    from ..output import atomic_path, write_text
+    from ..report.campaign import load_campaign
+
+    t0 = time.perf_counter()
+    pdf = _check_out(pdf_path, (".pdf",), "PDF file")
+    htm = _check_out(html_path, (".html", ".htm"), "HTML file")
+    md = _check_out(md_path, (".md", ".markdown", ".txt"), "Markdown file")
+    camp = load_campaign(campaign)  # validates everything before any analysis
+    from ..report.build import make_report
+
+    figures = bool(pdf or htm) and not no_figures
+    quiet = settings().quiet
+
+    def progress(name: str) -> None:
+        if not quiet and not as_json:
+            note(f"report: {name} …")
+
+    sheet = make_report(camp, figures=figures, progress=progress)
+    t1 = time.perf_counter()
+    outputs = []
+    pdf_bytes = None
+    if pdf:
+        from ..report.render_pdf import render_pdf
+
+        pdf_bytes, pages = render_pdf(sheet)
+        outputs.append(f"{pdf} ({pages} pages)")
+    html_text = None
+    if htm:
+        from ..report.render_html import render_html
+
+        html_text = render_html(sheet)
+        outputs.append(str(htm))
+    md_text = None
+    if md or not (pdf or htm or as_json):
+        from ..report.render_md import render_markdown
+
+        md_text = render_markdown(sheet)
+    # every output is rendered before the first file is written
+    if pdf_bytes is not None:
+        with atomic_path(pdf) as tmp:
+            tmp.write_bytes(pdf_bytes)
+    if html_text is not None:
+        write_text(htm, html_text)
+    if md is not None:
+        write_text(md, md_text)
+        outputs.append(str(md))
+    sheet.provenance["timing_s"]["render"] = time.perf_counter() - t1
+    if as_json:
+        emit_json(sheet.to_dict())
+    elif md is None and md_text is not None:
+        click.echo(md_text, nl=False)
+    if outputs:
+        note(f"report: {sheet.overall()}; wrote " + ", ".join(outputs)
+             + f" in {time.perf_counter() - t0:.1f} s")

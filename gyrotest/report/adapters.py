@@ -1,0 +1,439 @@
+"""Section adapters: each test of a campaign through the SAME core calls as its command.
+
+One small function per analysis. Each turns the campaign options into exactly the arguments
+the command-line module would pass (``gyrotest/cli/cmd_<name>.py``), calls the core, and
+returns an :class:`Analysis` holding
+
+* ``result`` -- the document the command prints with ``--json`` (built by the same
+  ``to_dict()`` calls, passed through :func:`gyrotest.output.jsonable`);
+* ``argv`` -- the equivalent command line (paths relative to the campaign directory), so the
+  sheet can be regenerated and checked number by number against the individual commands;
+* ``obj`` -- the result objects, for the figures.
+
+When a core API changes, only the adapter of that analysis changes. Logs are read once per
+(file, profile, ingest options) through :class:`LogCache`, with the CLI's own ingest path
+(:func:`gyrotest.cli.common.load_log`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+from ..output import jsonable
+from .campaign import TESTS, Campaign, Test
+
+
+@dataclass
+class Analysis:
+    """One command's worth of analysis inside the report."""
+
+    key: str  # "bias", "allan", "thermal", "thermal.step2", "info:static.parquet" ...
+    test: str  # campaign test name
+    command: str  # command name as typed: "bias", "model fit", "info" ...
+    argv: list[str]  # equivalent command line without "--json"
+    result: dict[str, Any]  # what the command prints with --json
+    obj: Any = None
+    logs: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"key": self.key, "test": self.test, "command": self.command,
+                "argv": ["gyrotest", *self.argv], "seconds": self.seconds}
+
+
+# ----------------------------------------------------------------------------- ingest
+def _cli_flag(key: str) -> str:
+    return {"nan_policy": "--nan"}.get(key, "--" + key.replace("_", "-"))
+
+
+def ingest_opts(test: Test, campaign: Campaign) -> tuple[dict[str, Any], list[str]]:
+    """The shared ingest options of a test as :func:`load_log` takes them, and as argv."""
+    opts: dict[str, Any] = {"nan_policy": "error"}
+    argv: list[str] = []
+    if test.profile is not None:
+        opts["profile"] = str(test.profile)
+        argv += ["--profile", campaign.rel(test.profile)]
+    for k, v in test.ingest.items():
+        if k == "temp_col":
+            vals = [v] if isinstance(v, str) else list(v)
+            opts["temp_col"] = tuple(vals)
+            for x in vals:
+                argv += ["--temp-col", x]
+            continue
+        opts[k] = v
+        argv += [_cli_flag(k), f"{v:g}" if isinstance(v, float) else str(v)]
+    lat = campaign.site.get("latitude_deg")
+    if lat is not None:
+        opts["latitude"] = float(lat)
+        argv += ["--latitude", repr(float(lat))]
+    return opts, argv
+
+
+class LogCache:
+    """Read each log once per (file, ingest options); the CLI's ingest path."""
+
+    def __init__(self) -> None:
+        self._logs: dict[tuple, Any] = {}
+        self.seconds = 0.0
+
+    def get(self, path: Path, opts: dict[str, Any], specs: list | None = None):
+        """The :class:`~gyrotest.data.GyroLog` of ``path`` read with ``opts`` (like the
+        commands: ``load_log``, or ``load_for_terms`` when model terms need channels)."""
+        key = (str(path), tuple(sorted((k, str(v)) for k, v in opts.items())))
+        if key not in self._logs:
+            t0 = time.perf_counter()
+            if specs:
+                from ..cli.cmd_model import load_for_terms
+
+                log = load_for_terms(str(path), opts, specs, announce=False)
+            else:
+                from ..cli.common import load_log
+
+                log = load_log(str(path), opts, announce=False)
+            self.seconds += time.perf_counter() - t0
+            self._logs[key] = log
+        return self._logs[key]
+
+
+def option_argv(test: Test, keys: tuple[str, ...] | None = None) -> list[str]:
+    """argv for the test's analysis options (those with a command-line option)."""
+    spec = {**TESTS[test.name], "axis": ("str", "--axis", "")}
+    argv: list[str] = []
+    for k, v in test.options.items():
+        if keys is not None and k not in keys:
+            continue
+        typ, flag, _ = spec.get(k, (None, None, None))
+        if flag is None:
+            continue
+        if typ == "bool":
+            if v:
+                argv.append(flag)
+        elif k == "gradient":
+            argv += [flag, ",".join(v)]
+        elif typ == "strs":
+            for x in v:
+                argv += [flag, x]
+        elif isinstance(v, Path):
+            continue  # paths are added by the adapter (relative to the campaign)
+        elif isinstance(v, float):
+            argv += [flag, repr(v)]
+        else:
+            argv += [flag, str(v)]
+    return argv
+
+
+def _timed(fn: Callable[[], tuple[dict, Any, list]]) -> tuple[dict, Any, list, float]:
+    t0 = time.perf_counter()
+    res, obj, logs = fn()
+    return jsonable(res), obj, logs, time.perf_counter() - t0
+
+
+# ----------------------------------------------------------------------------- bias
+def _bias_core(logs, *, skip: str, settle: str = "0", axis=None, no_earth_rate=False):
+    """The body of ``gyrotest bias`` (cli/cmd_bias.py) without plotting and rendering."""
+    from ..bias import estimate_bias, multi_position, repeatability, split_positions
+    from ..units import parse_duration
+
+    skip_s = parse_duration(skip, what="--skip")
+    settle_s = parse_duration(settle, what="--settle")
+    earth = not no_earth_rate
+    runs = []
+    has_pos_col = any(g.position is not None for g in logs)
+    if has_pos_col:
+        for g in logs:
+            if g.position is None:
+                raise InputError(f"{g.source}: no position column while other logs have one")
+            trimmed = g.skip(skip_s)
+            for label, part in split_positions(trimmed, settle_s):
+                runs.append(estimate_bias(part, axis=axis, earth_rate=False,
+                                          label=f"{label} ({g.source})"))
+    else:
+        for g in logs:
+            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth))
+    sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
+             for r in runs if r.site is not None}
+    multi = rep = None
+    if has_pos_col or len(sites) > 1:
+        lat = next((r.site.latitude_deg for r in runs if r.site is not None
+                    and r.site.latitude_deg == r.site.latitude_deg), None)
+        multi = multi_position(runs, lat)
+    elif len(runs) > 1:
+        rep = repeatability(runs)
+    result = {
+        "analysis": "multi-position" if multi else ("repeatability" if rep else "bias"),
+        "runs": [r.to_dict() for r in runs],
+        "repeatability": rep.to_dict() if rep else None,
+        "multi_position": multi.to_dict() if multi else None,
+        "units": {"bias": "deg/h", "time": "s"},
+    }
+    return result, {"runs": runs, "repeatability": rep, "multi": multi}
+
+
+def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias") -> Analysis:
+    """``gyrotest bias LOGS --skip ...`` (static runs: D_F, repeatability) or, for the
+    multi-position test, ``gyrotest bias LOG --settle ...``."""
+    opts, iargv = ingest_opts(test, campaign)
+    paths = test.logs
+
+    def go():
+        logs = [cache.get(p, opts) for p in paths]
+        res, obj = _bias_core(logs, skip=test.opt("skip", "0"), settle=test.opt("settle", "0"),
+                              axis=test.opt("axis"),
+                              no_earth_rate=bool(test.opt("no_earth_rate", False)))
+        return res, obj, logs
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["bias", *[campaign.rel(p) for p in paths], *iargv, *option_argv(test)]
+    return Analysis(key, test.name, "bias", argv, res, obj, logs, dt)
+
+
+# ----------------------------------------------------------------------------- allan
+def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
+    """``gyrotest allan LOG --skip ... --terms ... --vehicle-rate ... --horizon ...``
+    (cli/cmd_allan.py): :func:`gyrotest.noise.analysis.analyse_allan` on the trimmed log."""
+    from ..noise.analysis import analyse_allan, parse_taus
+    from ..noise.fit import MIN_EDF, parse_terms
+    from ..noise.impact import parse_vehicle_rate
+    from ..units import format_duration, parse_duration
+
+    opts, iargv = ingest_opts(test, campaign)
+    skip = test.opt("skip", "0")
+    terms = test.opt("terms", "Q,N,B,K,R")
+    detrend = test.opt("detrend", "none")
+
+    def go():
+        skip_s = parse_duration(skip, what="--skip")
+        horizon_s = parse_duration(test.opt("horizon", "1h"), what="--horizon")
+        if horizon_s <= 0:
+            raise InputError("--horizon must be > 0")
+        rates = [parse_vehicle_rate(v) for v in test.opt("vehicle_rates", [])]
+        g = cache.get(test.logs[0], opts)
+        logs = [g]
+        if skip_s > 0:
+            if skip_s >= g.duration_s:
+                raise InputError(f"{g.source}: --skip {skip} removes the whole record "
+                                 f"({format_duration(g.duration_s)})")
+            g = g.skip(skip_s)
+        axes = [test.opt("axis")] if test.opt("axis") else None
+        r = analyse_allan(
+            g, dev="oadev", taus=parse_taus(test.opt("taus", "10/decade")),
+            terms=parse_terms(terms), vehicle_rates=rates, axes=axes, confidence=0.683,
+            stop_ratio=None, min_edf=MIN_EDF, detrend=None if detrend == "none" else detrend,
+            run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
+            bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False)
+        res = {"analysis": "allan", "logs": [r.to_dict()],
+               "files": {"csv": None, "plot": None, "psd": None}}
+        return res, r, logs
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["allan", campaign.rel(test.logs[0]), *iargv, *option_argv(test)]
+    return Analysis("allan", test.name, "allan", argv, res, obj, logs, dt)
+
+
+# ----------------------------------------------------------------------------- scale factor
+def run_scale_factor(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
+    """``gyrotest scale-factor LOGS --settle ...`` (cli/cmd_scale_factor.py): plateaus of
+    every run, then :func:`gyrotest.scalefactor.analyse`."""
+    from .. import scalefactor as sfm
+    from ..cli.cmd_scale_factor import _rates, _terms
+    from ..units import parse_duration
+
+    opts, iargv = ingest_opts(test, campaign)
+
+    def go():
+        settle = parse_duration(test.opt("settle", "10s"), what="--settle")
+        trim_end = parse_duration(test.opt("trim_end", "0s"), what="--trim-end")
+        min_dwell = parse_duration(test.opt("min_dwell", "2s"), what="--min-dwell")
+        alpha = test.opt("alpha", 0.05)
+        if not 0 < alpha < 1:
+            raise InputError(f"--alpha {alpha} must be between 0 and 1")
+        loaded = [cache.get(p, opts) for p in test.logs]
+        sfm.check_runs_match(loaded)
+        runs = [sfm.extract_plateaus(lg, sfm.run_name(lg.source), settle_s=settle,
+                                     trim_end_s=trim_end, min_dwell_s=min_dwell,
+                                     detect=test.opt("detect", "auto"),
+                                     rates_dps=_rates(test.opt("rates")), snap_tol=3e-3,
+                                     stderr="allan") for lg in loaded]
+        g = loaded[0].gyro
+        result = sfm.analyse(runs, output_kind=g.output_kind,
+                             nominal_scale_factor=g.scale_factor,
+                             full_scale_dps=test.opt("full_scale_dps"),
+                             terms=_terms(test.opt("terms", "auto")), alpha=alpha,
+                             weighted=True, weighted_line=False, lock_in=True, periodic=True,
+                             common_rates=bool(test.opt("common_rates", False)))
+        if not test.opt("no_asymmetry", False) and any(
+                n.startswith("asymmetry not computed") for n in result.notes):
+            raise InputError("no negative input rates: the asymmetry (IEEE 952 §12.9.4.2.2) "
+                             "cannot be computed; add negative rates to the table sequence, or "
+                             "set no_asymmetry = true to reduce without it")
+        d = result.to_dict()
+        d["command"] = "scale-factor"
+        return d, result, loaded
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["scale-factor", *[campaign.rel(p) for p in test.logs], *iargv, *option_argv(test)]
+    return Analysis("scale_factor", test.name, "scale-factor", argv, res, obj, logs, dt)
+
+
+# ----------------------------------------------------------------------------- environment
+class WorkCache:
+    """Prepared model data (``prepare_log``) shared by the commands that would prepare the
+    same log with the same options (thermal-fit and the model-history steps)."""
+
+    def __init__(self) -> None:
+        self._wd: dict[tuple, Any] = {}
+
+    def get(self, g, path: Path, popts: dict[str, Any], specs: list | None = None):
+        """``prepare_log(g, path, popts, specs)`` once per (log, options)."""
+        from ..cli.cmd_model import prepare_log
+
+        key = (id(g), tuple(sorted((k, str(v)) for k, v in popts.items())))
+        if key not in self._wd:
+            self._wd[key] = prepare_log(g, str(path), popts, specs)
+        return self._wd[key]
+
+
+
+def _prep_opts(test: Test, **extra) -> dict[str, Any]:
+    d = {"axis": test.opt("axis"), "skip": test.opt("skip", "0"),
+         "resolution": test.opt("resolution", "auto"), "smooth": test.opt("smooth", "auto")}
+    d.update(extra)
+    return d
+
+
+def run_thermal(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
+                ) -> Analysis:
+    """``gyrotest thermal-fit LOG --t0 ... [--sensor] [--gradient A,B] [--setpoints CSV]``
+    (cli/cmd_thermal_fit.py): :func:`gyrotest.envmodel.domain.thermal_fit` on the prepared
+    log and/or :func:`~gyrotest.envmodel.domain.thermal_fit_setpoints`."""
+    from ..envmodel.domain import read_setpoints, thermal_fit, thermal_fit_setpoints
+    from ..envmodel.terms import parse_terms
+
+    opts, iargv = ingest_opts(test, campaign)
+    t0 = float(test.opt("t0", 21.0))
+    setpoints = test.opt("setpoints")
+
+    def go():
+        sp = th = None
+        logs = []
+        grad = tuple(test.opt("gradient")) if test.opt("gradient") else None
+        if setpoints is not None:
+            tab = read_setpoints(setpoints)
+            sp = thermal_fit_setpoints(tab["temp"], tab["drift"], tab.get("sigma"),
+                                       tab.get("dtdt"), t0_c=t0, weighted=False)
+        if test.logs:
+            path = test.logs[0]
+            g = cache.get(path, opts, parse_terms(["T", "dTdt"]))
+            logs = [g]
+            if not g.temperature:
+                raise InputError(f"{g.source}: thermal-fit needs a temperature channel; name "
+                                 "it with --temp-col")
+            wd = work.get(g, path, _prep_opts(test, t_ref=t0))
+            th = thermal_fit(wd, sensor=test.opt("sensor"), gradient=grad, folds=5)
+        res = {"chamber": th.to_dict() if th else None,
+               "setpoints": sp.to_dict() if sp else None, "model_file": None}
+        return res, {"chamber": th, "setpoints": sp}, logs
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["thermal-fit", *[campaign.rel(p) for p in test.logs]]
+    if setpoints is not None:
+        argv += ["--setpoints", campaign.rel(setpoints)]
+    argv += [*iargv, "--t0", repr(t0), *option_argv(
+        test, ("sensor", "gradient", "axis", "skip", "resolution", "smooth"))]
+    return Analysis("thermal", test.name, "thermal-fit", argv, res, obj, logs, dt)
+
+
+def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache,
+                  terms: str, key: str, *, t_ref: float | None = None) -> Analysis:
+    """``gyrotest model fit LOG --terms TERMS [--t-ref T]`` (cli/cmd_model.py): one step of
+    the model workbench; ``obj`` is the :class:`~gyrotest.envmodel.fit.FitResult`."""
+    from ..cli.cmd_model import collect_terms
+    from ..envmodel.fit import finish, fit_model
+
+    opts, iargv = ingest_opts(test, campaign)
+    path = test.logs[0]
+
+    def go():
+        specs = collect_terms((terms,), ())
+        g = cache.get(path, opts, specs)
+        wd = work.get(g, path, _prep_opts(test, t_ref=t_ref), specs)
+        res = fit_model(wd, specs, folds=5, light=True)
+        finish(res, k_sigma=4.0)
+        d = res.to_dict()
+        d["written"] = {}
+        return d, res, [g]
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["model", "fit", campaign.rel(path), "--terms", terms]
+    if t_ref is not None:
+        argv += ["--t-ref", repr(float(t_ref))]
+    argv += [*iargv, *option_argv(test, ("axis", "skip", "resolution", "smooth"))]
+    return Analysis(key, test.name, "model fit", argv, res, obj, logs, dt)
+
+
+def history_steps(analyses: list[Analysis]) -> list:
+    """:class:`~gyrotest.envmodel.history.HistoryStep` rows for successive model fits of one
+    log, as ``gyrotest model fit -o model.json`` appends them (``model history``)."""
+    from ..envmodel.history import make_step
+
+    steps: list = []
+    for a in analyses:
+        steps.append(make_step(a.obj, steps))
+    return steps
+
+
+def run_magnetic(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
+                 ) -> Analysis:
+    """``gyrotest mag-fit LOG [--settle] [--with T]`` (cli/cmd_mag_fit.py):
+    :func:`gyrotest.envmodel.domain.mag_fit` on the prepared log."""
+    from ..envmodel.domain import mag_fit
+    from ..envmodel.terms import parse_terms, split_terms
+    from ..units import parse_duration
+
+    opts, iargv = ingest_opts(test, campaign)
+    path = test.logs[0]
+
+    def go():
+        extra = split_terms(test.opt("with")) if test.opt("with") else []
+        specs = parse_terms(["Hx", "Hy", "Hz"] + extra)
+        settle_s = parse_duration(test.opt("settle", "10s"), what="--settle")
+        dwell_s = parse_duration(test.opt("min_dwell", "30s"), what="--min-dwell")
+        g = cache.get(path, opts, specs)
+        if len(g.field_uT) < 3:
+            raise InputError(f"terms Hx, Hy, Hz: {g.source} has {len(g.field_uT)} "
+                             "magnetic-field channel(s); name X, Y, Z with --field-cols")
+        wd = work.get(g, path, _prep_opts(test))
+        mg = mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=dwell_s, folds=5)
+        d = mg.to_dict()
+        d["model_file"] = None
+        return d, mg, [g]
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["mag-fit", campaign.rel(path), *iargv, *option_argv(test)]
+    return Analysis("magnetic", test.name, "mag-fit", argv, res, obj, logs, dt)
+
+
+def run_info(path: Path, test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
+    """``gyrotest info LOG --profile ...``: the log summary (timing, channels and ranges)
+    for the test-conditions section."""
+    opts, iargv = ingest_opts(test, campaign)
+
+    def go():
+        g = cache.get(path, opts)
+        return g.summary(), g, [g]
+
+    res, obj, logs, dt = _timed(go)
+    rel = campaign.rel(path)
+    return Analysis(f"info:{rel}", test.name, "info", ["info", rel, *iargv], res, obj, logs,
+                    dt)
+
+
+def finite(x) -> bool:
+    """True for a finite number."""
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)

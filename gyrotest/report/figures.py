@@ -1,0 +1,151 @@
+"""Figures of the spec sheet, drawn by the analysis modules' own plotting functions.
+
+* Allan deviation with the fit, components and residuals: :func:`gyrotest.noise.plots.plot_allan`;
+* scale-factor linearity residuals: :func:`gyrotest.scalefactor.plot.plot_scale_factor`;
+* thermal model vs measurement and residual: :func:`gyrotest.envmodel.plots.thermal_figures`;
+* magnetic response per axis: :func:`gyrotest.envmodel.plots.mag_figures`;
+* model history (error falling as terms are added): :func:`gyrotest.envmodel.plots.history_figures`.
+
+The functions that write a file are called with a temporary PNG path and the bytes read back;
+those that return matplotlib figures are saved here. Every figure is rendered at
+:data:`DPI` so that it stays sharp when scaled to the page width.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import tempfile
+from pathlib import Path
+
+from .sheet import Figure
+
+DPI = 150
+#: report size (inches) of each figure: about the PDF text width, so that the modules' fonts
+#: (8-10 pt) print at 7-9 pt
+SIZES = {"allan": (8.0, 5.4), "scale_factor": (9.6, 6.2), "thermal": (8.0, 3.4),
+         "time": (8.0, 5.6), "levels": (9.0, 3.6), "history": (8.5, 5.0)}
+_TARGET: list[tuple[float, float]] = []
+
+
+def resize_hook(fig) -> None:
+    """matplotlib ``figure.hooks`` entry (rcParams): give a figure created by a module's
+    plotting function the report size before anything is drawn on it."""
+    if _TARGET:
+        fig.set_size_inches(*_TARGET[-1], forward=False)
+
+
+@contextlib.contextmanager
+def report_size(size: tuple[float, float]):
+    """Figures created inside get ``size`` (inches) through :func:`resize_hook`: the plotting
+    functions that write files keep their layout code and only the canvas changes."""
+    import matplotlib
+
+    _TARGET.append(size)
+    try:
+        with matplotlib.rc_context({"figure.hooks": [f"{__name__}:resize_hook"]}):
+            yield
+    finally:
+        _TARGET.pop()
+
+
+def _png_from_file(draw, name: str) -> tuple[bytes, float, float]:
+    """Call ``draw(path)`` with a temporary .png path; return the bytes and the size (in)."""
+    with tempfile.TemporaryDirectory(prefix="gyrotest-report-") as d:
+        p = Path(d) / f"{name}.png"
+        draw(p)
+        data = p.read_bytes()
+    return data, *_png_size(data)
+
+
+def _png_size(data: bytes) -> tuple[float, float]:
+    import struct
+
+    w, h = struct.unpack(">II", data[16:24])
+    return w / DPI, h / DPI
+
+
+def _png_from_fig(fig, size: tuple[float, float] | None = None) -> tuple[bytes, float, float]:
+    import matplotlib.pyplot as plt
+
+    from ..plotting import STYLE
+
+    if size is not None:
+        fig.set_size_inches(*size)
+    buf = io.BytesIO()
+    try:
+        with plt.rc_context(STYLE):
+            fig.savefig(buf, format="png", dpi=DPI)
+    finally:
+        plt.close(fig)
+    data = buf.getvalue()
+    return data, *_png_size(data)
+
+
+def _close(figs) -> None:
+    import matplotlib.pyplot as plt
+
+    for _, f in figs:
+        plt.close(f)
+
+
+def allan_figure(source: str, axis_analysis) -> Figure:
+    """Allan deviation, fitted model, its components and the residuals in CI units."""
+    from ..noise.plots import plot_allan
+
+    with report_size(SIZES["allan"]):
+        png, w, h = _png_from_file(lambda p: plot_allan([(source, axis_analysis)], p), "allan")
+    return Figure("allan", "", png, None, w, h)
+
+
+def scale_factor_figure(result) -> Figure:
+    """Linearity error per rate with the nonlinearity model (residuals of the IEEE line)."""
+    from ..scalefactor.plot import plot_scale_factor
+
+    with report_size(SIZES["scale_factor"]):
+        png, w, h = _png_from_file(lambda p: plot_scale_factor(result, p), "scale_factor")
+    return Figure("scale_factor", "", png, None, w, h)
+
+
+def thermal_figures(th) -> list[Figure]:
+    """Drift vs temperature (model curve, heating/cooling) and the model fit over time with
+    its residual."""
+    from ..envmodel.plots import thermal_figures as figs_of
+
+    figs = figs_of(th)
+    out = []
+    try:
+        for name, fig in figs:
+            if name in ("thermal", "time"):
+                png, w, h = _png_from_fig(fig, SIZES[name])
+                out.append(Figure(f"thermal_{name}", "", png, None, w, h))
+    finally:
+        _close(figs)
+    return out
+
+
+def magnetic_figure(mg) -> Figure | None:
+    """Plateau means against the applied field per axis with the fitted slopes."""
+    from ..envmodel.plots import mag_figures
+
+    figs = mag_figures(mg)
+    try:
+        for name, fig in figs:
+            if name == "levels":
+                png, w, h = _png_from_fig(fig, SIZES["levels"])
+                return Figure("magnetic", "", png, None, w, h)
+    finally:
+        _close(figs)
+    return None
+
+
+def history_figure(steps) -> Figure:
+    """Residual RMS (fit, held-out, noise floor) and AIC/BIC per model step."""
+    from ..envmodel.plots import history_figures
+
+    figs = history_figures(steps)
+    try:
+        png, w, h = _png_from_fig(figs[0][1], SIZES["history"])
+    finally:
+        _close(figs)
+    return Figure("history", "", png, None, w, h)

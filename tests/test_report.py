@@ -1,0 +1,266 @@
+"""``gyrotest report``: every number of the sample sheet equals what the individual command
+prints, "not tested" sections, campaign validation before any work, and the outputs."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from cliutil import run_cli
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE = ROOT / "sample_data"
+CAMPAIGN = SAMPLE / "campaign.toml"
+
+
+def numbers(doc) -> list[dict]:
+    """Every number of a sheet's JSON that carries a source."""
+    out = []
+
+    def walk(x):
+        if isinstance(x, dict):
+            if "source" in x and "value" in x:
+                out.append(x)
+            for v in x.values():
+                walk(v)
+        elif isinstance(x, list):
+            for v in x:
+                walk(v)
+
+    walk(doc)
+    return out
+
+
+def dig(d, path):
+    for k in path:
+        d = d[k]
+    return d
+
+
+@pytest.fixture(scope="module")
+def sample_sheet():
+    r = run_cli(["-q", "report", CAMPAIGN, "--json"])
+    assert r.code == 0, r.err
+    return json.loads(r.out)
+
+
+def test_every_number_equals_the_individual_command(sample_sheet):
+    """Run each command of the sheet's provenance with --json (in the campaign directory, as
+    the sheet says) and compare every sourced number and uncertainty of the sheet with it."""
+    cmds = {c["key"]: c["argv"] for c in sample_sheet["provenance"]["commands"]}
+    assert {"bias", "allan", "scale_factor", "thermal", "magnetic", "multiposition",
+            "thermal.step1"} <= set(cmds)
+    outputs = {}
+    cwd = os.getcwd()
+    os.chdir(SAMPLE)
+    try:
+        for key, argv in cmds.items():
+            assert argv[0] == "gyrotest"
+            r = run_cli([*argv[1:], "--json"])
+            assert r.code == 0, f"{key}: {r.err}"
+            outputs[key] = json.loads(r.out)
+    finally:
+        os.chdir(cwd)
+    nums = numbers(sample_sheet)
+    assert len(nums) > 200
+    checked = set()
+    for n in nums:
+        for src, val in ((n["source"], n["value"]), (n.get("sigma_source"), n.get("sigma"))):
+            if src is None:
+                continue
+            want = dig(outputs[src["analysis"]], src["path"])
+            assert isinstance(want, (int, float)) and val is not None, (src, want, val)
+            assert val == want or math.isclose(val, want, rel_tol=1e-12, abs_tol=0.0), \
+                (src, val, want)
+            checked.add(src["analysis"])
+    assert set(cmds) <= checked | {k for k in cmds if k.startswith("info:")} | checked
+    # every analysis and every log summary contributed numbers
+    assert {k for k in cmds} == checked
+
+
+def test_sample_sheet_content(sample_sheet):
+    d = sample_sheet
+    assert d["format"] == "gyrotest-spec-sheet"
+    titles = [s["title"] for s in d["sections"]]
+    assert titles[0] == "Model equation" and titles[1] == "Scale factor"
+    assert "IA alignment" in titles and titles[-1] == "Compliance with the spec limits"
+    checks = {c["key"]: c for c in d["checks"]}
+    # bounds are printed with ≤ and carry the upper_bound flag
+    for k in ("allan.K", "allan.R"):
+        assert checks[k]["measured"]["upper_bound"] is True
+        assert checks[k]["measured"]["text"].startswith("≤")
+    # the supply test is absent: not tested, and it says so
+    assert checks["supply.supply_dph_per_v"]["verdict"] == "not tested"
+    env = next(s for s in d["sections"] if s["title"].startswith("Environmental"))
+    supply = next(s for s in env["subsections"] if s["title"] == "Supply voltage")
+    assert supply["status"] == "not tested"
+    assert d["overall_verdict"] in ("PASS", "FAIL", "INCONCLUSIVE")
+    # reproducibility: version, campaign and every input with its SHA-256
+    prov = d["provenance"]
+    assert prov["gyrotest_version"]
+    assert len(prov["campaign"]["sha256"]) == 64
+    files = {f["file"]: f["sha256"] for f in prov["inputs"]}
+    assert "static.parquet" in files and "multipos.csv" in files
+    import hashlib
+
+    assert files["multipos.csv"] == hashlib.sha256((SAMPLE / "multipos.csv").read_bytes()
+                                                   ).hexdigest()
+    # units everywhere: every sourced number has a unit, or sits under a header with one
+    for n in numbers(d):
+        assert n["text"] != "—"
+
+
+def _mini_campaign(tmp_path: Path, body: str) -> Path:
+    """A campaign in tmp_path using one bias run of the sample data."""
+    for f in ("bias_run1.parquet", "bias_run1.profile.toml"):
+        shutil.copy(SAMPLE / f, tmp_path / f)
+    p = tmp_path / "camp.toml"
+    p.write_text('[campaign]\noperator = "T"\ndate = "2024-01-01"\n'
+                 '[gyro]\nmodel = "GT-FOG-100"\nserial = "0427"\n'
+                 'nominal_scale_factor = 0.2\nscale_factor_unit = "arcsec/pulse"\n'
+                 '[site]\nlatitude_deg = 48.137\n' + body, encoding="utf-8")
+    return p
+
+
+BIAS = ('[tests.bias]\nlogs = ["bias_run1.parquet"]\nprofile = "bias_run1.profile.toml"\n'
+        'skip = "30min"\nlimits = { bias_dph = 0.5 }\n')
+
+
+def test_missing_tests_read_not_tested_and_outputs(tmp_path):
+    camp = _mini_campaign(tmp_path, BIAS)
+    pdf, html, md = tmp_path / "s.pdf", tmp_path / "s.html", tmp_path / "s.md"
+    r = run_cli(["-q", "report", camp, "--pdf", pdf, "--html", html, "--md", md])
+    assert r.code == 0, r.err
+    text = md.read_text(encoding="utf-8")
+    for heading in ("2 Scale factor", "3.2 Random drift", "4.1 Thermal", "4.2 Magnetic",
+                    "5 IA alignment"):
+        part = text.split(heading, 1)[1].split("\n#", 1)[0]
+        assert "Not tested" in part, heading
+    # the one test that ran: D_F with its 1σ and a FAIL against the (too tight) limit
+    assert "| bias D_F ± 1σ |" in text and "FAIL" in text
+    assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 5000
+    h = html.read_text(encoding="utf-8")
+    assert h.startswith("<!DOCTYPE html>") and "not tested" in h.lower()
+    assert "<img" not in h  # no analysis with a figure ran
+    # no stray temporary files
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["bias_run1.parquet", "bias_run1.profile.toml", "camp.toml", "s.pdf", "s.html", "s.md"])
+
+
+def test_markdown_to_stdout_by_default(tmp_path):
+    camp = _mini_campaign(tmp_path, BIAS)
+    r = run_cli(["-q", "report", camp])
+    assert r.code == 0, r.err
+    assert r.out.startswith("# GT-FOG-100 s/n 0427: gyro specification sheet")
+    assert "## 8 Compliance with the spec limits" in r.out
+
+
+@pytest.mark.parametrize(("body", "fragments"), [
+    (BIAS.replace("skip =", "skipp ="), ["camp.toml", "[tests.bias] skipp", "unknown key"]),
+    (BIAS.replace("bias_run1.parquet\"]", "nope.parquet\"]"),
+     ["camp.toml", "[tests.bias] logs[0]", "nope.parquet", "not found"]),
+    (BIAS + '[tests.allan]\nlog = "bias_run1.parquet"\nprofile = "missing.toml"\n',
+     ["camp.toml", "[tests.allan] profile", "missing.toml"]),
+    (BIAS + '[tests.alan]\nlog = "bias_run1.parquet"\n', ["camp.toml", "[tests.alan]",
+                                                         "unknown test"]),
+    (BIAS.replace("bias_dph", "bias_dhp"), ["camp.toml", "limits.bias_dhp", "unknown limit"]),
+    (BIAS.replace('"30min"', '"thirty minutes"'), ["camp.toml", "[tests.bias] skip"]),
+    (BIAS + '[tests.allan]\nlog = "bias_run1.parquet"\nvehicle_rates = ["fast"]\n',
+     ["camp.toml", "vehicle_rates", "fast"]),
+    (BIAS + '[tests.allan]\nlog = "bias_run1.parquet"\nterms = "Q,N,X"\n',
+     ["camp.toml", "[tests.allan] terms"]),
+    (BIAS + '[tests.thermal]\nlog = "bias_run1.parquet"\nmodel_steps = ["T,bogus"]\n',
+     ["camp.toml", "model_steps", "bogus"]),
+    (BIAS + '[tests.magnetic]\nprofile = "bias_run1.profile.toml"\n',
+     ["camp.toml", "[tests.magnetic] log", "missing"]),
+    ('[tests]\nbias = 3\n', ["camp.toml", "[tests.bias]", "table"]),
+    ('[extra]\nx = 1\n', ["camp.toml", "[extra]", "unknown section"]),
+])
+def test_bad_campaign_fails_before_any_work(tmp_path, monkeypatch, body, fragments):
+    import gyrotest.report.build as build
+
+    def boom(*a, **k):
+        raise AssertionError("an analysis ran before the campaign was validated")
+
+    monkeypatch.setattr(build, "run_campaign", boom)
+    camp = _mini_campaign(tmp_path, body)
+    pdf = tmp_path / "spec.pdf"
+    r = run_cli(["report", camp, "--pdf", pdf])
+    r.assert_clean_error(*fragments)
+    assert not pdf.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_bad_toml_missing_file_and_output_path(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[campaign\n")
+    run_cli(["report", bad]).assert_clean_error("bad.toml", "invalid TOML")
+    run_cli(["report", tmp_path / "none.toml"]).assert_clean_error("none.toml", "not found")
+    camp = _mini_campaign(tmp_path, BIAS)
+    run_cli(["report", camp, "--pdf", tmp_path / "no" / "x.pdf"]).assert_clean_error(
+        "does not exist")
+    run_cli(["report", camp, "--pdf", tmp_path / "x.png"]).assert_clean_error(".pdf")
+    c2 = _mini_campaign(tmp_path, BIAS.replace('operator = "T"', ""))
+    c2.write_text(c2.read_text().replace('operator = "T"\n', ""))
+    run_cli(["report", c2]).assert_clean_error("[campaign] operator", "missing")
+
+
+def test_analysis_error_names_the_test(tmp_path):
+    camp = _mini_campaign(tmp_path, BIAS.replace('"30min"', '"3h"'))
+    r = run_cli(["report", camp])
+    r.assert_clean_error("camp.toml", "[tests.bias]", "removes the whole record")
+
+
+def test_number_formatting_and_verdicts():
+    from gyrotest.report.sheet import (
+        FAIL,
+        INCONCLUSIVE,
+        NO_LIMIT,
+        PASS,
+        Check,
+        Num,
+        fmt_number,
+        fmt_pm,
+    )
+
+    assert fmt_pm(1.80912, 0.03249) == "1.809 ± 0.032"
+    assert fmt_pm(0.00799512, 2.9e-5) == "0.007995 ± 0.000029"
+    assert fmt_pm(-0.0421, 0.0203) == "−0.042 ± 0.020"
+    assert fmt_pm(2.3e-5, 1.1e-6).endswith("·10⁻⁵")
+    assert fmt_number(216000.0) == "216000"
+    assert fmt_number(0.2) == "0.2"
+    assert fmt_number(1.99975, 3, strip=False) == "2.00"
+    assert fmt_number(float("nan")) == "—"
+    assert Num(0.0527, "(°/h)/√h", bound=True).text() == "≤ 0.0527 (°/h)/√h"
+
+    def v(value, limit, bound=False):
+        return Check("k", "x", "", Num(value, "u", bound=bound), limit, "u").verdict
+
+    assert v(0.8, 1.0) == PASS and v(-0.8, 1.0) == PASS and v(1.2, 1.0) == FAIL
+    assert v(1.2, 1.0, bound=True) == INCONCLUSIVE and v(0.5, 1.0, bound=True) == PASS
+    assert v(0.5, None) == NO_LIMIT
+    assert Check("k", "x", "", None, 1.0, "u").verdict == "not tested"
+
+
+def test_sample_pdf_and_html_with_figures(tmp_path):
+    """The README's first command on the bundled campaign: PDF and HTML with every figure."""
+    pdf, html = tmp_path / "spec.pdf", tmp_path / "spec.html"
+    r = run_cli(["-q", "report", CAMPAIGN, "--pdf", pdf, "--html", html, "--json"])
+    assert r.code == 0, r.err
+    d = json.loads(r.out)
+    figs = d["figures"]
+    assert [f["key"] for f in figs] == ["scale_factor", "allan", "thermal_thermal",
+                                        "thermal_time", "magnetic", "history"]
+    assert all(f["embedded"] for f in figs)
+    assert not [w for w in d["warnings"] if "could not be drawn" in w["text"]]
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF") and data.rstrip().endswith(b"%%EOF")
+    assert 200_000 < len(data) < 3_000_000
+    h = html.read_text(encoding="utf-8")
+    assert h.count("data:image/png;base64,") == 6
+    assert "Figure 6." in h and "not tested" in h.lower()

@@ -13,9 +13,23 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
 
-from .fit import FitResult, WorkData, choose_resolution, fit_model, prepare
+from .compensate import CompensationResult, compensate
+from .diagnose import Candidate, Diagnosis, diagnose
+from .domain import (
+                     MagResult,
+                     SetpointResult,
+                     ThermalResult,
+                     mag_fit,
+                     thermal_fit,
+                     thermal_fit_setpoints,
+)
+from .fit import FitResult, WorkData, choose_resolution, choose_smoothing, fit_model, prepare
+from .history import append_history, load_history
 from .model import EnvModel
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 
-__all__ = ["EFFECTS", "EnvFrame", "EnvModel", "FitResult", "TermSpec", "WorkData",
-           "choose_resolution", "fit_model", "parse_terms", "prepare"]
+__all__ = ["EFFECTS", "Candidate", "CompensationResult", "Diagnosis", "EnvFrame", "EnvModel",
+           "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalResult", "WorkData",
+           "append_history", "choose_resolution", "choose_smoothing", "compensate", "diagnose",
+           "fit_model", "load_history", "mag_fit", "parse_terms", "prepare", "thermal_fit",
+           "thermal_fit_setpoints"]

@@ -3,20 +3,26 @@
 Working resolution
 ------------------
 Raw 10 Hz samples are dominated by white noise and 10⁶ rows make every fit slow, while the
-environmental effects live at minutes to hours. gyrotest therefore fits **block means**:
+environmental effects live at minutes to hours. gyrotest therefore fits **smoothed block
+means**:
 
-1. channels are averaged onto a fine grid (dt_f ≈ min(1 s, T_b/5), a multiple of τ0) on which
-   every regressor is computed (derivatives, lags and powers of the channels);
-2. the gyro rate and every regressor are averaged over consecutive blocks of T_b seconds
-   inside each gap-free segment. Averaging the regressors (not recomputing them from averaged
-   channels) keeps a model linear in its coefficients exact under averaging.
+1. channels are averaged onto a fine grid (dt_f ≈ 1 s, a multiple of τ0) on which every
+   regressor is computed (powers, lags and derivatives of the channels);
+2. the gyro rate and every regressor pass through the same smoother S_W (moving mean over W,
+   applied twice: a triangular kernel 2·W wide). Because output and regressors are filtered
+   alike, a model linear in its coefficients stays exact, and the dT/dt regressor
+   d(S_W T)/dt = S_W(dT/dt) carries no smoothing bias however large W is; W only costs time
+   resolution. W = max(60 s, the window at which the noisiest temperature sensor's derivative
+   noise falls to 1 % of its dT/dt RMS) (:func:`choose_smoothing`);
+3. everything is averaged over consecutive blocks of T_b inside each gap-free segment (the
+   smoother's reach, 2·W, is left out at each segment end).
 
-T_b is chosen from the noise level: the raw rate's Allan deviation reaches its minimum at
-τ_min (below it white noise dominates, above it drift and environment); T_b = τ_min/4 rounded
-down to 1-2-5 steps and clipped to [duration/20000, min(60 s, duration/300)], so white noise is
-averaged down by √(T_b/τ0) while effects slower than ≈ 4·T_b stay resolved, the fit sees at
-most 20 000 blocks, and at least 300. ``resolution=`` overrides it. The choice and its reason
-are stated in every result.
+T_b is chosen from the noise level (:func:`choose_resolution`): the rate's Allan deviation
+reaches its minimum at τ_min (below it white noise dominates, above it drift and environment);
+T_b = τ_min/4 rounded down to 1-2-5 steps, clipped to [max(W/4, duration/20000),
+max(that, min(60 s, duration/300))]: no finer than the smoothed series can carry, at most
+20 000 blocks, at least 300 when the record allows. ``resolution=`` and ``smoothing_s=``
+override. The choice and its reason are stated in every result.
 
 Estimation
 ----------
@@ -28,9 +34,10 @@ exactly at each step). Uncertainties: HAC (see :mod:`.stats`) on the Gauss–New
 validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
 max(6·W, duration/500) (at least 2·folds chunks); chunk c belongs to fold c mod folds; each
 fold is predicted from a fit on the other folds (linear coefficients re-fitted, a searched
-frequency searched afresh on the training folds, time constants kept at the full-data value, which a fold
-without the start-up could not pin down), leaving out 2·W on either side of each held-out chunk so that neither the smoother nor
-short-memory noise carries held-out data into the training set.
+frequency searched afresh on the training folds, time constants kept at the full-data value,
+which a fold without the start-up could not pin down), leaving out 2·W on either side of each
+held-out chunk so that neither the smoother nor short-memory noise carries held-out data into
+the training set.
 """
 
 from __future__ import annotations

@@ -225,3 +225,16 @@ def test_conversions_to_other_tools():
     assert c["kalibr"]["gyroscope_random_walk"] == pytest.approx(K / 216000 * math.pi / 180,
                                                                  rel=1e-9)
     assert c["N"]["discrete_sigma_deg_s"] == pytest.approx(0.011 / math.sqrt(0.01), rel=1e-3)
+
+
+def test_predict_avar_extrapolates_with_uncertainty():
+    """σ²_A(T) at the record length, the bias-uncertainty input of gyrotest.bias."""
+    comps = [("arw", {"N": 0.01}), ("rrw", {"K": 0.1})]
+    tau, sig, edf, lo, hi = table_from_model(comps, tau0=0.1, n=300_000)
+    f = fit_noise_model(tau, sig, edf, sigma_lo=lo, sigma_hi=hi, terms="N,B,K", tau0=0.1)
+    T = 30_000.0
+    v, sd = f.predict_avar([T])
+    assert v[0] == pytest.approx(float(mixture_avar(np.array([T]), comps)[0]), rel=0.10)
+    assert 0 < sd[0] < v[0]
+    vc, _ = f.predict_avar([T], conservative=True)
+    assert vc[0] >= v[0]

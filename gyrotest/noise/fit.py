@@ -842,11 +842,48 @@ class NoiseFit:
         return out
 
     def model_sigma(self, tau=None) -> np.ndarray:
+        """σ_model(τ) = √(Σ c_j g_j(τ)) in deg/h (IEEE 952 Annex C mixture, seed 001 eq. 5.9)."""
         return np.sqrt(self.model_avar(tau))
 
     def component_avar(self, tau=None) -> dict[str, np.ndarray]:
+        """Each term's Allan variance c_j g_j(τ), (deg/h)², keyed by label."""
         t = self.tau if tau is None else np.asarray(tau, float)
         return {term.label: term.avar(t) for term in self.terms}
+
+    def predict_avar(self, tau, *, conservative: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """σ²_model(τ) at any τ (s), (deg/h)², with its 1σ uncertainty from the sandwich
+        covariance of the coefficients (delta method: var = ∇ᵀ Σ ∇, ∇ = ∂σ²/∂(c, ln shape)).
+
+        Use it to extrapolate, e.g. the variance of a mean over a record of length T is
+        σ²_A(T) for white, Markov (T ≫ T_c) and random-walk rate noise (IEEE 952 Annex C): the
+        bias uncertainty of :mod:`gyrotest.bias` is ``sqrt(predict_avar(T)[0])``. With
+        ``conservative`` the terms that are upper bounds only add their bound (no variance)."""
+        t = np.atleast_1d(np.asarray(tau, float))
+        val = self.model_avar(t)
+        var = np.zeros_like(t)
+        if self.cov is not None and self.cov_labels:
+            grads = []
+            for lab in self.cov_labels:
+                kind, name = lab.split(":", 1)
+                term = next(tt for tt in self.terms if tt.label == name)
+                g = _basis(term.key, t, term.shape, term.bi_f0)
+                if kind == "c":
+                    grads.append(g)
+                else:
+                    h = 1e-4
+                    gp = _basis(term.key, t, term.shape * math.exp(h), term.bi_f0)
+                    gm = _basis(term.key, t, term.shape * math.exp(-h), term.bi_f0)
+                    grads.append(term.coef * (gp - gm) / (2 * h))
+            D = np.array(grads)  # (p, n)
+            var = np.einsum("in,ij,jn->n", D, self.cov, D)
+        if conservative:
+            from .impact import _coef_from_value
+
+            for term in self.terms:
+                if not term.identified and term.upper and term.key in LINEAR_KEYS:
+                    cu = _coef_from_value(term.key, term.upper, term.shape)
+                    val = val + max(cu - term.coef, 0.0) * _basis(term.key, t, None, term.bi_f0)
+        return val, np.sqrt(np.maximum(var, 0.0))
 
     def psd(self, f) -> np.ndarray:
         """Two-sided rate PSD of the model (deg/h)²/Hz; deterministic terms excluded."""

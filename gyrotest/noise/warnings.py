@@ -30,7 +30,7 @@ KROBKA-M12     too few clusters: τ with EDF below the fit floor are not fitted 
 KROBKA-M7      a deterministic trend leaks into the Allan variance (a mean square, not a
                variance): at long τ the Allan–Krobka dispersion is significantly below the
                Allan deviation, by more than a rate random walk's own random trend would
-               explain (or R is identified); try ``--detrend linear``.
+               explain; try ``--detrend linear``.
 KROBKA-M6      the model misfits (χ² test or runs beyond 3 CI): the five-slope basis is
                incomplete and unmodelled noise becomes parameter error; the diagnosis names
                the missing term.
@@ -175,15 +175,17 @@ def _bias_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) ->
     if not B.identified or share < 0.5:
         parts = ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(shares.items(),
                                                                     key=lambda kv: -kv[1]))
-        at_end = tmin >= fit.fit_range[1] * (1 - 1e-9)
-        what = (f"σ falls to the end of the fitted range (τ = {_g(tmin)} s) without reaching a "
-                f"plateau (model there: {parts})" if at_end else
+        falling = tmin >= fit.fit_range[1] * (1 - 1e-9) or any(
+            k in ("N", "Q") and v >= 0.9 for k, v in shares.items())
+        what = (f"σ is still falling at its minimum (τ = {_g(tmin)} s; model there: {parts}), "
+                "no plateau was reached" if falling else
                 f"the minimum is a crossover, not a plateau: at τ = {_g(tmin)} s the model is "
                 f"{parts}")
         out.append(KrobkaWarning(
             "KROBKA-M4", "no bias-instability plateau",
             f"{what}; B_tangent = σ_min/0.664 = {_g(Bt)} deg/h is only an upper bound; joint "
-            f"fit: {B.text()}. {floor_txt}", reason, ev))
+            f"fit: {B.text()}. {floor_txt}", reason, ev,
+            severity="info" if falling and not B.identified else "warning"))
     elif ratio < B_RATIO_WARN:
         out.append(KrobkaWarning(
             "KROBKA-M4", "tangent over-estimates B",
@@ -361,12 +363,11 @@ def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=Non
     # a rate random walk realisation has a random end-to-end trend too: least-squares slope of
     # Brownian motion over T has variance 6K²/(5T); require the ramp to stand 3σ above it
     K = fit.term("K")
-    R_term = fit.term("R")
     T = float(record_s) if record_s else 4.0 * float(np.nanmax(fit.tau))
     # K: its value, or its upper bound when the fit could not establish it
     k_int = (0.0 if K is None else K.value if K.identified else (K.upper or 0.0)) / 60.0
     R_rrw = 3.0 * k_int * math.sqrt(6.0 / (5.0 * T)) * 3600.0
-    if not ((R_term is not None and R_term.identified) or R_est > R_rrw):
+    if R_est <= R_rrw:  # a rate random walk of the fitted size explains the trend
         return
     out.append(KrobkaWarning(
         "KROBKA-M7", "deterministic trend in the Allan variance",
@@ -402,6 +403,8 @@ def _misfit_checks(fit: NoiseFit, out: list[KrobkaWarning], diagnosis=None) -> N
 
 
 def _component_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
+    if not fit.consistent:
+        return  # a misfitting model trades terms anyway: KROBKA-M6 says so
     for t in fit.terms:
         if t.key == "N" or t.coef <= 0:
             continue

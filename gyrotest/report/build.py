@@ -64,7 +64,7 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
 
     def step(name: str, fn, announce: bool = True):
         if progress and announce:
-            progress(name.replace("_", " "))
+            progress(name.replace("scale_factor", "scale factor"))
         try:
             return fn()
         except GyrotestError as e:
@@ -274,10 +274,13 @@ class Builder:
             txt = ", ".join(x for x in [site.get("name"), (
                 f"latitude {site['latitude_deg']:g}°" if "latitude_deg" in site else None)] if x)
             ident.append(("Site", txt))
-        tested = [s for s in ("scale_factor", "bias", "allan", "thermal", "magnetic", "supply",
-                              "multiposition") if s in self.c.tests]
-        ident.append(("Tests", f"{len(tested)} of 7 test types run; "
-                      + ", ".join(t.replace("_", " ") for t in tested)))
+        names = {"scale_factor": "scale factor", "bias": "bias", "allan": "random drift (Allan)",
+                 "thermal": "thermal", "magnetic": "magnetic", "supply": "supply voltage",
+                 "multiposition": "IA alignment (multi-position)"}
+        tested = [v for k, v in names.items() if k in self.c.tests]
+        missing = [v for k, v in names.items() if k not in self.c.tests]
+        ident.append(("Tests", (", ".join(tested) or "none")
+                      + (f"; not tested: {', '.join(missing)}" if missing else "")))
         ident.append(("Software", f"gyrotest {__version__}"))
         ident.append(("Campaign file", f"{self.c.path.name} (SHA-256 {self.c.sha256[:16]}…)"))
         prov = {
@@ -301,6 +304,8 @@ class Builder:
         """One line: overall verdict and counts."""
         v = [c.verdict for c in self.checks]
         n_lim = sum(1 for c in self.checks if c.limit is not None)
+        if not n_lim:
+            return "no limits given in the campaign"
         parts = [f"{sheet.overall()}: {v.count('PASS')} of {n_lim} limited items pass"]
         for k in ("FAIL", "INCONCLUSIVE"):
             if v.count(k):
@@ -687,11 +692,35 @@ class Builder:
                                digits=3)])
         if not imp.get("strapdown"):
             sec.add(P("No vehicle rates given ([tests.allan] vehicle_rates): only the "
-                         "platform case is predicted.", "note"))
+                      "platform case is predicted.", "note"))
         sec.add(T(["system", "vehicle rate", f"attitude error σ after {fmt_number(hz)} s",
                        "σ ratio strapdown/platform", "σ with the bounds at their limit"], rows,
                       title="Predicted attitude error of three such gyros (first order)",
                       widths=[3.2, 1.3, 2.0, 1.5, 1.8], key="impact"))
+        comps = imp.get("components", [])
+        if comps:
+            rates = imp.get("strapdown", [])
+            crow = []
+            for i, c in enumerate(comps):
+                cp = ip + ["components", i]
+                crow.append([c["term"] + ("  (S(0) = 0)" if c.get("zero_dc_psd") else ""),
+                             s.num(cp + ["platform_sigma_deg"], "", digits=3)]
+                            + [s.num(cp + ["strapdown_sigma_deg", j], "", digits=3)
+                               for j in range(len(rates))])
+            sec.add(T(["component", "platform σ, °"]
+                      + [f"strapdown at {fmt_number(r['vehicle_rate_deg_s'], 3)} °/s, σ, °"
+                         for r in rates], crow,
+                      title=f"Contribution of each noise component after {fmt_number(hz)} s",
+                      unit_in_header=True, key="impact_components"))
+        tab = ax.get("table", [])
+        k100 = next((i for i, row in enumerate(tab) if abs(row["tau"] / 100.0 - 1) < 0.01
+                     and row.get("sigma") is not None), None)
+        if k100 is not None:
+            sec.add(P("For comparison, the drift in the old integral sense, σ(τ = "
+                      f"{s.t(base + ['table', k100, 'tau'], 's')}) = "
+                      f"{s.t(base + ['table', k100, 'sigma'], U_DPH)}, is one number: it cannot "
+                      "tell how the error grows in a strapdown system, where the components "
+                      "above add differently.", "note"))
         for fl in imp.get("flags", []):
             sec.add(P(fl.get("text", ""), "note"))
         sec.add(P("Assumptions: " + "; ".join(imp.get("assumptions", [])) + ". Method: "
@@ -973,9 +1002,15 @@ class Builder:
                 txt = ("− " + txt[1:]) if txt.startswith("−") else ("+ " + txt)
             return ("≤ " if n.bound else "") + txt
 
-        def eq(key: str) -> str:
+        def eq(key: str, unit: str) -> str:
             t = v(key)
-            return t if t.startswith("≤") else "= " + t
+            if t == "(not tested)":
+                return "not tested"
+            return (t if t.startswith("≤") else "= " + t) + " " + unit
+
+        def vu(key: str, unit: str, digits: int = 3) -> str:
+            t = v(key, digits)
+            return t if t == "(not tested)" else f"{t}{unit}"
 
         def have(*keys: str) -> bool:
             return any(c.get(k) is not None and c[k].value is not None for k in keys)
@@ -985,7 +1020,7 @@ class Builder:
         pulse = u == "arcsec/pulse"
         lhs = "S0·ΔN/Δt" if pulse or not u else "S0·V"
         t0 = self.c.tests.get("thermal")
-        t0v = fmt_number(float(t0.opt("t0", 21.0))) if t0 else "T_ref"
+        t0v = f"{fmt_number(float(t0.opt('t0', 21.0)))} °C" if t0 else "the reference"
         e_terms = []
         if have("D_T", "D_Tdot", "D_gradTdot"):
             e_terms.append(f"{v('D_T')}·ΔT {v('D_Tdot', 3, True)}·dT/dt "
@@ -1003,20 +1038,23 @@ class Builder:
             f"{lhs} = [I + E + D]·[1 + 10⁻⁶·ε_K]⁻¹",
             "",
             f"S0  = {fmt_number(s0) if s0 is not None else '(not given)'} {u} (nominal);"
-            f" fitted SF = {v('SF', 8)} {u}",
+            f" fitted SF = {vu('SF', ' ' + u, 8)}",
             "I   = ω_IRA + ω_XRA·sinΘ_Y − ω_YRA·sinΘ_X",
-            f"      IA azimuth misalignment = {v('theta', 3)}°",
+            f"      IA azimuth misalignment = {vu('theta', '°')}",
             "E   = D_T·ΔT + D_Ṫ·dT/dt + D_∇Ṫ·d(∇T)/dt + (w_x·H_x + w_y·H_y + w_z·H_z)/H0",
             f"    = {e_terms[0]}",
             *[f"      + {t}" for t in e_terms[1:]],
-            f"      [°/h; ΔT in °C from {t0v} °C, dT/dt in °C/h, H in µT]",
+            f"      [°/h; ΔT in °C from {t0v}, dT/dt in °C/h, H in µT]",
             "D   = D_F + D_R + D_Q",
-            f"D_F = {v('D_F', 4)} °/h",
-            f"D_R : N {eq('N')} °/√h, B {eq('B')} °/h,",
-            f"      K {eq('K')} (°/h)/√h, R {eq('R')} (°/h)/h",
-            f"D_Q : Q {eq('Q')} arcsec",
+            f"D_F = {vu('D_F', ' °/h', 4)}",
+            f"D_R : N {eq('N', '°/√h')}, B {eq('B', '°/h')},",
+            f"      K {eq('K', '(°/h)/√h')}, R {eq('R', '(°/h)/h')}",
+            f"D_Q : Q {eq('Q', 'arcsec')}",
             "ε_K = ε_0 + ε_T·ΔT + f(I)",
-            f"    = {v('eps0', 4)} {v('epsT', 3, True)}·ΔT + f(I) ppm   (f(I): §2)",
+            (f"    = {v('eps0', 4)} {v('epsT', 3, True)}·ΔT + f(I) ppm   (f(I): §2)"
+             if have("eps0") else "    = (scale factor not tested)")
+            if have("epsT") or not have("eps0") else
+            f"    = {v('eps0', 4)} + f(I) ppm   (ε_T not measured; f(I): §2)",
         ]
         sec.add(Equation(lines))
         rows = []

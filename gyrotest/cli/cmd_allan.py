@@ -137,6 +137,21 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
         from ..noise.plots import plot_psd
 
         plot_psd(items, psd_path)
+    if as_json:
+        _warnings(results, as_json)
+        emit_json({"analysis": "allan", "logs": [r.to_dict() for r in results],
+                   "files": {"csv": csv_path, "plot": plot_path, "psd": psd_path}})
+        return
+    for r in results:
+        _render(r)
+    _warnings(results, as_json)
+    for p, what in ((csv_path, "table"), (plot_path, "plot"), (psd_path, "PSD plot")):
+        if p:
+            note(f"{what} written to {p}")
+
+
+def _warnings(results, as_json: bool) -> None:
+    """Krobka's warnings on stderr (info-level ones as notes, not with --json)."""
     for r in results:
         for a in r.axes:
             for w in a.warnings:
@@ -144,15 +159,6 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
                     warn(f"{r.source} [{a.axis}] {w.code}: {w.title}: {w.message}")
                 elif not as_json:
                     note(f"{r.source} [{a.axis}] {w.code}: {w.message}")
-    if as_json:
-        emit_json({"analysis": "allan", "logs": [r.to_dict() for r in results],
-                   "files": {"csv": csv_path, "plot": plot_path, "psd": psd_path}})
-        return
-    for r in results:
-        _render(r)
-    for p, what in ((csv_path, "table"), (plot_path, "plot"), (psd_path, "PSD plot")):
-        if p:
-            note(f"{what} written to {p}")
 
 
 def _table_rows(r):

@@ -210,6 +210,7 @@ class Diagnosis:
             "candidates": [c.to_dict() for c in self.candidates],
             "steps": self.steps,
             "suggested_terms": self.final.requested,
+            "final_fit": None if self.final is self.base else self.final.to_dict(),
             "psd_line_hints_hz": list(self.line_hints),
         }
 

@@ -898,6 +898,7 @@ class NoiseFit:
         return ci_residuals(self.sigma, self.sigma_lo, self.sigma_hi, self.model_sigma())
 
     def term(self, label: str) -> FitTerm | None:
+        """The term with this label (e.g. "markov[2]") or key (first match), or None."""
         for t in self.terms:
             if t.label == label or (t.key == label and label != "markov"):
                 return t
@@ -909,18 +910,23 @@ class NoiseFit:
     # ---- statistics ---------------------------------------------------------------------
     @property
     def n_used(self) -> int:
+        """Number of τ that entered the fit."""
         return int(np.count_nonzero(self.used))
 
     @property
     def design_effect(self) -> float:
+        """n/n_eff ≥ 1: variance inflation of a mean over the correlated τ (Kish)."""
         return max(self.n_used / self.n_eff, 1.0)
 
     @property
     def chi2_dof(self) -> float:
+        """χ²/dof = L/(n − k) with the EDF-based variances of ln σ̂² (≈ 1 for a good model)."""
         return self.chi2 / self.dof if self.dof > 0 else math.nan
 
     @property
     def p_value(self) -> float:
+        """P(χ² ≥ observed) with the Satterthwaite approximation for correlated terms:
+        χ² ~ a·χ²_{(n−k)/a}, a = tr(ρ²)/n (Satterthwaite 1946)."""
         a = max(self.satterthwaite, 1.0)
         d = self.dof / a
         if d <= 0:
@@ -929,14 +935,17 @@ class NoiseFit:
 
     @property
     def aic(self) -> float:
+        """Akaike: L/design_effect + 2k (k free parameters)."""
         return self.deviance / self.design_effect + 2.0 * self.n_free
 
     @property
     def bic(self) -> float:
+        """Schwarz: L/design_effect + k·ln n_eff."""
         return self.deviance / self.design_effect + self.n_free * math.log(max(self.n_eff, 2.0))
 
     @property
     def fit_range(self) -> tuple[float, float]:
+        """(τ_min, τ_max) of the fitted τ, s."""
         t = self.tau[self.used]
         return float(t.min()), float(t.max())
 
@@ -949,6 +958,7 @@ class NoiseFit:
         return (not math.isfinite(self.p_value) or self.p_value >= 0.01) and not run
 
     def label_string(self) -> str:
+        """The fitted terms' labels, comma-separated (for --terms)."""
         return ",".join(t.label for t in self.terms)
 
     def to_dict(self) -> dict[str, Any]:

@@ -1188,11 +1188,11 @@ class Builder:
         nolim = [c for c in self.checks if c.limit is None and c.verdict != NOT_TESTED
                  and c.key.split(".")[1] in LIMITS.get(c.key.split(".")[0], {})]
         if nolim:
-            sec.add(P("No limit given for: " + ", ".join(sorted({c.label for c in nolim}))
-                         + "."))
+            sec.add(P("No limit given for: " + "; ".join(sorted({c.label for c in nolim}))
+                      + "."))
         nt = sorted({c.label for c in self.checks if c.verdict == NOT_TESTED})
         if nt:
-            sec.add(P("Not tested: " + ", ".join(nt) + "."))
+            sec.add(P("Not tested: " + "; ".join(nt) + "."))
         return sec
 
 

@@ -70,6 +70,7 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     quiet = settings().quiet
 
     def progress(name: str) -> None:
+        """One note per analysis on stderr (not with --json or -q)."""
         if not quiet and not as_json:
             note(f"report: {name} …")
 

@@ -43,6 +43,7 @@ class Analysis:
     seconds: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form (the argv starts with "gyrotest")."""
         return {"key": self.key, "test": self.test, "command": self.command,
                 "argv": ["gyrotest", *self.argv], "seconds": self.seconds}
 
@@ -182,6 +183,7 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
     paths = test.logs
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         logs = [cache.get(p, opts) for p in paths]
         res, obj = _bias_core(logs, skip=test.opt("skip", "0"), settle=test.opt("settle", "0"),
                               axis=test.opt("axis"),
@@ -208,6 +210,7 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     detrend = test.opt("detrend", "none")
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         skip_s = parse_duration(skip, what="--skip")
         horizon_s = parse_duration(test.opt("horizon", "1h"), what="--horizon")
         if horizon_s <= 0:
@@ -247,6 +250,7 @@ def run_scale_factor(test: Test, campaign: Campaign, cache: LogCache) -> Analysi
     opts, iargv = ingest_opts(test, campaign)
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         settle = parse_duration(test.opt("settle", "10s"), what="--settle")
         trim_end = parse_duration(test.opt("trim_end", "0s"), what="--trim-end")
         min_dwell = parse_duration(test.opt("min_dwell", "2s"), what="--min-dwell")
@@ -320,6 +324,7 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
     setpoints = test.opt("setpoints")
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         sp = th = None
         logs = []
         grad = tuple(test.opt("gradient")) if test.opt("gradient") else None
@@ -360,6 +365,7 @@ def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, work: WorkCac
     path = test.logs[0]
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         specs = collect_terms((terms,), ())
         g = cache.get(path, opts, specs)
         wd = work.get(g, path, _prep_opts(test, t_ref=t_ref), specs)
@@ -400,6 +406,7 @@ def run_magnetic(test: Test, campaign: Campaign, cache: LogCache, work: WorkCach
     path = test.logs[0]
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         extra = split_terms(test.opt("with")) if test.opt("with") else []
         specs = parse_terms(["Hx", "Hy", "Hz"] + extra)
         settle_s = parse_duration(test.opt("settle", "10s"), what="--settle")
@@ -425,6 +432,7 @@ def run_info(path: Path, test: Test, campaign: Campaign, cache: LogCache) -> Ana
     opts, iargv = ingest_opts(test, campaign)
 
     def go():
+        """The command body: returns (result, objects, logs)."""
         g = cache.get(path, opts)
         return g.summary(), g, [g]
 

@@ -63,6 +63,7 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
     out: dict[str, ad.Analysis] = {}
 
     def step(name: str, fn, announce: bool = True):
+        """Run one adapter; a gyrotest error is re-raised naming the campaign and test."""
         if progress and announce:
             progress(name.replace("scale_factor", "scale factor"))
         try:
@@ -234,6 +235,7 @@ class Builder:
             self.warnings.append(w)
 
     def sf_unit(self) -> str:
+        """Sheet spelling of the scale-factor unit (from the analysis, else the campaign)."""
         sf = self.an.get("scale_factor")
         u = sf.result.get("scale_factor_unit") if sf else self.c.gyro.get("scale_factor_unit")
         return SF_UNIT_TEXT.get(u or "", u or "")
@@ -325,6 +327,7 @@ class Builder:
 
     # ---------------------------------------------------------------- 2 scale factor
     def scale_factor(self, sec: Section) -> Section:
+        """Section 2: the §5.3.2 items, per-run lines, f(I) model and the linearity figure."""
         a = self.an.get("scale_factor")
         if a is None:
             for key, lab, ieee in (("scale_factor_error_ppm", "scale-factor error ε0",
@@ -480,11 +483,13 @@ class Builder:
 
     # ---------------------------------------------------------------- 3 drift
     def drift(self, sec: Section) -> Section:
+        """Section 3: bias (3.1), random drift (3.2), noise structure (3.3), application (3.4)."""
         self.bias(sec.sub("Bias D_F", "§5.3.3.1.1"))
         self.random_drift(sec)
         return sec
 
     def bias(self, sec: Section) -> None:
+        """Subsection 3.1: D_F ± 1σ, repeatability, per-run table, multi-position cross-check."""
         a = self.an.get("bias")
         if a is None:
             self.check("bias", "bias_dph", "bias D_F", "§5.3.3.1.1", None, sec.number)
@@ -561,6 +566,7 @@ class Builder:
                 self.warn("bias", f"{Path(run['source']).name}: {n}")
 
     def random_drift(self, parent: Section) -> None:
+        """Subsections 3.2-3.4 from the Allan analysis: N, B, K, R, Q with ≤ for bounds."""
         a = self.an.get("allan")
         sec = parent.sub("Random drift D_R and quantization D_Q", "§5.3.3.1.2, §5.3.3.1.3")
         labels = {"N": ("angle random walk N", "§5.3.3.1.2 a", U_ARW),
@@ -627,6 +633,7 @@ class Builder:
                     "the residual per τ in units of the confidence interval.")
 
     def noise_structure(self, sec: Section, a, s: Src, base: list, ax: dict) -> None:
+        """Subsection 3.3: Krobka's noise-structure table (value, status, τ range, S(0))."""
         terms = ax["fit"]["terms"]
         rows = []
         for i, t in enumerate(terms):
@@ -674,6 +681,7 @@ class Builder:
             sec.add(P(ln))
 
     def application(self, sec: Section, a, s: Src, base: list, ax: dict) -> None:
+        """Subsection 3.4: platform vs strapdown attitude error at the vehicle rates."""
         imp = ax.get("impact")
         if not imp:
             _not_tested(sec, "the analysis gave no impact prediction.")
@@ -728,6 +736,7 @@ class Builder:
 
     # ---------------------------------------------------------------- 4 environment
     def environment(self, sec: Section) -> Section:
+        """Section 4: thermal, magnetic, supply and model-history subsections."""
         self.thermal(sec.sub("Thermal: D_T, D_Ṫ, D_∇Ṫ and the Antonova–Matveev model"))
         self.magnetic(sec.sub("Magnetic field: w_x, w_y, w_z"))
         self.supply(sec.sub("Supply voltage"))
@@ -740,6 +749,7 @@ class Builder:
         return sec
 
     def thermal(self, sec: Section) -> None:
+        """Subsection 4.1: IEEE E terms and the Antonova–Matveev coefficients."""
         a = self.an.get("thermal")
         ieee_lab = {"D_T": ("drift temperature sensitivity D_T", "(°/h)/°C"),
                     "D_Tdot": ("temperature-ramp sensitivity D_Ṫ", "(°/h)/(°C/h)"),
@@ -820,6 +830,7 @@ class Builder:
                 self.figure(sec, f, caps.get(f.key, ""))
 
     def magnetic(self, sec: Section) -> None:
+        """Subsection 4.2: w_x, w_y, w_z with the reversal and hysteresis cross-checks."""
         a = self.an.get("magnetic")
         if a is None:
             for k in ("wx", "wy", "wz"):
@@ -869,6 +880,7 @@ class Builder:
                     "applied field, per axis, with the fitted sensitivity.")
 
     def supply(self, sec: Section) -> None:
+        """Subsection 4.3: supply-voltage sensitivity ('model fit --terms V')."""
         a = self.an.get("supply")
         if a is None:
             self.check("supply", "supply_dph_per_v", "supply-voltage sensitivity", "§8.3 E",
@@ -891,6 +903,7 @@ class Builder:
             self.warn("model fit (supply)", w)
 
     def history(self, sec: Section) -> None:
+        """Subsection 4.4: the model-fit steps of the thermal run, error falling."""
         steps = [self.an[k] for k in sorted((k for k in self.an if k.startswith("thermal.step")),
                                             key=lambda k: int(k[len("thermal.step"):]))]
         if not steps:
@@ -925,6 +938,7 @@ class Builder:
 
     # ---------------------------------------------------------------- 5 alignment
     def alignment(self, sec: Section) -> Section:
+        """Section 5: IA alignment from the multi-position fit."""
         a = self.an.get("multiposition")
         mp = a.result.get("multi_position") if a else None
         if mp is None:
@@ -991,9 +1005,11 @@ class Builder:
 
     # ---------------------------------------------------------------- 1 model equation
     def model_equation(self, sec: Section) -> None:
+        """Section 1: the §8.3 model equation with the coefficients of sections 2-5."""
         c = self.coef
 
         def v(key: str, digits: int = 3, signed: bool = False) -> str:
+            """A coefficient as equation text (signed: with its sign operator)."""
             n = c.get(key)
             if n is None or n.value is None:
                 return "(not tested)"
@@ -1003,16 +1019,19 @@ class Builder:
             return ("≤ " if n.bound else "") + txt
 
         def eq(key: str, unit: str) -> str:
+            """"= value unit", "≤ bound unit" or "not tested"."""
             t = v(key)
             if t == "(not tested)":
                 return "not tested"
             return (t if t.startswith("≤") else "= " + t) + " " + unit
 
         def vu(key: str, unit: str, digits: int = 3) -> str:
+            """Value with unit, or "(not tested)"."""
             t = v(key, digits)
             return t if t == "(not tested)" else f"{t}{unit}"
 
         def have(*keys: str) -> bool:
+            """True when any of the coefficients was measured."""
             return any(c.get(k) is not None and c[k].value is not None for k in keys)
 
         u = self.sf_unit()
@@ -1079,6 +1098,7 @@ class Builder:
 
     # ---------------------------------------------------------------- 6 conditions
     def conditions(self, sec: Section) -> Section:
+        """Section 6: logs as read, input files with SHA-256, equivalent commands."""
         titles = {"bias": "bias runs", "allan": "Allan run", "scale_factor": "rate-table runs",
                   "thermal": "thermal-chamber run", "magnetic": "Helmholtz-coil run",
                   "multiposition": "multi-position run", "supply": "supply-voltage run"}
@@ -1145,6 +1165,7 @@ class Builder:
         return sec
 
     def identity_checks(self) -> None:
+        """Warn when a log's profile names another model, serial or S0 than the campaign."""
         g = self.c.gyro
         seen = set()
         for a in self.an.values():
@@ -1168,6 +1189,7 @@ class Builder:
 
     # ---------------------------------------------------------------- 7, 8
     def warnings_section(self, sec: Section) -> Section:
+        """Section 7: warnings first, then notes, with their source."""
         if not self.warnings:
             sec.add(P("None."))
             return sec
@@ -1179,6 +1201,7 @@ class Builder:
         return sec
 
     def compliance(self, sec: Section) -> Section:
+        """Section 8: every item with a limit, the verdict rule, and what was not tested."""
         limited = [c for c in self.checks if c.limit is not None]
         if not limited:
             sec.add(P("No limits given in the campaign: every item reads \"no limit given\"."))

@@ -240,6 +240,7 @@ class Campaign:
             return str(p)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form (paths relative to the campaign directory)."""
         return {"file": str(self.path), "sha256": self.sha256, "campaign": self.meta,
                 "gyro": self.gyro, "site": self.site,
                 "tests": {k: {"logs": [self.rel(p) for p in t.logs],

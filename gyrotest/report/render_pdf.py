@@ -219,10 +219,12 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
             self._pages: list[dict] = []
 
         def showPage(self):
+            """Keep the page state; decorate once the page count is known."""
             self._pages.append(dict(self.__dict__))
             self._startPage()
 
         def save(self):
+            """Draw header and footer ("page X of Y") on every page, then save."""
             n = len(self._pages)
             pages.append(n)
             for state in self._pages:

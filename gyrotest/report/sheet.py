@@ -108,6 +108,7 @@ class Num:
         return t
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         d: dict[str, Any] = {"value": self.value, "unit": self.unit, "text": self.text()}
         if self.sigma is not None:
             d["sigma"] = self.sigma
@@ -132,6 +133,7 @@ class Para:
     nums: list[Num] = field(default_factory=list)  # the numbers quoted in the text
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         d: dict[str, Any] = {"type": "paragraph", "text": self.text, "style": self.style}
         if self.nums:
             d["numbers"] = [n.to_dict() for n in self.nums]
@@ -159,6 +161,7 @@ class Table:
         return str(c)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"type": "table", "key": self.key, "title": self.title, "columns": self.columns,
                 "rows": [[c.to_dict() if isinstance(c, Num) else c for c in r]
                          for r in self.rows], "note": self.note,
@@ -172,6 +175,7 @@ class Equation:
     lines: list[str]
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"type": "equation", "lines": self.lines}
 
 
@@ -188,6 +192,7 @@ class Figure:
     number: int = 0
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"type": "figure", "key": self.key, "number": self.number,
                 "caption": self.caption, "embedded": self.png is not None}
 
@@ -206,6 +211,7 @@ class Check:
 
     @property
     def verdict(self) -> str:
+        """PASS / FAIL / INCONCLUSIVE / "no limit given" / "not tested"."""
         m = self.measured
         if m is None or m.value is None or not math.isfinite(m.value):
             return NOT_TESTED
@@ -216,6 +222,7 @@ class Check:
         return INCONCLUSIVE if m.bound else FAIL
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"key": self.key, "item": self.label, "ieee": self.ieee, "section": self.section,
                 "measured": self.measured.to_dict() if self.measured else None,
                 "limit": self.limit, "unit": self.unit, "verdict": self.verdict}
@@ -248,6 +255,7 @@ class Section:
 
     @property
     def heading(self) -> str:
+        """Number, title and IEEE 952 reference."""
         t = f"{self.number} {self.title}"
         if self.ieee:
             t += f" (IEEE 952 {self.ieee})"
@@ -260,6 +268,7 @@ class Section:
             yield from s.walk()
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"number": self.number, "title": self.title, "ieee": self.ieee,
                 "status": self.status, "blocks": [b.to_dict() for b in self.blocks],
                 "subsections": [s.to_dict() for s in self.subsections]}
@@ -297,6 +306,7 @@ class Sheet:
         return NO_LIMIT
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
         return {"format": "gyrotest-spec-sheet", "version": 1, "title": self.title,
                 "title_block": [{"label": a, "text": b} for a, b in self.identity],
                 "overall_verdict": self.overall(), "verdict_rule": VERDICT_RULE,

@@ -7,6 +7,7 @@ Not part of the test suite. Run from the repository root:
     python benchmarks/bench_oadev.py --big           # also 10^8 samples (needs ~6 GB for AllanTools)
     python benchmarks/bench_oadev.py --sweep-chunks  # chunk-size sweep of the OADEV kernel
     python benchmarks/bench_oadev.py --only-tot      # TOTDEV/MTOTDEV scaling only
+    python benchmarks/bench_oadev.py --sizes 1e8 --repeat 2   # OADEV at the given sizes only
 
 Method
 ------
@@ -144,12 +145,12 @@ def bench_oadev(sizes, grids, repeat):
 
 def bench_tot(repeat):
     print("\nTOTDEV and MTOTDEV, octave tau, gyrotest (noise ID off): time vs N (O(N) per tau)")
-    print(f"{'kind':>8} {'N':>9} {'#tau':>5} {'seconds':>9} {'s per tau per 1e6 samples':>27}")
+    print(f"{'kind':>8} {'N':>9} {'#tau':>5} {'wall s':>8} {'cpu s':>7} {'cpu s per tau per 1e6 samples':>31}")
     for kind in ("totdev", "mtotdev"):
         for n in (2.5e5, 5e5, 1e6):
             r = spawn("gyrotest", n, "octave", "time", kind=kind, repeat=1 if kind == "mtotdev" else repeat)
-            print(f"{kind:>8} {int(n):>9} {r['n_tau']:>5} {r['seconds']:>9.2f} "
-                  f"{r['seconds'] / r['n_tau'] / (n / 1e6):>27.3f}", flush=True)
+            print(f"{kind:>8} {int(n):>9} {r['n_tau']:>5} {r['seconds']:>8.2f} {r['cpu_seconds']:>7.2f} "
+                  f"{r['cpu_seconds'] / r['n_tau'] / (n / 1e6):>31.3f}", flush=True)
     r = spawn("allantools", 1e6, "octave", "time", kind="totdev", repeat=repeat)
     print(f"AllanTools totdev 1e6 octave: {r['seconds']:.2f} s ({r['n_tau']} tau)")
     r = spawn("allantools", 2000, "octave", "time", kind="mtotdev", repeat=1)
@@ -176,6 +177,7 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--chunk", type=int, default=0)
     ap.add_argument("--big", action="store_true", help="also run 10^8 samples")
+    ap.add_argument("--sizes", default="", help="comma-separated N list for OADEV, e.g. 1e8")
     ap.add_argument("--sweep-chunks", action="store_true")
     ap.add_argument("--only-tot", action="store_true")
     args = ap.parse_args(argv)
@@ -188,8 +190,13 @@ def main(argv=None):
         sweep_chunks(1e7, args.repeat)
         return
     if not args.only_tot:
-        sizes = [1e7] + ([1e8] if args.big else [])
+        if args.sizes:
+            sizes = [float(v) for v in args.sizes.split(",")]
+        else:
+            sizes = [1e7] + ([1e8] if args.big else [])
         bench_oadev(sizes, ["octave", "decade10"], args.repeat)
+        if args.sizes:
+            return
     bench_tot(args.repeat)
 
 

@@ -977,7 +977,8 @@ def compute_deviation(
     bias_correction : TOTDEV/MTOTDEV only. False (default) gives the plain estimators, as
         Stable32's "no bias correction" and the NBS14 reference values. True divides the
         variance by the SP1065 bias factor for the identified α: TOTDEV 1 − a·τ/T with
-        a = 0.481 (α = −1) or 0.750 (α = −2), T the segment length (no bias for α ≥ 0);
+        a = 0.481 (α = −1) or 0.750 (α = −2), T the (longest) segment length (no bias for
+        α ≥ 0);
         MTOTDEV 0.94, 0.83, 0.73, 0.70, 0.69 for α = 2 … −2 (Howe & Vernotte 1999).
 
     Returns a :class:`DeviationResult`. Units: σ in the rate unit of the input (rate input) or
@@ -1046,7 +1047,13 @@ def compute_deviation(
     hadamard = kind in ("hdev", "ohdev", "hkdev")
     alpha_min = -4 if hadamard else -2
     if alpha is not None:
-        a_arr = np.broadcast_to(np.asarray(alpha, dtype=np.int64), m_arr.shape).copy()
+        a_in = np.asarray(alpha, dtype=np.int64)
+        if a_in.ndim and a_in.size != m_arr.size:
+            raise InputError(
+                f"forced alpha has {a_in.size} values for {m_arr.size} τ (after rounding τ to "
+                "multiples of τ0 and merging duplicates); give one α per τ or a single α"
+            )
+        a_arr = np.broadcast_to(a_in, m_arr.shape).copy()
         if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
             raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
         a_methods = ["forced"] * len(m_arr)

@@ -526,7 +526,11 @@ def _rn_theory_fpm(m: int) -> float:
 
 
 def b1_noise_id(
-    y_avg: np.ndarray, m: int, *, mu_max: int = 1, rn_ratio: float | None = None
+    y_avg: np.ndarray,
+    m: int,
+    *,
+    mu_max: int = 1,
+    rn_ratio: float | Callable[[], float] | None = None,
 ) -> NoiseId:
     """B1-ratio noise identification for short series (Barnes 1969; Howe, Beard, Greenhall &
     Riley 2000), with the R(n) ratio to split white from flicker angle noise.
@@ -536,6 +540,7 @@ def b1_noise_id(
     boundaries are geometric means of neighbouring theoretical values. μ maps to α = −μ − 1
     (μ = −2 means α = 2 or 1, decided by R(n) = MVAR/AVAR against 1/m (white) and the flicker
     value, boundary their geometric mean; without ``rn_ratio`` α = 1 is returned).
+    ``rn_ratio`` may be a zero-argument callable: it is then evaluated only when needed.
     """
     y = np.asarray(y_avg, dtype=float)
     n = y.size
@@ -556,8 +561,9 @@ def b1_noise_id(
     if mu_sel == -2:
         if rn_ratio is None or m <= 1:
             return NoiseId(1, math.nan, 0, math.nan, "b1", n)
+        rn = rn_ratio() if callable(rn_ratio) else float(rn_ratio)
         bound = math.sqrt((1.0 / m) * _rn_theory_fpm(m))
-        return NoiseId(2 if rn_ratio < bound else 1, math.nan, 0, math.nan, "b1+rn", n)
+        return NoiseId(2 if rn < bound else 1, math.nan, 0, math.nan, "b1+rn", n)
     return NoiseId(-mu_sel - 1, math.nan, 0, math.nan, "b1", n)
 
 
@@ -615,7 +621,10 @@ def identify_noise(
         elif parts and max(p.size for p in parts) >= B1_MIN_POINTS:
             longest = max(parts, key=lambda p: p.size)
             y = longest if data_type == "frequency" else np.diff(longest)
-            rn = rn_ratio(m) if (rn_ratio is not None and m > 1) else None
+            rn = None
+            if rn_ratio is not None and m > 1:
+                def rn(f=rn_ratio, mm=m):  # evaluated only if B1 says white/flicker angle
+                    return f(mm)
             nid = b1_noise_id(y, m, mu_max=min(-alpha_min - 1, 3), rn_ratio=rn)
         elif prev is not None:
             nid = NoiseId(prev, math.nan, 0, math.nan, "reused", n_pts)

@@ -25,10 +25,11 @@ def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path |
 
 @click.command("report")
 @click.argument("campaign", type=str)
-@click.option("--pdf", "pdf_path", default=None, help="Write the sheet as PDF to this file.")
-@click.option("--html", "html_path", default=None,
+@click.option("--pdf", "pdf_path", default=None, metavar="FILE",
+              help="Write the sheet as PDF to this file.")
+@click.option("--html", "html_path", default=None, metavar="FILE",
               help="Write the sheet as one self-contained HTML file (figures embedded).")
-@click.option("--md", "md_path", default=None,
+@click.option("--md", "md_path", default=None, metavar="FILE",
               help="Write the Markdown to this file instead of stdout.")
 @click.option("--no-figures", is_flag=True,
               help="Leave the figures out of the HTML/PDF (faster).")

@@ -89,14 +89,15 @@ def test_simple_effects():
     assert np.allclose(tm.acceleration_power(np.array([2.0]), 2), [4.0])
 
 
-def test_thermal_branch_schmitt():
+def test_thermal_branch_play_operator():
     t = np.arange(0, 20000.0)
     T = np.interp(t, [0, 3000, 8000, 12000, 20000], [20, 20, 40, 30, 30])
-    s = tm.thermal_branch(T, 1.0, 60.0, 0.5)
+    s = tm.thermal_branch(T, 0.5)
     assert s[1000] == 0  # before any move
-    assert s[5000] == 1  # heating
-    assert s[10000] == -1  # cooling
-    assert s[15000] == -1  # steady after cooling: keeps the branch
+    assert s[5000] == pytest.approx(1)  # heating branch
+    assert s[8200] == pytest.approx((T[8200] - (40 - 0.5)) / 0.5)  # reversing: in between
+    assert s[10000] == pytest.approx(-1)  # cooling branch
+    assert s[15000] == pytest.approx(-1)  # steady after cooling: keeps the branch
 
 
 # ----------------------------------------------------------------------------- parsing

@@ -900,9 +900,10 @@ def _warnings(specs, coefs, vif, corr, names, thetas, fitter, rms_fit, rms_hold,
     for s in fitter.nl:
         (pname, val), = thetas[s.label].items()
         lo, hi = fitter.bounds[s.label][pname]
+        unit = s.effect.nonlinear[0].unit
         if s.effect.nonlinear[0].kind == "tau" and (val < lo * 1.05 or val > hi / 1.05):
-            out.append(f"{s.label}: {pname} = {val:.4g} s is at the edge of its search range "
-                       f"[{lo:.4g}, {hi:.4g}] s: not resolved by this log")
+            out.append(f"{s.label}: {pname} = {val:.4g} {unit} is at the edge of its search "
+                       f"range [{lo:.4g}, {hi:.4g}] {unit}: not resolved by this log")
     if math.isfinite(rms_hold) and rms_hold > 1.5 * rms_fit:
         out.append(f"held-out RMS {rms_hold:.3g} deg/h is {rms_hold / rms_fit:.2g}x the fit RMS: "
                    "the model over-fits or does not extrapolate between the time chunks")

@@ -379,24 +379,36 @@ def sinusoid(t_s: np.ndarray, freq_hz: float) -> np.ndarray:
     return np.column_stack([np.cos(w), np.sin(w)])
 
 
-def thermal_branch(temp_c: np.ndarray, dt: float, window_s: float, threshold_c_per_h: float,
+def thermal_branch(temp_c: np.ndarray, width_c: float,
                    bounds: list[tuple[int, int]] | None = None) -> np.ndarray:
-    """Heating/cooling branch indicator (thermal hysteresis).
+    """Heating/cooling branch state of a backlash (play) operator (thermal hysteresis).
 
-    Formula: s = +1 after dT/dt > +θ (heating), −1 after dT/dt < −θ (cooling), the previous
-    state otherwise (a Schmitt trigger on the smoothed rate), 0 before the first decision.
-    Units: dimensionless; coefficient = half the heating−cooling offset, deg/h. Source:
-    gyrotest; the hysteresis check PX4's thermal calibration lacks (peer-tools §7).
+    Formula: y_k = min(max(y_{k−1}, T_k − w), T_k + w), y_0 = T_0 (half-width w, fitted);
+    s = (T − y)/w ∈ [−1, +1]: +1 on a heating branch, −1 on a cooling branch, moving linearly
+    between them while the temperature reverses by 2w. Units: dimensionless, w in degC;
+    coefficient = half the heating − cooling offset, deg/h. Source: the play operator of
+    hysteresis modelling (Krasnosel'skii & Pokrovskii 1989; the simulator's thermal
+    hysteresis); the heating-vs-cooling check PX4's thermal calibration lacks (peer-tools §7).
     """
-    r = temperature_rate(temp_c, dt, window_s, bounds)
-    code = np.where(r > threshold_c_per_h, 1.0, np.where(r < -threshold_c_per_h, -1.0, np.nan))
-    out = np.zeros_like(r)
-    for a, b in bounds or [(0, len(r))]:
-        seg = code[a:b]
-        idx = np.where(np.isfinite(seg), np.arange(b - a), -1)
-        np.maximum.accumulate(idx, out=idx)
-        val = np.where(idx >= 0, seg[np.maximum(idx, 0)], 0.0)
-        out[a:b] = val
+    T = np.asarray(temp_c, dtype=np.float64)
+    out = np.empty_like(T)
+    for a, b in bounds or [(0, len(T))]:
+        if b <= a:
+            continue
+        seg = T[a:b].tolist()
+        y = seg[0]
+        ys = [0.0] * len(seg)
+        lo_off, hi_off = -width_c, width_c
+        for i, v in enumerate(seg):
+            lo = v + lo_off
+            if y < lo:
+                y = lo
+            else:
+                hi = v + hi_off
+                if y > hi:
+                    y = hi
+            ys[i] = y
+        out[a:b] = (T[a:b] - np.asarray(ys)) / width_c
     return out
 
 
@@ -490,8 +502,9 @@ _reg(Effect("sin", "periodic disturbance (sinusoid)", "a·cos 2πft + b·sin 2π
             ("a", "b"), "deg/h", "IEEE 952 Annex C sinusoid", "none", sinusoid,
             nonlinear=(NLParam("f_Hz", "Hz", "freq"),), smooth=True))
 _reg(Effect("hyst", "thermal hysteresis (heating vs cooling branch)",
-            "±1 on heating/cooling branch", ("D_hyst",), "deg/h",
-            "gyrotest (heating/cooling check)", "temperature", thermal_branch, smooth=True))
+            "play-operator branch state s ∈ [−1, 1], half-width w", ("D_hyst",), "deg/h",
+            "play operator; heating/cooling check", "temperature", thermal_branch,
+            nonlinear=(NLParam("width_c", "degC", "tau"),), smooth=True))
 _reg(Effect("rate", "scale-factor error on the input rate", "Ω_in·1e-6", ("eps_K",), "ppm",
             "IEEE 952 §8.3 ε_K", "table_rate", input_rate))
 _reg(Effect("rateT", "scale-factor temperature sensitivity", "Ω_in·(T − T_ref)·1e-6",
@@ -832,8 +845,7 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
     elif k == "sin":
         return sinusoid(frame.t, theta["f_Hz"])
     elif k == "hyst":
-        x = thermal_branch(frame.temperature[ch[0]], frame.dt, W,
-                           refs.hyst_threshold_c_per_h.get(ch[0], 0.1), frame.bounds)
+        x = thermal_branch(frame.temperature[ch[0]], theta["width_c"], frame.bounds)
     elif k == "rate":
         x = input_rate(frame.table_rate)
     elif k == "rateT":
@@ -861,8 +873,11 @@ def compiled(expr: str) -> SafeExpression:
 def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float) -> dict[str, tuple[float, float]]:
     """Search ranges of a term's nonlinear parameters for a record of ``duration_s`` fitted at
     ``resolution_s``: time constants from max(2·resolution, 10 s) to half the record (lag: up to
-    the record); frequency from 2/duration to 1/(4·resolution)."""
+    the record); frequency from 2/duration to 1/(4·resolution); hysteresis half-width 0.02 to
+    5 degC."""
     lo_tau = max(2.0 * resolution_s, 10.0)
+    if spec.key == "hyst":
+        return {"width_c": (0.02, 5.0)}
     if spec.key == "Tlag":
         return {"tau_s": (lo_tau, max(lo_tau * 2, duration_s))}
     if spec.key == "warmup":

@@ -42,6 +42,8 @@ class MeanUncertainty:
     record_s: float
     method: str
     naive_sigma_dph: float  # σ/√n, for comparison (wrong for correlated noise)
+    bound_sigma_dph: float = 0.0  # with the bound-only noise terms at their 95 % upper limits
+    bounded_terms: list[str] = field(default_factory=list)
     N_dph_rt_s: float = 0.0  # fitted white-rate coefficient, (deg/h)·√s
     flicker_level_dph: float = 0.0  # fitted flat Allan level, deg/h
     K_dph_per_rt_s: float = 0.0  # fitted rate-random-walk coefficient, (deg/h)/√s
@@ -52,6 +54,8 @@ class MeanUncertainty:
             "record_s": self.record_s,
             "method": self.method,
             "naive_sigma_over_sqrt_n_dph": self.naive_sigma_dph,
+            "sigma_mean_upper_bound_dph": self.bound_sigma_dph,
+            "bound_only_noise_terms": self.bounded_terms,
             "model": {
                 "N_deg_per_rt_h": self.N_dph_rt_s / 60.0,
                 "allan_floor_dph": self.flicker_level_dph,
@@ -65,14 +69,16 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     """Standard uncertainty (1σ, deg/h) of the mean of ``rate`` (deg/h, interval ``tau0`` s).
 
     Method: overlapping Allan deviation on an octave τ grid up to a quarter of the record
-    (gap-aware pooling over ``segments``), a non-negative weighted fit of
-    ``σ²(τ) = N²/τ + F² + K²τ/3`` (white rate, flat/flicker, rate random walk; weights from the
-    estimator's χ² confidence, NIST SP1065), evaluated at τ = T, the record length:
-    ``u = sqrt(N²/T + F² + K²T/3)``. σ_A²(T) is the variance of a mean over T for white and
-    random-walk noise (IEEE 952 Annex C relations), so this is honest for correlated noise,
-    unlike σ/√n. Never smaller than the white-noise value σ(τ0)·sqrt(τ0/T).
+    (gap-aware pooling over ``segments``), the joint χ²-likelihood noise-model fit of
+    :func:`gyrotest.noise.fit.fit_deviation` with white rate, bias-instability and rate-random-walk
+    terms (N, B, K), evaluated at τ = T, the record length: ``u = sqrt(σ²_model(T))``. σ_A²(T)
+    is the variance of a mean over T for white rate noise (N²/T), rate random walk started at
+    the record start (K²T/3) and Markov noise with T ≫ T_c (IEEE 952 Annex C relations), so this
+    is honest for correlated noise, unlike σ/√n. Never smaller than the white-noise value
+    σ(τ0)·sqrt(τ0/T).
     """
     from .noise.deviations import compute_deviation
+    from .noise.fit import fit_deviation
 
     rate = np.asarray(rate, dtype=np.float64)
     n = rate.size
@@ -83,31 +89,28 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     naive = float(np.std(rate, ddof=1) / math.sqrt(n))
     segs = segments or [(0, n)]
     dev = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus="octave",
-                            stop_ratio=4, segments=segs, noise_id=False)
-    tau = np.asarray(dev.tau, float)
-    sig = np.asarray(dev.sigma, float)
-    ok = np.isfinite(sig) & (sig > 0)
-    tau, sig = tau[ok], sig[ok]
-    if tau.size == 0:
+                            stop_ratio=4, segments=segs)
+    ok = np.isfinite(dev.sigma) & (np.asarray(dev.sigma) > 0)
+    if not ok.any():
         raise AnalysisError("the rate is constant: the bias uncertainty cannot be estimated "
                             "(quantised to a single level? check the scale factor)")
-    nterms = np.asarray(dev.n, float)[ok]
-    # relative std of the Allan-variance estimate ~ sqrt(2/edf); edf ~ number of terms*(τ0/τ)
-    edf = np.maximum(nterms * np.minimum(1.0, 1.5 * tau0 / tau), 1.0)
-    w = 1.0 / (sig**2 * np.sqrt(2.0 / edf))
-    A = np.column_stack([1.0 / tau, np.ones_like(tau), tau / 3.0]) * w[:, None]
-    from scipy.optimize import nnls
-
-    coef, _ = nnls(A, sig**2 * w)
-    var_T = coef[0] / T + coef[1] + coef[2] * T
-    white_floor = sig[0] ** 2 * tau[0] / T
+    fit = fit_deviation(dev, terms="N,B,K")
+    var_T = float(fit.predict_avar([T])[0][0])
+    var_bound = float(fit.predict_avar([T], conservative=True)[0][0])
+    white_floor = float(dev.sigma[ok][0] ** 2 * dev.tau[ok][0] / T)
     var_T = max(var_T, white_floor)
+    var_bound = max(var_bound, var_T)
+    par = {t.key: t.params.get(t.key, 0.0) for t in fit.terms}
     return MeanUncertainty(
         sigma_dph=math.sqrt(var_T), record_s=T,
-        method="Allan variance at the record length from a weighted N/flat/K fit of the "
-               "overlapping Allan deviation (octave τ up to T/4)",
-        naive_sigma_dph=naive, N_dph_rt_s=math.sqrt(coef[0]),
-        flicker_level_dph=math.sqrt(coef[1]), K_dph_per_rt_s=math.sqrt(coef[2]),
+        method="Allan variance at the record length, σ_A(T), from the joint N/B/K noise-model "
+               "fit of the overlapping Allan deviation (octave τ up to T/4)",
+        naive_sigma_dph=naive,
+        bound_sigma_dph=math.sqrt(var_bound),
+        bounded_terms=[t.key for t in fit.terms if t.status != "identified"],
+        N_dph_rt_s=par.get("N", 0.0) * 60.0,
+        flicker_level_dph=par.get("B", 0.0) * math.sqrt(2 * math.log(2) / math.pi),
+        K_dph_per_rt_s=par.get("K", 0.0) / 60.0,
     )
 
 
@@ -189,6 +192,11 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
     elif earth_rate:
         notes.append("no site given (--latitude/--ia): earth rate NOT removed; D_F includes it")
     unc = mean_uncertainty(rate, part.tau0, segs)
+    if unc.bound_sigma_dph > 3 * unc.sigma_dph and unc.bounded_terms:
+        notes.append(
+            f"noise term(s) {', '.join(unc.bounded_terms)} only bounded by this record: if they "
+            f"were at their 95 % upper limits the 1σ would be {unc.bound_sigma_dph:.3g} deg/h; "
+            "a longer record would resolve them")
     temps = [np.mean(v) for v in part.temperature.values()]
     return BiasResult(
         source=log.source, axis=axis, label=label or log.source, samples=part.n,

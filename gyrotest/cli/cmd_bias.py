@@ -136,7 +136,7 @@ def _render(runs, rep, multi):
     c.print(t)
     for r in runs:
         for n in r.notes:
-            warn(f"{r.label}: {n}")
+            (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
     if rep:
         c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs[/bold]: D_F mean "
                 f"{fmt_num(rep.mean_dph, 6)} deg/h, 1σ {fmt_num(rep.sigma_1_dph, 3)} deg/h, "

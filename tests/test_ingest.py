@@ -354,3 +354,16 @@ def test_ingest_cli_round_trip(tmp_path, rng):
 def test_profile_dataclass_roundtrip():
     p = Profile(columns={"rate": ["a"]}, gyro={"rate_unit": "deg/h"})
     assert p.output_kind() == "rate"
+
+
+def test_atomic_write_permissions(tmp_path):
+    import os
+
+    from gyrotest.output import write_text
+
+    old = os.umask(0o022)
+    try:
+        write_text(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(old)
+    assert (os.stat(tmp_path / "a.txt").st_mode & 0o777) == 0o644

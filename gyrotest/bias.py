@@ -88,13 +88,13 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     T = n * tau0
     naive = float(np.std(rate, ddof=1) / math.sqrt(n))
     segs = segments or [(0, n)]
-    dev = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus="octave",
+    dev = compute_deviation(rate, tau0, input_kind="rate", kind="oadev", taus="decade10",
                             stop_ratio=4, segments=segs)
     ok = np.isfinite(dev.sigma) & (np.asarray(dev.sigma) > 0)
     if not ok.any():
         raise AnalysisError("the rate is constant: the bias uncertainty cannot be estimated "
                             "(quantised to a single level? check the scale factor)")
-    fit = fit_deviation(dev, terms="N,B,K")
+    fit = fit_deviation(dev, terms="Q,N,B,K")
     var_T = float(fit.predict_avar([T])[0][0])
     var_bound = float(fit.predict_avar([T], conservative=True)[0][0])
     white_floor = float(dev.sigma[ok][0] ** 2 * dev.tau[ok][0] / T)
@@ -103,8 +103,8 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     par = {t.key: t.params.get(t.key, 0.0) for t in fit.terms}
     return MeanUncertainty(
         sigma_dph=math.sqrt(var_T), record_s=T,
-        method="Allan variance at the record length, σ_A(T), from the joint N/B/K noise-model "
-               "fit of the overlapping Allan deviation (octave τ up to T/4)",
+        method="Allan variance at the record length, σ_A(T), from the joint Q/N/B/K noise-model "
+               "fit of the overlapping Allan deviation (10 τ per decade up to T/4)",
         naive_sigma_dph=naive,
         bound_sigma_dph=math.sqrt(var_bound),
         bounded_terms=[t.key for t in fit.terms if t.status != "identified"],

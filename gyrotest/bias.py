@@ -427,3 +427,104 @@ def split_positions(log: GyroLog, settle_s: float = 0.0) -> list[tuple[str, Gyro
         part.site = Site(lat if lat is not None else float("nan"), az, el, name)
         out.append((name, part))
     return out
+
+
+# ----------------------------------------------------------------------------- the command
+@dataclass
+class BiasAnalysis:
+    """Everything ``gyrotest bias`` computes (and the spec-sheet report quotes): the D_F of
+    each run or position, and the repeatability over runs or the multi-position fit."""
+
+    runs: list[BiasResult]
+    repeatability: Repeatability | None
+    multi: MultiPositionResult | None
+    #: the logs the runs were estimated on (one per run, or one per position), for the plot
+    parts: list[GyroLog]
+    #: warm-up trim still inside ``parts`` (0 when they are position pieces, already trimmed)
+    parts_skip_s: float = 0.0
+
+    @property
+    def analysis(self) -> str:
+        """``multi-position``, ``repeatability`` or ``bias``."""
+        if self.multi:
+            return "multi-position"
+        return "repeatability" if self.repeatability else "bias"
+
+    def to_dict(self) -> dict:
+        """The JSON document of ``gyrotest bias --json``."""
+        return {
+            "analysis": self.analysis,
+            "runs": [r.to_dict() for r in self.runs],
+            "repeatability": self.repeatability.to_dict() if self.repeatability else None,
+            "multi_position": self.multi.to_dict() if self.multi else None,
+            "units": {"bias": "deg/h", "time": "s"},
+        }
+
+
+def parse_positions(positions: str | list[str] | None, n_logs: int) -> list[str] | None:
+    """The IA direction of each of ``n_logs`` logs from ``"up,down,..."`` (or a list); None
+    when not given. InputError when the count does not match."""
+    if not positions:
+        return None
+    pos_list = ([p.strip() for p in positions.split(",")] if isinstance(positions, str)
+                else [str(p).strip() for p in positions])
+    if len(pos_list) != n_logs:
+        raise InputError(f"--positions lists {len(pos_list)} direction(s) for {n_logs} file(s); "
+                         "give one IA direction per file")
+    return pos_list
+
+
+def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 0.0,
+                 axis: str | None = None, positions: str | list[str] | None = None,
+                 earth_rate: bool = True) -> BiasAnalysis:
+    """The whole bias analysis of ``gyrotest bias`` (no printing, no files).
+
+    * ``positions`` (one IA direction per log, :func:`parse_positions`) sets each log's IA;
+    * logs with a position column are trimmed by ``skip_s``, split into positions
+      (:func:`split_positions`, ``settle_s`` dropped after every change) and each position's
+      mean is taken without earth-rate removal (the multi-position fit separates it);
+    * otherwise D_F of each log after ``skip_s`` (:func:`estimate_bias`, earth rate removed
+      unless ``earth_rate`` is False);
+    * several IA directions (or a position column): :func:`multi_position`; several runs with
+      one IA: :func:`repeatability`.
+
+    The input logs are not modified.
+    """
+    import copy
+
+    pos_list = parse_positions(positions, len(logs))
+    if pos_list:
+        placed = []
+        for g, lab in zip(logs, pos_list):
+            az, el, name = parse_ia(lab)
+            if g.site is None:
+                raise InputError("--positions needs the site latitude: give --latitude")
+            g = copy.copy(g)
+            g.site = Site(g.site.latitude_deg, az, el, name)
+            placed.append(g)
+        logs = placed
+    runs: list[BiasResult] = []
+    parts: list[GyroLog] = []
+    has_pos_col = any(g.position is not None for g in logs)
+    if has_pos_col:
+        for g in logs:
+            if g.position is None:
+                raise InputError(f"{g.source}: no position column while other logs have one")
+            for label, part in split_positions(g.skip(skip_s), settle_s):
+                parts.append(part)
+                runs.append(estimate_bias(part, axis=axis, earth_rate=False,
+                                          label=f"{label} ({g.source})"))
+    else:
+        for g in logs:
+            parts.append(g)
+            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate))
+    sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
+             for r in runs if r.site is not None}
+    multi = rep = None
+    if has_pos_col or len(sites) > 1:
+        lat = next((r.site.latitude_deg for r in runs if r.site is not None
+                    and r.site.latitude_deg == r.site.latitude_deg), None)
+        multi = multi_position(runs, lat)
+    elif len(runs) > 1:
+        rep = repeatability(runs)
+    return BiasAnalysis(runs, rep, multi, parts, 0.0 if has_pos_col else skip_s)

@@ -6,9 +6,7 @@ import os
 
 import click
 
-from ..bias import estimate_bias, multi_position, repeatability, split_positions
-from ..earth import Site, parse_ia
-from ..errors import InputError
+from ..bias import analyse_bias, parse_positions
 from ..units import format_duration, parse_duration
 from .common import (
     console,
@@ -61,61 +59,20 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
         from ..plotting import check_plot_path
 
         check_plot_path(plot_path)
-    pos_list = [p.strip() for p in positions.split(",")] if positions else None
-    if pos_list is not None and len(pos_list) != len(logs):
-        raise InputError(f"--positions lists {len(pos_list)} direction(s) for {len(logs)} file(s); "
-                         "give one IA direction per file")
+    pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    if pos_list:
-        for g, lab in zip(glogs, pos_list):
-            az, el, name = parse_ia(lab)
-            if g.site is None:
-                raise InputError("--positions needs the site latitude: give --latitude")
-            g.site = Site(g.site.latitude_deg, az, el, name)
-    earth = not no_earth_rate
-    runs = []
-    parts = []
-    has_pos_col = any(g.position is not None for g in glogs)
-    if has_pos_col:
-        for g in glogs:
-            if g.position is None:
-                raise InputError(f"{g.source}: no position column while other logs have one")
-            trimmed = g.skip(skip_s)
-            for label, part in split_positions(trimmed, settle_s):
-                parts.append(part)
-                runs.append(estimate_bias(part, axis=axis, earth_rate=False,
-                                          label=f"{label} ({g.source})"))
-    else:
-        for g in glogs:
-            parts.append(g)
-            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth))
-    sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
-             for r in runs if r.site is not None}
-    multi = None
-    rep = None
-    if has_pos_col or len(sites) > 1:
-        lat = next((r.site.latitude_deg for r in runs if r.site is not None
-                    and r.site.latitude_deg == r.site.latitude_deg), None)
-        multi = multi_position(runs, lat)
-    elif len(runs) > 1:
-        rep = repeatability(runs)
-    result = {
-        "analysis": "multi-position" if multi else ("repeatability" if rep else "bias"),
-        "runs": [r.to_dict() for r in runs],
-        "repeatability": rep.to_dict() if rep else None,
-        "multi_position": multi.to_dict() if multi else None,
-        "units": {"bias": "deg/h", "time": "s"},
-    }
+    ba = analyse_bias(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis, positions=pos_list,
+                      earth_rate=not no_earth_rate)
     if plot_path:
         from ..bias_plot import plot_bias
 
-        plot_bias(parts, runs, multi, plot_path, skip_s=0.0 if has_pos_col else skip_s)
+        plot_bias(ba.parts, ba.runs, ba.multi, plot_path, skip_s=ba.parts_skip_s)
         if not as_json:
             note(f"plot written to {plot_path}")
     if as_json:
-        emit_json(result)
+        emit_json(ba.to_dict())
         return
-    _render(runs, rep, multi)
+    _render(ba.runs, ba.repeatability, ba.multi)
 
 
 def _render(runs, rep, multi):

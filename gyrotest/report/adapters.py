@@ -136,59 +136,23 @@ def _timed(fn: Callable[[], tuple[dict, Any, list]]) -> tuple[dict, Any, list, f
 
 
 # ----------------------------------------------------------------------------- bias
-def _bias_core(logs, *, skip: str, settle: str = "0", axis=None, no_earth_rate=False):
-    """The body of ``gyrotest bias`` (cli/cmd_bias.py) without plotting and rendering."""
-    from ..bias import estimate_bias, multi_position, repeatability, split_positions
-    from ..units import parse_duration
-
-    skip_s = parse_duration(skip, what="--skip")
-    settle_s = parse_duration(settle, what="--settle")
-    earth = not no_earth_rate
-    runs = []
-    has_pos_col = any(g.position is not None for g in logs)
-    if has_pos_col:
-        for g in logs:
-            if g.position is None:
-                raise InputError(f"{g.source}: no position column while other logs have one")
-            trimmed = g.skip(skip_s)
-            for label, part in split_positions(trimmed, settle_s):
-                runs.append(estimate_bias(part, axis=axis, earth_rate=False,
-                                          label=f"{label} ({g.source})"))
-    else:
-        for g in logs:
-            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth))
-    sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
-             for r in runs if r.site is not None}
-    multi = rep = None
-    if has_pos_col or len(sites) > 1:
-        lat = next((r.site.latitude_deg for r in runs if r.site is not None
-                    and r.site.latitude_deg == r.site.latitude_deg), None)
-        multi = multi_position(runs, lat)
-    elif len(runs) > 1:
-        rep = repeatability(runs)
-    result = {
-        "analysis": "multi-position" if multi else ("repeatability" if rep else "bias"),
-        "runs": [r.to_dict() for r in runs],
-        "repeatability": rep.to_dict() if rep else None,
-        "multi_position": multi.to_dict() if multi else None,
-        "units": {"bias": "deg/h", "time": "s"},
-    }
-    return result, {"runs": runs, "repeatability": rep, "multi": multi}
-
-
 def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias") -> Analysis:
     """``gyrotest bias LOGS --skip ...`` (static runs: D_F, repeatability) or, for the
-    multi-position test, ``gyrotest bias LOG --settle ...``."""
+    multi-position test, ``gyrotest bias LOG --settle ...``: :func:`gyrotest.bias.analyse_bias`."""
+    from ..bias import analyse_bias
+    from ..units import parse_duration
+
     opts, iargv = ingest_opts(test, campaign)
     paths = test.logs
 
     def go():
         """The command body: returns (result, objects, logs)."""
+        skip_s = parse_duration(test.opt("skip", "0"), what="--skip")
+        settle_s = parse_duration(test.opt("settle", "0"), what="--settle")
         logs = [cache.get(p, opts) for p in paths]
-        res, obj = _bias_core(logs, skip=test.opt("skip", "0"), settle=test.opt("settle", "0"),
-                              axis=test.opt("axis"),
-                              no_earth_rate=bool(test.opt("no_earth_rate", False)))
-        return res, obj, logs
+        ba = analyse_bias(logs, skip_s=skip_s, settle_s=settle_s, axis=test.opt("axis"),
+                          earth_rate=not test.opt("no_earth_rate", False))
+        return ba.to_dict(), ba, logs
 
     res, obj, logs, dt = _timed(go)
     argv = ["bias", *[campaign.rel(p) for p in paths], *iargv, *option_argv(test)]

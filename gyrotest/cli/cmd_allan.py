@@ -94,14 +94,12 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
       gyrotest allan static.csv --terms +markov --vehicle-rate 10deg/s --json
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
     """
-    from ..noise.analysis import analyse_allan, parse_taus
+    from ..noise.analysis import allan_document, analyse_allan, parse_taus
     from ..noise.fit import parse_terms
-    from ..noise.impact import parse_vehicle_rate
+    from ..noise.impact import parse_horizon, parse_vehicle_rate
 
-    skip_s = parse_duration(skip, what="--skip")
-    horizon_s = parse_duration(horizon, what="--horizon")
-    if horizon_s <= 0:
-        raise InputError("--horizon must be > 0")
+    parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
+    horizon_s = parse_horizon(horizon)
     rates = [parse_vehicle_rate(v) for v in vehicle_rates]
     tau_spec = parse_taus(taus)
     keys = parse_terms(terms)
@@ -114,18 +112,12 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    results = []
-    for g in glogs:
-        if skip_s > 0:
-            if skip_s >= g.duration_s:
-                raise InputError(f"{g.source}: --skip {skip} removes the whole record "
-                                 f"({format_duration(g.duration_s)})")
-            g = g.skip(skip_s)
-        results.append(analyse_allan(
-            g, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates, axes=axis_list,
-            confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-            detrend=None if detrend == "none" else detrend, run_diagnosis=not no_diagnose,
-            impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular))
+    results = [analyse_allan(
+        g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
+        axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+        detrend=None if detrend == "none" else detrend, run_diagnosis=not no_diagnose,
+        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
+        for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)
@@ -139,8 +131,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
         plot_psd(items, psd_path)
     if as_json:
         _warnings(results, as_json)
-        emit_json({"analysis": "allan", "logs": [r.to_dict() for r in results],
-                   "files": {"csv": csv_path, "plot": plot_path, "psd": psd_path}})
+        emit_json(allan_document(results, csv=csv_path, plot=plot_path, psd=psd_path))
         return
     for r in results:
         _render(r)

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..data import GyroLog
 from ..errors import AnalysisError, InputError
+from ..units import format_duration, parse_duration
 from .deviations import DEVIATION_KINDS, DeviationResult, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
@@ -58,7 +59,8 @@ from .spectral import (
 )
 from .warnings import KrobkaWarning, krobka_checks
 
-__all__ = ["AllanAnalysis", "AxisAnalysis", "analyse_allan", "input_kind_of", "parse_taus"]
+__all__ = ["AllanAnalysis", "AxisAnalysis", "allan_document", "analyse_allan", "input_kind_of",
+           "parse_taus"]
 
 PULSE_KINDS = ("counts", "updown", "counter")
 #: deviations whose expectation is the Allan variance, so the IEEE closed forms fit them
@@ -263,9 +265,33 @@ def _long_taus(tau: np.ndarray, count: int = 8) -> list[float]:
     return sel[-count:].tolist()
 
 
+def _skip_warmup(log: GyroLog, skip: float | str) -> GyroLog:
+    """``log`` without its first ``skip`` (seconds or duration text); InputError when that is
+    the whole record."""
+    if isinstance(skip, str):
+        text, skip_s = skip, parse_duration(skip, what="--skip")
+    else:
+        text, skip_s = f"{skip:g}s", float(skip)
+    if skip_s <= 0:
+        return log
+    if skip_s >= log.duration_s:
+        raise InputError(f"{log.source}: --skip {text} removes the whole record "
+                         f"({format_duration(log.duration_s)})")
+    return log.skip(skip_s)
+
+
+def allan_document(results: Sequence[AllanAnalysis], *, csv: str | None = None,
+                   plot: str | None = None, psd: str | None = None) -> dict[str, Any]:
+    """The JSON document of ``gyrotest allan --json``: every log's analysis and the files
+    written."""
+    return {"analysis": "allan", "logs": [r.to_dict() for r in results],
+            "files": {"csv": csv, "plot": plot, "psd": psd}}
+
+
 def analyse_allan(
     log: GyroLog,
     *,
+    skip_s: float | str = 0.0,
     dev: str = "oadev",
     taus: str | Sequence[float] | None = "10/decade",
     terms: str | Sequence[str] | None = None,
@@ -288,6 +314,9 @@ def analyse_allan(
 
     Parameters
     ----------
+    skip_s : warm-up trim at the start of the log, seconds, or a duration text such as
+        ``"30min"`` (read by :func:`gyrotest.units.parse_duration`; quoted as written when it
+        removes the whole record).
     dev : deviation for the table: oadev (default), adev, mdev, tdev, hdev, ohdev, totdev,
         mtotdev, akdev, hkdev. The noise model is fitted to it when it is Allan-type (oadev,
         adev, totdev, akdev), otherwise to an OADEV computed on the same τ (noted).
@@ -310,6 +339,7 @@ def analyse_allan(
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
     """
+    log = _skip_warmup(log, skip_s)
     if dev not in DEVIATION_KINDS:
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)

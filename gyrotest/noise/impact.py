@@ -51,7 +51,7 @@ import numpy as np
 from scipy import integrate
 
 from ..errors import InputError
-from ..units import factor
+from ..units import factor, parse_duration
 from .terms import PLATFORM_BENIGN_LABEL
 
 __all__ = [
@@ -235,6 +235,14 @@ def parse_vehicle_rate(text: str | float) -> float:
     dph = val * factor(unit, "rate", what="--vehicle-rate")
     return math.radians(dph / 3600.0)
 
+
+
+def parse_horizon(text: str | float) -> float:
+    """The prediction horizon (``--horizon``, e.g. ``1h``) in seconds; must be > 0."""
+    horizon_s = parse_duration(text, what="--horizon")
+    if horizon_s <= 0:
+        raise InputError("--horizon must be > 0")
+    return horizon_s
 
 @dataclass
 class ImpactResult:

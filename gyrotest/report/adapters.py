@@ -162,41 +162,29 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
 # ----------------------------------------------------------------------------- allan
 def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest allan LOG --skip ... --terms ... --vehicle-rate ... --horizon ...``
-    (cli/cmd_allan.py): :func:`gyrotest.noise.analysis.analyse_allan` on the trimmed log."""
-    from ..noise.analysis import analyse_allan, parse_taus
+    (cli/cmd_allan.py): :func:`gyrotest.noise.analysis.analyse_allan`."""
+    from ..noise.analysis import allan_document, analyse_allan, parse_taus
     from ..noise.fit import MIN_EDF, parse_terms
-    from ..noise.impact import parse_vehicle_rate
-    from ..units import format_duration, parse_duration
+    from ..noise.impact import parse_horizon, parse_vehicle_rate
 
     opts, iargv = ingest_opts(test, campaign)
-    skip = test.opt("skip", "0")
-    terms = test.opt("terms", "Q,N,B,K,R")
     detrend = test.opt("detrend", "none")
 
     def go():
         """The command body: returns (result, objects, logs)."""
-        skip_s = parse_duration(skip, what="--skip")
-        horizon_s = parse_duration(test.opt("horizon", "1h"), what="--horizon")
-        if horizon_s <= 0:
-            raise InputError("--horizon must be > 0")
+        horizon_s = parse_horizon(test.opt("horizon", "1h"))
         rates = [parse_vehicle_rate(v) for v in test.opt("vehicle_rates", [])]
         g = cache.get(test.logs[0], opts)
-        logs = [g]
-        if skip_s > 0:
-            if skip_s >= g.duration_s:
-                raise InputError(f"{g.source}: --skip {skip} removes the whole record "
-                                 f"({format_duration(g.duration_s)})")
-            g = g.skip(skip_s)
         axes = [test.opt("axis")] if test.opt("axis") else None
         r = analyse_allan(
-            g, dev="oadev", taus=parse_taus(test.opt("taus", "10/decade")),
-            terms=parse_terms(terms), vehicle_rates=rates, axes=axes, confidence=0.683,
-            stop_ratio=None, min_edf=MIN_EDF, detrend=None if detrend == "none" else detrend,
+            g, skip_s=test.opt("skip", "0"), dev="oadev",
+            taus=parse_taus(test.opt("taus", "10/decade")),
+            terms=parse_terms(test.opt("terms", "Q,N,B,K,R")), vehicle_rates=rates, axes=axes,
+            confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
+            detrend=None if detrend == "none" else detrend,
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
             bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False)
-        res = {"analysis": "allan", "logs": [r.to_dict()],
-               "files": {"csv": None, "plot": None, "psd": None}}
-        return res, r, logs
+        return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)
     argv = ["allan", campaign.rel(test.logs[0]), *iargv, *option_argv(test)]

@@ -62,6 +62,7 @@ segments). The τ grid is built on the longest segment.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -943,6 +944,26 @@ def _pooled_edf(kind: str, alpha: int, m: int, parts: Sequence[np.ndarray], ns: 
     return 1.0 / inv, label
 
 
+#: below this many samples the τ loop runs in one thread (thread start-up would dominate)
+PARALLEL_MIN_SAMPLES = 200_000
+
+
+def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> list:
+    """:func:`_raw_variance` for every averaging factor in ``ms``, in order.
+
+    The τ values are independent and the kernels spend their time in numpy calls that release
+    the GIL, so long records are processed by a small thread pool (one thread per core, at
+    most 4); the result is identical to the serial loop."""
+    ms = [int(m) for m in ms]
+    workers = min(os.cpu_count() or 1, 4, len(ms))
+    if workers < 2 or longest < PARALLEL_MIN_SAMPLES:
+        return [_raw_variance(kind, parts, m) for m in ms]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=workers) as ex:
+        return list(ex.map(lambda m: _raw_variance(kind, parts, m), ms))
+
+
 def compute_deviation(
     data,
     tau0: float,
@@ -1006,9 +1027,8 @@ def compute_deviation(
     rows_n: list[int] = []
     rows_ns: list[list[int]] = []
     dropped: list[int] = []
-    for m in grid.m:
+    for m, (var, n_tot, ns) in zip(grid.m, _raw_variances(kind, parts, grid.m, longest)):
         m = int(m)
-        var, n_tot, ns = _raw_variance(kind, parts, m)
         if n_tot < 1:
             dropped.append(m)
             continue

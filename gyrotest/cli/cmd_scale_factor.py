@@ -32,26 +32,6 @@ def _duration(ctx, param, value):
         raise click.BadParameter(str(e)) from None
 
 
-def _rates(value: str | None) -> list[float] | None:
-    if value is None:
-        return None
-    try:
-        out = [abs(float(v)) for v in value.replace(";", ",").split(",") if v.strip()]
-    except ValueError:
-        raise InputError(f"--rates {value!r}: write rates in deg/s separated by commas, e.g. "
-                         "1,2,5,10,20,50,100,200,500") from None
-    if not out or not all(math.isfinite(v) for v in out):
-        raise InputError(f"--rates {value!r}: no usable rate")
-    return out
-
-
-def _terms(value: str):
-    v = value.strip().lower()
-    if v in ("auto", "linear", "none"):
-        return v if v != "none" else "linear"
-    return [t.strip() for t in v.split(",") if t.strip()]
-
-
 @click.command("scale-factor")
 @click.argument("logs", nargs=-1, type=str)
 @click.option("--table", "table_path", type=click.Path(dir_okay=False), default=None,
@@ -128,50 +108,28 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
         parent = Path(points_path).parent
         if str(parent) and not parent.is_dir():
             raise InputError(f"points file {points_path}: directory {parent} does not exist")
-    if min(settle, trim_end, min_dwell) < 0:
-        raise InputError("--settle, --trim-end and --min-dwell must not be negative")
-    if not 0 < alpha < 1:
-        raise InputError(f"--alpha {alpha} must be between 0 and 1")
-    if not snap_tol > 0:
-        raise InputError(f"--snap-tol {snap_tol} must be positive")
-    if full_scale is not None and not full_scale > 0:
-        raise InputError(f"--full-scale {full_scale} must be a positive rate in deg/s")
-    rate_list = _rates(rates)
-    term_sel = _terms(terms)
-    kw = dict(full_scale_dps=full_scale, terms=term_sel, alpha=alpha,
+    sfm.check_settings(settle_s=settle, trim_end_s=trim_end, min_dwell_s=min_dwell, alpha=alpha,
+                       snap_tol=snap_tol, full_scale_dps=full_scale)
+    rate_list = sfm.parse_rates(rates)
+    kw = dict(full_scale_dps=full_scale, terms=sfm.parse_term_choice(terms), alpha=alpha,
               weighted=not unweighted, weighted_line=weighted_line, lock_in=not no_lock_in,
-              periodic=not no_periodic, common_rates=common_rates)
+              periodic=not no_periodic, common_rates=common_rates,
+              require_asymmetry=not no_asymmetry)
     loaded = []
     if table_path:
         if logs:
             raise InputError("give either rate-table logs or --table FILE, not both")
-        er = None
-        if ingest_opts.get("latitude") is not None:
-            from ..earth import check_latitude, earth_rate_component, parse_ia
-
-            az, el, _ = parse_ia(ingest_opts.get("ia") or "up")
-            er = earth_rate_component(check_latitude(ingest_opts["latitude"]), az, el)
-        runs, kind, s0, tnotes = sfm.read_points_table(
-            table_path, earth_rate_dph=er, scale_factor=ingest_opts.get("scale_factor"))
-        for n in tnotes:
-            note(n)
-        result = sfm.analyse(runs, output_kind=kind, nominal_scale_factor=s0, **kw)
+        result = sfm.reduce_table(table_path, latitude_deg=ingest_opts.get("latitude"),
+                                  ia=ingest_opts.get("ia"),
+                                  scale_factor=ingest_opts.get("scale_factor"), on_note=note,
+                                  **kw)
     else:
         if not logs:
             raise InputError("no input: give one rate-table log per run, or --table FILE")
         loaded = load_logs(logs, ingest_opts, announce=not as_json)
-        sfm.check_runs_match(loaded)
-        runs = [sfm.extract_plateaus(lg, sfm.run_name(lg.source), settle_s=settle,
-                                     trim_end_s=trim_end, min_dwell_s=min_dwell, detect=detect,
-                                     rates_dps=rate_list, snap_tol=snap_tol,
-                                     stderr=stderr_method) for lg in loaded]
-        g = loaded[0].gyro
-        result = sfm.analyse(runs, output_kind=g.output_kind,
-                             nominal_scale_factor=g.scale_factor, **kw)
-    if not no_asymmetry and any(n.startswith("asymmetry not computed") for n in result.notes):
-        raise InputError("no negative input rates: the asymmetry (IEEE 952 §12.9.4.2.2) cannot be "
-                         "computed; add negative rates to the table sequence, or pass "
-                         "--no-asymmetry to reduce without it")
+        result = sfm.reduce_logs(loaded, settle_s=settle, trim_end_s=trim_end,
+                                 min_dwell_s=min_dwell, detect=detect, rates_dps=rate_list,
+                                 snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
     if plot_path:
         from ..scalefactor.plot import plot_scale_factor
@@ -180,15 +138,9 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
     if points_path:
         sfm.write_points_csv(result, points_path)
     if as_json:
-        d = result.to_dict()
-        d["command"] = "scale-factor"
-        if plot_path:
-            d["plot"] = str(plot_path)
-        if points_path:
-            d["points_file"] = str(points_path)
-        emit_json(d)
+        emit_json(sfm.scale_factor_document(result, plot=plot_path, points_file=points_path))
         for n in result.notes:
-            if n.startswith("asymmetry not computed"):
+            if n.startswith(sfm.ASYMMETRY_SKIPPED):
                 warn(n)
         return
     for n in result.notes:

@@ -193,44 +193,27 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
 
 # ----------------------------------------------------------------------------- scale factor
 def run_scale_factor(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
-    """``gyrotest scale-factor LOGS --settle ...`` (cli/cmd_scale_factor.py): plateaus of
-    every run, then :func:`gyrotest.scalefactor.analyse`."""
+    """``gyrotest scale-factor LOGS --settle ...`` (cli/cmd_scale_factor.py):
+    :func:`gyrotest.scalefactor.reduce_logs` (plateaus of every run, then the analysis)."""
     from .. import scalefactor as sfm
-    from ..cli.cmd_scale_factor import _rates, _terms
     from ..units import parse_duration
 
     opts, iargv = ingest_opts(test, campaign)
 
     def go():
         """The command body: returns (result, objects, logs)."""
-        settle = parse_duration(test.opt("settle", "10s"), what="--settle")
-        trim_end = parse_duration(test.opt("trim_end", "0s"), what="--trim-end")
-        min_dwell = parse_duration(test.opt("min_dwell", "2s"), what="--min-dwell")
-        alpha = test.opt("alpha", 0.05)
-        if not 0 < alpha < 1:
-            raise InputError(f"--alpha {alpha} must be between 0 and 1")
         loaded = [cache.get(p, opts) for p in test.logs]
-        sfm.check_runs_match(loaded)
-        runs = [sfm.extract_plateaus(lg, sfm.run_name(lg.source), settle_s=settle,
-                                     trim_end_s=trim_end, min_dwell_s=min_dwell,
-                                     detect=test.opt("detect", "auto"),
-                                     rates_dps=_rates(test.opt("rates")), snap_tol=3e-3,
-                                     stderr="allan") for lg in loaded]
-        g = loaded[0].gyro
-        result = sfm.analyse(runs, output_kind=g.output_kind,
-                             nominal_scale_factor=g.scale_factor,
-                             full_scale_dps=test.opt("full_scale_dps"),
-                             terms=_terms(test.opt("terms", "auto")), alpha=alpha,
-                             weighted=True, weighted_line=False, lock_in=True, periodic=True,
-                             common_rates=bool(test.opt("common_rates", False)))
-        if not test.opt("no_asymmetry", False) and any(
-                n.startswith("asymmetry not computed") for n in result.notes):
-            raise InputError("no negative input rates: the asymmetry (IEEE 952 §12.9.4.2.2) "
-                             "cannot be computed; add negative rates to the table sequence, or "
-                             "set no_asymmetry = true to reduce without it")
-        d = result.to_dict()
-        d["command"] = "scale-factor"
-        return d, result, loaded
+        result = sfm.reduce_logs(
+            loaded, settle_s=parse_duration(test.opt("settle", "10s"), what="--settle"),
+            trim_end_s=parse_duration(test.opt("trim_end", "0s"), what="--trim-end"),
+            min_dwell_s=parse_duration(test.opt("min_dwell", "2s"), what="--min-dwell"),
+            detect=test.opt("detect", "auto"), rates_dps=sfm.parse_rates(test.opt("rates")),
+            snap_tol=3e-3, stderr="allan", full_scale_dps=test.opt("full_scale_dps"),
+            terms=sfm.parse_term_choice(test.opt("terms", "auto")),
+            alpha=test.opt("alpha", 0.05), weighted=True, weighted_line=False, lock_in=True,
+            periodic=True, common_rates=bool(test.opt("common_rates", False)),
+            require_asymmetry=not test.opt("no_asymmetry", False))
+        return sfm.scale_factor_document(result), result, loaded
 
     res, obj, logs, dt = _timed(go)
     argv = ["scale-factor", *[campaign.rel(p) for p in test.logs], *iargv, *option_argv(test)]

@@ -400,6 +400,9 @@ def _rate_set(P: Points, r: int) -> set[float]:
     return set(np.round(P.table[P.run == r] / DPS, 6).tolist())
 
 
+#: how :func:`analyse` notes a reduction without negative input rates
+ASYMMETRY_SKIPPED = "asymmetry not computed"
+
 def _fmt_rates(rs) -> str:
     rs = sorted(rs)
     s = ", ".join(f"{r:+g}" for r in rs[:8])
@@ -714,7 +717,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
     have_neg = bool(np.any(P.table < 0) and np.any(P.table > 0))
     if not have_neg:
         asym = AsymmetryResult("skipped: no negative input rates (asymmetry needs SF+ and SF−)")
-        notes.append("asymmetry not computed: the runs have no negative input rates")
+        notes.append(f"{ASYMMETRY_SKIPPED}: the runs have no negative input rates")
     else:
         per_run, per_sig, ci, ci_sig, methods = [], [], [], [], set()
         for r in range(R):

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import click
 
-from .cmd_model import check_output, load_for_terms, write_plot
+from .cmd_model import check_output, write_plot
 from .common import (
     console,
     emit_json,
     fmt_num,
     ingest_options,
     json_option,
+    load_for_terms,
     note,
     warn,
     with_ingest,
@@ -52,7 +53,6 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
         check_plot_path(plot_path)
     model = EnvModel.load(model_path)
     g = load_for_terms(log, ingest_opts, model.specs, announce=not as_json)
-    model.check_log(g)
     cp = compensate(g, model, keep_bias=keep_bias)
     if out_path:
         from ..ingest import write_log

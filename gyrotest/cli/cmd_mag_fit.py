@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import click
 
-from ..errors import InputError
 from ..units import parse_duration
-from .cmd_model import check_output, load_for_terms, prepare_log, render_fit, write_plot
-from .common import console, emit_json, fmt_num, ingest_options, json_option, note, with_ingest
+from .cmd_model import check_output, render_fit, write_plot
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    load_for_terms,
+    note,
+    with_ingest,
+)
 
 
 @click.command("mag-fit")
@@ -47,25 +55,19 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
       gyrotest mag-fit helmholtz.csv --profile bench.toml
       gyrotest mag-fit long_run.csv --field-cols Hx,Hy,Hz --with T -o mag.json
     """
-    from ..envmodel.domain import mag_fit
-    from ..envmodel.terms import parse_terms, split_terms
+    from ..envmodel.domain import analyse_mag, mag_terms
 
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
         from ..plotting import check_plot_path
 
         check_plot_path(plot_path)
-    extra = split_terms(with_terms) if with_terms else []
-    specs = parse_terms(["Hx", "Hy", "Hz"] + extra)
+    _, specs = mag_terms(with_terms)
     settle_s = parse_duration(settle, what="--settle")
     dwell_s = parse_duration(min_dwell, what="--min-dwell")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
-    if len(g.field_uT) < 3:
-        raise InputError(f"terms Hx, Hy, Hz: {g.source} has {len(g.field_uT)} magnetic-field "
-                         "channel(s); name X, Y, Z with --field-cols")
-    wd = prepare_log(g, log, {"axis": axis, "skip": skip, "resolution": resolution,
-                              "smooth": smooth})
-    mg = mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=dwell_s, folds=folds)
+    mg = analyse_mag(g, path=log, with_terms=with_terms, settle_s=settle_s, min_dwell_s=dwell_s,
+                     axis=axis, skip=skip, resolution=resolution, smooth=smooth, folds=folds)
     if out_path:
         mg.fit.model.save(out_path)
     if plot_path:

@@ -12,14 +12,14 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from ..units import format_duration, parse_duration
+from ..units import format_duration
 from .common import (
     console,
     emit_json,
     fmt_num,
     ingest_options,
     json_option,
-    load_log,
+    load_for_terms,
     note,
     warn,
     with_ingest,
@@ -69,64 +69,6 @@ def term_options(f):
     return f
 
 
-def _dur_or_auto(text: str, what: str) -> float | None:
-    if text is None or str(text).strip().lower() in ("auto", ""):
-        return None
-    v = parse_duration(text, what=what)
-    if v <= 0:
-        raise InputError(f"{what} must be > 0 (got {text!r})")
-    return v
-
-
-def collect_terms(terms: tuple[str, ...], custom: tuple[str, ...]) -> list:
-    """Parse --terms and --term into TermSpecs (InputError on bad text)."""
-    from ..envmodel.terms import parse_terms
-
-    texts = [t for t in terms if t.strip()]
-    out = parse_terms(texts) if texts else []
-    for c in custom:
-        if ":" not in c:
-            raise InputError(f"--term {c!r}: write NAME:EXPRESSION, e.g. vib:extra.vib_g**2")
-        out += parse_terms([c])
-    return out
-
-
-_ROLE_WORDS = {"temperature": ("temperature",), "temperature2": ("temperature",),
-               "table+temp": ("temperature", "table", "rate-table"),
-               "field": ("field", "magnetic"), "supply": ("supply",),
-               "table_rate": ("table", "rate-table"), "extra": ()}
-
-
-def load_for_terms(path: str, ingest_opts: dict, specs: list, *, announce: bool = True):
-    """Read a log; when ingest rejects a channel a term needs, name the term(s) too."""
-    try:
-        return load_log(path, ingest_opts, announce=announce)
-    except InputError as e:
-        msg = str(e)
-        low = msg.lower()
-        hit = []
-        for s in specs:
-            if s.key == "custom":
-                if any(ref.name.lower() in low for ref in _expr_refs(s)):
-                    hit.append(s.label)
-                continue
-            words = _ROLE_WORDS.get(s.effect.needs, ())
-            if any(w in low for w in words) or any(c.lower() in low for c in s.channels):
-                hit.append(s.label)
-        if hit:
-            raise InputError(f"term{'s' if len(hit) > 1 else ''} {', '.join(hit)}: {msg}") from None
-        raise
-
-
-def _expr_refs(spec):
-    from ..envmodel.expr import parse_expression
-
-    try:
-        return parse_expression(spec.expr or "").channels
-    except InputError:
-        return []
-
-
 def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
     """Validate an output path before any work (suffix and directory)."""
     if path is None:
@@ -139,37 +81,6 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
     if not parent.is_dir():
         raise InputError(f"{what} {p}: directory {parent} does not exist")
     return p
-
-
-def prepare_log(log, path: str, opts: dict, specs: list | None = None):
-    """Trim, then prepare a log for fitting with the CLI options (returns WorkData); when the
-    log is too short, the message names the terms that were asked for."""
-    from ..errors import AnalysisError
-
-    try:
-        return _prepare_log(log, path, opts)
-    except AnalysisError as e:
-        if specs:
-            names = ", ".join(s.label for s in specs)
-            raise AnalysisError(f"terms {names}: {e}") from None
-        raise
-
-
-def _prepare_log(log, path: str, opts: dict):
-    from ..envmodel.fit import file_provenance, prepare
-
-    skip_s = parse_duration(opts.get("skip") or "0", what="--skip")
-    if skip_s > 0:
-        if skip_s >= log.duration_s:
-            raise InputError(f"--skip {opts['skip']} is longer than the log "
-                             f"({format_duration(log.duration_s)})")
-        log = log.skip(skip_s)
-    prov = file_provenance(path) if path != "-" else {"file": "<stdin>"}
-    return prepare(log, axis=opts.get("axis"),
-                   resolution=_dur_or_auto(opts.get("resolution"), "--resolution"),
-                   t_ref=opts.get("t_ref"), v_ref=opts.get("v_ref"),
-                   smoothing_s=_dur_or_auto(opts.get("smooth"), "--smooth"),
-                   t_on_s=-skip_s, provenance=prov)
 
 
 # ----------------------------------------------------------------------------- rendering
@@ -356,8 +267,9 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
       gyrotest model fit run.csv --terms "T(T_coil),Tlag(T_case),Hx,Hy,Hz" --plot fit.png
       gyrotest model fit run.csv --terms T --term "vib:extra.vib_g**2" --json
     """
-    from ..envmodel.fit import finish, fit_model
+    from ..envmodel.fit import fit_log
     from ..envmodel.history import append_history, session_paths
+    from ..envmodel.prepare import collect_terms
 
     specs = collect_terms(terms, custom)
     out_path = check_output(output, (".json", ".toml"), "model file")
@@ -373,10 +285,8 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
         if not parent.is_dir():
             raise InputError(f"--session {session}: directory {parent} does not exist")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
-    wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
-                              "resolution": resolution, "smooth": smooth}, specs)
-    res = fit_model(wd, specs, folds=folds, light=True)
-    finish(res, k_sigma=k_sigma)
+    res = fit_log(g, specs, path=log, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                  resolution=resolution, smooth=smooth, folds=folds, k_sigma=k_sigma)
     written: dict = {}
     if session:
         from ..envmodel.history import load_history
@@ -449,7 +359,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
       gyrotest model diagnose chamber.csv --profile bench.toml --terms T,T2
       gyrotest model diagnose run.csv --terms T --candidates dTdt,Tlag,dGdt --json
     """
-    from ..envmodel.diagnose import ALPHA, diagnose
+    from ..envmodel.diagnose import diagnose_log
+    from ..envmodel.prepare import collect_terms
     from ..envmodel.terms import split_terms
 
     specs = collect_terms(terms, custom)
@@ -459,10 +370,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
         check_plot_path(plot_path)
     cand = split_terms(candidates) if candidates else None
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
-    wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t_ref, "v_ref": v_ref,
-                              "resolution": resolution, "smooth": smooth}, specs)
-    diag = diagnose(wd, specs, cand, alpha=ALPHA if alpha is None else alpha,
-                    min_improvement=min_improvement / 100.0, folds=folds)
+    diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                        resolution=resolution, smooth=smooth, alpha=alpha,
+                        min_improvement_pct=min_improvement, folds=folds)
     if plot_path:
         from ..envmodel.plots import diagnosis_figures
 

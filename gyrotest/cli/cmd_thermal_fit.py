@@ -7,13 +7,14 @@ import math
 import click
 
 from ..errors import InputError
-from .cmd_model import check_output, load_for_terms, prepare_log, render_fit, write_plot
+from .cmd_model import check_output, render_fit, write_plot
 from .common import (
     console,
     emit_json,
     fmt_num,
     ingest_options,
     json_option,
+    load_for_terms,
     note,
     warn,
     with_ingest,
@@ -75,10 +76,14 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
       gyrotest thermal-fit chamber.csv --profile bench.toml --t0 21 -o thermal.json
       gyrotest thermal-fit --setpoints thermostat.csv --t0 21
     """
-    from ..envmodel.domain import read_setpoints, thermal_fit, thermal_fit_setpoints
+    from ..envmodel.domain import (
+        analyse_thermal,
+        check_thermal_input,
+        parse_gradient,
+        thermal_terms,
+    )
 
-    if log is None and setpoints is None:
-        raise InputError("give a chamber log, --setpoints TABLE, or both")
+    check_thermal_input(log is not None, setpoints)
     out_path = check_output(output, (".json", ".toml"), "model file")
     if output and log is None:
         raise InputError("-o needs a chamber log (a set-point table gives no full model)")
@@ -86,40 +91,25 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
         from ..plotting import check_plot_path
 
         check_plot_path(plot_path)
-    grad = None
-    if gradient:
-        parts = [p.strip() for p in gradient.split(",") if p.strip()]
-        if len(parts) != 2:
-            raise InputError(f"--gradient {gradient!r}: give two channels, e.g. T_case,T_coil")
-        grad = (parts[0], parts[1])
-    sp = None
-    if setpoints:
-        tab = read_setpoints(setpoints)
-        sp = thermal_fit_setpoints(tab["temp"], tab["drift"], tab.get("sigma"), tab.get("dtdt"),
-                                   t0_c=t0, weighted=weighted)
-    th = None
+    parse_gradient(gradient)  # a bad --gradient fails before the log is read
+    g = None
     if log is not None:
-        from ..envmodel.terms import parse_terms
-
-        specs = parse_terms(["T", "dTdt"])
-        g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
-        if not g.temperature:
-            raise InputError(f"{g.source}: thermal-fit needs a temperature channel; name it "
-                             "with --temp-col")
-        wd = prepare_log(g, log, {"axis": axis, "skip": skip, "t_ref": t0,
-                                  "resolution": resolution, "smooth": smooth})
-        th = thermal_fit(wd, sensor=sensor, gradient=grad, folds=folds)
-        if out_path:
-            th.am.model.save(out_path)
+        g = load_for_terms(log, ingest_opts, thermal_terms(), announce=not as_json)
+    ta = analyse_thermal(g, path=log, setpoints=setpoints, t0_c=t0, sensor=sensor,
+                         gradient=gradient, weighted=weighted, axis=axis, skip=skip,
+                         resolution=resolution, smooth=smooth, folds=folds)
+    th, sp = ta.chamber, ta.setpoints
+    if th and out_path:
+        th.am.model.save(out_path)
     if plot_path:
         from ..envmodel.plots import setpoint_figures, thermal_figures
 
         figs = (thermal_figures(th) if th else []) + (setpoint_figures(sp) if sp else [])
         write_plot(figs, plot_path)
     if as_json:
-        emit_json({"chamber": th.to_dict() if th else None,
-                   "setpoints": sp.to_dict() if sp else None,
-                   "model_file": str(out_path) if out_path else None})
+        d = ta.to_dict()
+        d["model_file"] = str(out_path) if out_path else None
+        emit_json(d)
         return
     c = console()
     if th:

@@ -210,6 +210,14 @@ def load_log(path: str, opts: dict, *, announce: bool = True):
     return log
 
 
+def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True):
+    """:func:`load_log` for a model with term ``specs``: an ingest error about a channel a
+    term needs names the term too (:func:`gyrotest.envmodel.prepare.load_for_terms`)."""
+    from ..envmodel.prepare import load_for_terms as naming_terms
+
+    return naming_terms(lambda: load_log(path, opts, announce=announce), specs)
+
+
 def load_logs(paths: tuple[str, ...] | list[str], opts: dict, *, announce: bool = True) -> list:
     if not paths:
         raise InputError("no log file given")

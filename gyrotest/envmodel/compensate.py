@@ -78,6 +78,9 @@ def compensate(log, model: EnvModel, *, keep_bias: bool = False) -> Compensation
     Drift RMS and peak-to-peak (deg/h) are taken of the smoothed block means at the model's
     working resolution (mean removed); the Allan deviation (overlapping, octave τ) of the full
     rate before and after. The predicted RMS after compensation is the model's held-out RMS.
+    A log without a channel the model needs is an InputError naming the term and channel
+    (raised when :meth:`EnvModel.predict` resolves the terms, as :meth:`EnvModel.check_log`).
+    This is the whole analysis of ``gyrotest compensate``.
     """
     axis = model.axis if model.axis in log.rates else log.axes[0]
     pred = model.predict(log, include_bias=not keep_bias)

@@ -32,6 +32,7 @@ import numpy as np
 from ..errors import AnalysisError, InputError
 from . import stats as st
 from .fit import FitResult, WorkData, fit_model
+from .prepare import prepare_log
 from .terms import TermSpec, candidate_terms, describe, nonlinear_bounds, parse_terms, resolve_terms
 
 ALPHA = 0.001
@@ -124,6 +125,21 @@ def _trials(spec: TermSpec, wd: WorkData) -> int:
     if spec.effect.nonlinear[0].kind == "freq":
         return max(1, int(round((hi - lo) * wd.duration_s)))
     return max(1, int(round(math.log(hi / lo))))
+
+
+def diagnose_log(log, specs: list[TermSpec], candidates: list[str] | None = None, *,
+                 path: str | None = None, axis: str | None = None, skip: str | float = "0",
+                 t_ref: float | None = None, v_ref: float | None = None,
+                 resolution: str | None = "auto", smooth: str | None = "auto",
+                 alpha: float | None = None, min_improvement_pct: float = 1.0,
+                 folds: int = 5) -> Diagnosis:
+    """``gyrotest model diagnose``: prepare ``log`` with the command's options
+    (:func:`gyrotest.envmodel.prepare.prepare_log`) and :func:`diagnose` the model ``specs``
+    (``alpha`` default :data:`ALPHA`; ``min_improvement_pct`` in %)."""
+    wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                     resolution=resolution, smooth=smooth, specs=specs)
+    return diagnose(wd, specs, candidates, alpha=ALPHA if alpha is None else alpha,
+                    min_improvement=min_improvement_pct / 100.0, folds=folds)
 
 
 def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,

@@ -11,6 +11,10 @@ and magnetic fields" (seed 002; decoded in GYRO_REFERENCE §6):
 * magnetic: Δω(H) = w0 + w_x·Hx/H0 + w_y·Hy/H0 + w_z·Hz/H0, H0 = 100 µT, coefficients in
   deg/h per 100 µT; Helmholtz test 0 → +300 → −300 → 0 µT in 50 µT steps, 180 s per level,
   one axis at a time; quick reversal estimate K = |Δω(+300) − Δω(−300)|/6.
+
+:func:`analyse_thermal` and :func:`analyse_mag` are the whole analyses of ``gyrotest
+thermal-fit`` and ``gyrotest mag-fit`` (and of the spec-sheet report's thermal and magnetic
+sections): a loaded log and the command's options in, the result out.
 """
 
 from __future__ import annotations
@@ -28,7 +32,8 @@ import numpy as np
 from ..errors import AnalysisError, InputError
 from . import stats as st
 from .fit import FitResult, WorkData, fit_model, predict_blocks
-from .terms import H0_UT, temperature_rate
+from .prepare import prepare_log
+from .terms import H0_UT, TermSpec, parse_terms, split_terms, temperature_rate
 
 #: the paper's published coefficients for its FOG sample (GYRO_REFERENCE §6)
 ANTONOVA_MATVEEV_PAPER = {"w0": 1.197, "w1": -0.108, "w2": 0.004, "w_dV": 1.997, "t0_c": 21.0}
@@ -497,3 +502,95 @@ def mag_fit(wd: WorkData, *, extra_terms: list[str] | None = None, settle_s: flo
                                     "no significant up/down difference")}
     return MagResult(res, coefs, plateaus, reversal, hyst, notes)
 
+
+
+# ============================================================================ the commands
+#: terms named when ingest rejects a channel ``thermal-fit`` needs
+THERMAL_TERMS = ("T", "dTdt")
+
+
+def thermal_terms() -> list[TermSpec]:
+    """The term specs of :data:`THERMAL_TERMS` (for
+    :func:`gyrotest.envmodel.prepare.load_for_terms`)."""
+    return parse_terms(list(THERMAL_TERMS))
+
+
+def parse_gradient(value: str | list[str] | tuple[str, ...] | None) -> tuple[str, str] | None:
+    """``--gradient A,B`` (or a list of two names) → ("A", "B"); None when not given."""
+    if not value:
+        return None
+    parts = ([p.strip() for p in value.split(",") if p.strip()] if isinstance(value, str)
+             else [str(p).strip() for p in value])
+    if len(parts) != 2:
+        raise InputError(f"--gradient {value!r}: give two channels, e.g. T_case,T_coil")
+    return parts[0], parts[1]
+
+
+def check_thermal_input(has_log: bool, setpoints) -> None:
+    """thermal-fit needs a chamber log, a set-point table, or both."""
+    if not has_log and setpoints is None:
+        raise InputError("give a chamber log, --setpoints TABLE, or both")
+
+
+@dataclass
+class ThermalAnalysis:
+    """``gyrotest thermal-fit``: the chamber-run fit and/or the set-point table fit."""
+
+    chamber: ThermalResult | None
+    setpoints: SetpointResult | None
+
+    def to_dict(self) -> dict:
+        """The JSON document of ``gyrotest thermal-fit --json`` (no model file written)."""
+        return {"chamber": self.chamber.to_dict() if self.chamber else None,
+                "setpoints": self.setpoints.to_dict() if self.setpoints else None,
+                "model_file": None}
+
+
+def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path | None = None,
+                    t0_c: float = 21.0, sensor: str | None = None,
+                    gradient: str | list[str] | tuple[str, ...] | None = None,
+                    weighted: bool = False, axis: str | None = None, skip: str | float = "0",
+                    resolution: str | None = "auto", smooth: str | None = "auto",
+                    folds: int = 5) -> ThermalAnalysis:
+    """The analysis of ``gyrotest thermal-fit``: the set-point table ``setpoints``
+    (:func:`read_setpoints`, :func:`thermal_fit_setpoints`) and/or the chamber run ``log``
+    (a :class:`~gyrotest.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
+    (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
+    ``smooth`` options as typed), then :func:`thermal_fit`."""
+    check_thermal_input(log is not None, setpoints)
+    grad = parse_gradient(gradient)
+    sp = th = None
+    if setpoints is not None:
+        tab = read_setpoints(setpoints)
+        sp = thermal_fit_setpoints(tab["temp"], tab["drift"], tab.get("sigma"), tab.get("dtdt"),
+                                   t0_c=t0_c, weighted=weighted)
+    if log is not None:
+        if not log.temperature:
+            raise InputError(f"{log.source}: thermal-fit needs a temperature channel; name it "
+                             "with --temp-col")
+        wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t0_c, resolution=resolution,
+                         smooth=smooth)
+        th = thermal_fit(wd, sensor=sensor, gradient=grad, folds=folds)
+    return ThermalAnalysis(th, sp)
+
+
+def mag_terms(with_terms: str | None = None) -> tuple[list[str], list[TermSpec]]:
+    """(the ``--with`` terms, the term specs ``mag-fit`` needs: Hx, Hy, Hz and those)."""
+    extra = split_terms(with_terms) if with_terms else []
+    return extra, parse_terms(["Hx", "Hy", "Hz"] + extra)
+
+
+def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,
+                settle_s: float = 10.0, min_dwell_s: float = 30.0, axis: str | None = None,
+                skip: str | float = "0", resolution: str | None = "auto",
+                smooth: str | None = "auto", folds: int = 5) -> MagResult:
+    """The analysis of ``gyrotest mag-fit``: ``log`` (read from ``path``) needs three field
+    channels; prepared (:func:`gyrotest.envmodel.prepare.prepare_log`), then :func:`mag_fit`
+    with the ``--with`` terms ``with_terms`` (comma-separated)."""
+    extra, _ = mag_terms(with_terms)
+    if len(log.field_uT) < 3:
+        raise InputError(f"terms Hx, Hy, Hz: {log.source} has {len(log.field_uT)} magnetic-field "
+                         "channel(s); name X, Y, Z with --field-cols")
+    wd = prepare_log(log, path, axis=axis, skip=skip, resolution=resolution, smooth=smooth)
+    return mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=min_dwell_s,
+                   folds=folds)

@@ -836,6 +836,23 @@ def finish(res: FitResult, k_sigma: float = 4.0) -> None:
     res.model.fit["noise_floor_dph"] = res.floor.rms_dph
 
 
+
+def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | None = None,
+            skip: str | float = "0", t_ref: float | None = None, v_ref: float | None = None,
+            resolution: str | None = "auto", smooth: str | None = "auto", folds: int = 5,
+            k_sigma: float = 4.0) -> FitResult:
+    """``gyrotest model fit``: prepare ``log`` with the command's options
+    (:func:`gyrotest.envmodel.prepare.prepare_log`; ``path`` for the model's provenance), fit
+    ``specs`` (:func:`fit_model`) and add the residual Allan deviation, noise floor and
+    excursions (:func:`finish`)."""
+    from .prepare import prepare_log
+
+    wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                     resolution=resolution, smooth=smooth, specs=specs)
+    res = fit_model(wd, specs, folds=folds, light=True)
+    finish(res, k_sigma=k_sigma)
+    return res
+
 _ADVICE = {
     frozenset({"T", "ramp"}): "temperature and time rise together (a monotone ramp): run a "
     "thermal cycle (up and down) or hold the temperature while time passes",

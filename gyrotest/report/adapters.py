@@ -10,9 +10,11 @@ returns an :class:`Analysis` holding
   sheet can be regenerated and checked number by number against the individual commands;
 * ``obj`` -- the result objects, for the figures.
 
-When a core API changes, only the adapter of that analysis changes. Logs are read once per
+The command bodies themselves live in the core (``analyse_bias``, ``analyse_allan``,
+``reduce_logs``, ``analyse_thermal``, ``analyse_mag``, ``fit_log``); an adapter only reads
+the campaign's options with the commands' own parsers and calls them. Logs are read once per
 (file, profile, ingest options) through :class:`LogCache`, with the CLI's own ingest path
-(:func:`gyrotest.cli.common.load_log`).
+(:func:`gyrotest.cli.common.load_log` / ``load_for_terms``).
 """
 
 from __future__ import annotations
@@ -24,7 +26,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
 from ..output import jsonable
 from .campaign import TESTS, Campaign, Test
 
@@ -89,14 +90,9 @@ class LogCache:
         key = (str(path), tuple(sorted((k, str(v)) for k, v in opts.items())))
         if key not in self._logs:
             t0 = time.perf_counter()
-            if specs:
-                from ..cli.cmd_model import load_for_terms
+            from ..cli.common import load_for_terms
 
-                log = load_for_terms(str(path), opts, specs, announce=False)
-            else:
-                from ..cli.common import load_log
-
-                log = load_log(str(path), opts, announce=False)
+            log = load_for_terms(str(path), opts, specs or [], announce=False)
             self.seconds += time.perf_counter() - t0
             self._logs[key] = log
         return self._logs[key]
@@ -221,38 +217,16 @@ def run_scale_factor(test: Test, campaign: Campaign, cache: LogCache) -> Analysi
 
 
 # ----------------------------------------------------------------------------- environment
-class WorkCache:
-    """Prepared model data (``prepare_log``) shared by the commands that would prepare the
-    same log with the same options (thermal-fit and the model-history steps)."""
-
-    def __init__(self) -> None:
-        self._wd: dict[tuple, Any] = {}
-
-    def get(self, g, path: Path, popts: dict[str, Any], specs: list | None = None):
-        """``prepare_log(g, path, popts, specs)`` once per (log, options)."""
-        from ..cli.cmd_model import prepare_log
-
-        key = (id(g), tuple(sorted((k, str(v)) for k, v in popts.items())))
-        if key not in self._wd:
-            self._wd[key] = prepare_log(g, str(path), popts, specs)
-        return self._wd[key]
+def _prep_opts(test: Test) -> dict[str, Any]:
+    """The log-preparation options (``--axis --skip --resolution --smooth``) of a test."""
+    return {"axis": test.opt("axis"), "skip": test.opt("skip", "0"),
+            "resolution": test.opt("resolution", "auto"), "smooth": test.opt("smooth", "auto")}
 
 
-
-def _prep_opts(test: Test, **extra) -> dict[str, Any]:
-    d = {"axis": test.opt("axis"), "skip": test.opt("skip", "0"),
-         "resolution": test.opt("resolution", "auto"), "smooth": test.opt("smooth", "auto")}
-    d.update(extra)
-    return d
-
-
-def run_thermal(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
-                ) -> Analysis:
+def run_thermal(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest thermal-fit LOG --t0 ... [--sensor] [--gradient A,B] [--setpoints CSV]``
-    (cli/cmd_thermal_fit.py): :func:`gyrotest.envmodel.domain.thermal_fit` on the prepared
-    log and/or :func:`~gyrotest.envmodel.domain.thermal_fit_setpoints`."""
-    from ..envmodel.domain import read_setpoints, thermal_fit, thermal_fit_setpoints
-    from ..envmodel.terms import parse_terms
+    (cli/cmd_thermal_fit.py): :func:`gyrotest.envmodel.domain.analyse_thermal`."""
+    from ..envmodel.domain import analyse_thermal, thermal_terms
 
     opts, iargv = ingest_opts(test, campaign)
     t0 = float(test.opt("t0", 21.0))
@@ -260,25 +234,12 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
 
     def go():
         """The command body: returns (result, objects, logs)."""
-        sp = th = None
-        logs = []
-        grad = tuple(test.opt("gradient")) if test.opt("gradient") else None
-        if setpoints is not None:
-            tab = read_setpoints(setpoints)
-            sp = thermal_fit_setpoints(tab["temp"], tab["drift"], tab.get("sigma"),
-                                       tab.get("dtdt"), t0_c=t0, weighted=False)
-        if test.logs:
-            path = test.logs[0]
-            g = cache.get(path, opts, parse_terms(["T", "dTdt"]))
-            logs = [g]
-            if not g.temperature:
-                raise InputError(f"{g.source}: thermal-fit needs a temperature channel; name "
-                                 "it with --temp-col")
-            wd = work.get(g, path, _prep_opts(test, t_ref=t0))
-            th = thermal_fit(wd, sensor=test.opt("sensor"), gradient=grad, folds=5)
-        res = {"chamber": th.to_dict() if th else None,
-               "setpoints": sp.to_dict() if sp else None, "model_file": None}
-        return res, {"chamber": th, "setpoints": sp}, logs
+        path = test.logs[0] if test.logs else None
+        g = cache.get(path, opts, thermal_terms()) if path else None
+        ta = analyse_thermal(g, path=str(path) if path else None, setpoints=setpoints,
+                             t0_c=t0, sensor=test.opt("sensor"), gradient=test.opt("gradient"),
+                             weighted=False, folds=5, **_prep_opts(test))
+        return ta.to_dict(), ta, [g] if g is not None else []
 
     res, obj, logs, dt = _timed(go)
     argv = ["thermal-fit", *[campaign.rel(p) for p in test.logs]]
@@ -289,12 +250,13 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
     return Analysis("thermal", test.name, "thermal-fit", argv, res, obj, logs, dt)
 
 
-def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache,
-                  terms: str, key: str, *, t_ref: float | None = None) -> Analysis:
+def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, terms: str, key: str, *,
+                  t_ref: float | None = None) -> Analysis:
     """``gyrotest model fit LOG --terms TERMS [--t-ref T]`` (cli/cmd_model.py): one step of
-    the model workbench; ``obj`` is the :class:`~gyrotest.envmodel.fit.FitResult`."""
-    from ..cli.cmd_model import collect_terms
-    from ..envmodel.fit import finish, fit_model
+    the model workbench, :func:`gyrotest.envmodel.fit.fit_log`; ``obj`` is the
+    :class:`~gyrotest.envmodel.fit.FitResult`."""
+    from ..envmodel.fit import fit_log
+    from ..envmodel.prepare import collect_terms
 
     opts, iargv = ingest_opts(test, campaign)
     path = test.logs[0]
@@ -303,9 +265,8 @@ def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, work: WorkCac
         """The command body: returns (result, objects, logs)."""
         specs = collect_terms((terms,), ())
         g = cache.get(path, opts, specs)
-        wd = work.get(g, path, _prep_opts(test, t_ref=t_ref), specs)
-        res = fit_model(wd, specs, folds=5, light=True)
-        finish(res, k_sigma=4.0)
+        res = fit_log(g, specs, path=str(path), t_ref=t_ref, folds=5, k_sigma=4.0,
+                      **_prep_opts(test))
         d = res.to_dict()
         d["written"] = {}
         return d, res, [g]
@@ -329,12 +290,10 @@ def history_steps(analyses: list[Analysis]) -> list:
     return steps
 
 
-def run_magnetic(test: Test, campaign: Campaign, cache: LogCache, work: WorkCache
-                 ) -> Analysis:
+def run_magnetic(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest mag-fit LOG [--settle] [--with T]`` (cli/cmd_mag_fit.py):
-    :func:`gyrotest.envmodel.domain.mag_fit` on the prepared log."""
-    from ..envmodel.domain import mag_fit
-    from ..envmodel.terms import parse_terms, split_terms
+    :func:`gyrotest.envmodel.domain.analyse_mag`."""
+    from ..envmodel.domain import analyse_mag, mag_terms
     from ..units import parse_duration
 
     opts, iargv = ingest_opts(test, campaign)
@@ -342,16 +301,12 @@ def run_magnetic(test: Test, campaign: Campaign, cache: LogCache, work: WorkCach
 
     def go():
         """The command body: returns (result, objects, logs)."""
-        extra = split_terms(test.opt("with")) if test.opt("with") else []
-        specs = parse_terms(["Hx", "Hy", "Hz"] + extra)
+        _, specs = mag_terms(test.opt("with"))
         settle_s = parse_duration(test.opt("settle", "10s"), what="--settle")
         dwell_s = parse_duration(test.opt("min_dwell", "30s"), what="--min-dwell")
         g = cache.get(path, opts, specs)
-        if len(g.field_uT) < 3:
-            raise InputError(f"terms Hx, Hy, Hz: {g.source} has {len(g.field_uT)} "
-                             "magnetic-field channel(s); name X, Y, Z with --field-cols")
-        wd = work.get(g, path, _prep_opts(test))
-        mg = mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=dwell_s, folds=5)
+        mg = analyse_mag(g, path=str(path), with_terms=test.opt("with"), settle_s=settle_s,
+                         min_dwell_s=dwell_s, folds=5, **_prep_opts(test))
         d = mg.to_dict()
         d["model_file"] = None
         return d, mg, [g]

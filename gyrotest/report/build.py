@@ -59,7 +59,6 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
     """Run every test of ``campaign`` (IEEE order) and the log summaries; returns the
     analyses by key. An error names the test: ``campaign.toml [tests.bias]: ...``."""
     cache = ad.LogCache()
-    work = ad.WorkCache()
     out: dict[str, ad.Analysis] = {}
 
     def step(name: str, fn, announce: bool = True):
@@ -81,18 +80,18 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
         elif name == "scale_factor":
             out[name] = step(name, lambda t=test: ad.run_scale_factor(t, campaign, cache))
         elif name == "thermal":
-            out[name] = step(name, lambda t=test: ad.run_thermal(t, campaign, cache, work))
+            out[name] = step(name, lambda t=test: ad.run_thermal(t, campaign, cache))
             t0 = float(test.opt("t0", 21.0))
             for i, terms in enumerate(test.opt("model_steps", []) if test.logs else [], 1):
                 k = f"thermal.step{i}"
                 out[k] = step(f"thermal model step {i}: {terms}",
                               lambda t=test, tm=terms, k=k, t0=t0: ad.run_model_fit(
-                                  t, campaign, cache, work, tm, k, t_ref=t0))
+                                  t, campaign, cache, tm, k, t_ref=t0))
         elif name == "magnetic":
-            out[name] = step(name, lambda t=test: ad.run_magnetic(t, campaign, cache, work))
+            out[name] = step(name, lambda t=test: ad.run_magnetic(t, campaign, cache))
         elif name == "supply":
             out[name] = step(name, lambda t=test: ad.run_model_fit(
-                t, campaign, cache, work, t.opt("terms", "V"), "supply"))
+                t, campaign, cache, t.opt("terms", "V"), "supply"))
     for name, test in campaign.tests.items():
         for p in test.logs:
             k = f"info:{campaign.rel(p)}"
@@ -820,7 +819,7 @@ class Builder:
         if t.conditions:
             sec.add(P(f"Conditions: {t.conditions}.", "note"))
         if ch is not None:
-            figs = self.draw("thermal", lambda: _fig("thermal_figures", a.obj["chamber"])) or []
+            figs = self.draw("thermal", lambda: _fig("thermal_figures", a.obj.chamber)) or []
             caps = {"thermal_thermal": "Thermal run: drift against temperature (heating and "
                     "cooling coloured) with the static Antonova–Matveev curve, and the "
                     "temperature-rate term.",

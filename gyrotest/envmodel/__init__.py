@@ -10,26 +10,43 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * :func:`diagnose` — rank the candidate terms the model lacks → :class:`Diagnosis`;
 * :func:`thermal_fit`, :func:`thermal_fit_setpoints`, :func:`mag_fit` — domain fits;
 * :func:`compensate` — apply a model to another run → :class:`CompensationResult`;
+* the commands' analyses from a loaded log and their options: :func:`fit_log` (``model
+  fit``), :func:`diagnose_log` (``model diagnose``), :func:`analyse_thermal`
+  (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.prepare` holds the shared
+  steps (:func:`load_for_terms`, :func:`prepare_log`, :func:`collect_terms`);
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
 
 from .compensate import CompensationResult, compensate
-from .diagnose import Candidate, Diagnosis, diagnose
+from .diagnose import Candidate, Diagnosis, diagnose, diagnose_log
 from .domain import (
-                     MagResult,
-                     SetpointResult,
-                     ThermalResult,
-                     mag_fit,
-                     thermal_fit,
-                     thermal_fit_setpoints,
+    MagResult,
+    SetpointResult,
+    ThermalAnalysis,
+    ThermalResult,
+    analyse_mag,
+    analyse_thermal,
+    mag_fit,
+    thermal_fit,
+    thermal_fit_setpoints,
 )
-from .fit import FitResult, WorkData, choose_resolution, choose_smoothing, fit_model, prepare
+from .fit import (
+    FitResult,
+    WorkData,
+    choose_resolution,
+    choose_smoothing,
+    fit_log,
+    fit_model,
+    prepare,
+)
 from .history import append_history, load_history
 from .model import EnvModel
+from .prepare import collect_terms, load_for_terms, prepare_log
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 
 __all__ = ["EFFECTS", "Candidate", "CompensationResult", "Diagnosis", "EnvFrame", "EnvModel",
-           "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalResult", "WorkData",
-           "append_history", "choose_resolution", "choose_smoothing", "compensate", "diagnose",
-           "fit_model", "load_history", "mag_fit", "parse_terms", "prepare", "thermal_fit",
-           "thermal_fit_setpoints"]
+           "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalAnalysis",
+           "ThermalResult", "WorkData", "analyse_mag", "analyse_thermal", "append_history",
+           "choose_resolution", "choose_smoothing", "collect_terms", "compensate", "diagnose",
+           "diagnose_log", "fit_log", "fit_model", "load_for_terms", "load_history", "mag_fit",
+           "parse_terms", "prepare", "prepare_log", "thermal_fit", "thermal_fit_setpoints"]

@@ -32,7 +32,7 @@ import os
 import re
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +100,10 @@ class RawTable:
     path: Path | None  # None for stdin
     header_line: int = 0  # 1-based line of the header in a text file
     meta: dict | None = None  # gyrotest metadata of a converted Parquet/Feather file
+    # float64 columns read by the streaming reader, writeable and owned by this table: handed
+    # to the first (only) role that uses them without a copy (see _column_to_float)
+    owned: dict[str, np.ndarray] = field(default_factory=dict)
+    exclusive: set[str] = field(default_factory=set)
 
     def line_of_row(self, row: int) -> int | None:
         """1-based text line of 0-based data row ``row`` (text files only)."""
@@ -238,7 +242,13 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     if delim == "whitespace":
         table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns)
     else:
-        table = _read_csv_arrow(p if p else io.BytesIO(data), source, delim, skip, columns)
+        owned = _stream_numeric(p, delim, skip, names, columns) if p else None
+        if owned is not None:
+            table = pa.table({c: owned[c] for c in (columns or names)})
+            if table.num_rows == 0:
+                raise InputError(f"{source}: header only, no data rows")
+            return RawTable(table, source, fmt, p, header_line=skip + 1, owned=owned)
+        table = _read_csv_arrow(p if p else io.BytesIO(data), source, delim, skip, columns, names)
     if table.num_rows == 0:
         raise InputError(f"{source}: header only, no data rows")
     return RawTable(table, source, fmt, p, header_line=skip + 1)
@@ -262,22 +272,124 @@ def _missing_column_msg(col: str, names: list[str], source: str, role: str | Non
             f"{', '.join(names[:20])}{' ...' if len(names) > 20 else ''}")
 
 
-def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] | None) -> pa.Table:
+NULL_VALUES = ["", "NA", "N/A", "null", "NULL", "-"]
+#: text files at least this large are read by the streaming reader straight into float64 arrays
+STREAM_MIN_BYTES = 128 << 20
+#: bytes of text parsed at a time by the streaming reader
+RANGE_BYTES = 64 << 20
+
+
+def _skip_comment_rows(row):
+    """pyarrow invalid-row handler: skip ``#`` comment lines in the middle of a file."""
+    if row.text.lstrip().startswith("#") or not row.text.strip():
+        return "skip"
+    return "error"
+
+
+def _csv_options(delim: str, skip: int, names: list[str], columns: list[str] | None,
+                 column_types: dict | None = None):
     import pyarrow.csv as pcsv
 
-    def on_invalid(row):
-        if row.text.lstrip().startswith("#") or not row.text.strip():
-            return "skip"
-        return "error"
-
-    read_opts = pcsv.ReadOptions(skip_rows=skip, use_threads=True, block_size=1 << 22)
-    parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=on_invalid,
+    # the header line is skipped and our own (stripped) names are used, so that a padded
+    # header such as "rate , temp" still matches --rate-col rate
+    read_opts = pcsv.ReadOptions(skip_rows=skip + 1, column_names=names, use_threads=True,
+                                 block_size=1 << 22)
+    parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
                                    ignore_empty_lines=True)
-    conv_opts = pcsv.ConvertOptions(
-        include_columns=columns,
-        strings_can_be_null=True,
-        null_values=["", "NA", "N/A", "null", "NULL", "-"],
-    )
+    conv_opts = pcsv.ConvertOptions(include_columns=columns, strings_can_be_null=True,
+                                    null_values=NULL_VALUES, column_types=column_types)
+    return read_opts, parse_opts, conv_opts
+
+
+def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
+                    columns: list[str] | None) -> dict[str, np.ndarray] | None:
+    """Read a large, all-numeric text table straight into preallocated float64 arrays.
+
+    The file is read in ranges of :data:`RANGE_BYTES` cut at line ends; each range
+    is parsed by pyarrow's multithreaded reader with every used column forced to float64 and
+    copied into the output arrays, so peak memory is about the arrays plus one range instead of
+    Arrow buffers plus numpy copies of the whole file. Returns None — and the caller uses the
+    whole-file reader, which also produces the precise error messages — for small files or
+    anything that is not plain numbers (text, timestamps, quotes across a cut …)."""
+    import pyarrow.csv as pcsv
+
+    size = path.stat().st_size
+    if size < STREAM_MIN_BYTES:
+        return None
+    cols = list(columns or names)
+    try:
+        fh = open(path, "rb")
+    except OSError:
+        return None
+    try:
+        head = fh.read(1 << 22)
+        pos = 0
+        for _ in range(skip + 1):  # comment lines and the header
+            pos = head.index(b"\n", pos) + 1
+        body_sample = head[pos:]
+        per_row = len(body_sample) / max(body_sample.count(b"\n"), 1)
+        cap = int((size - pos) / max(per_row, 1.0) * 1.02) + 1024
+        out = {c: np.empty(cap) for c in cols}
+        read_opts = pcsv.ReadOptions(column_names=names, use_threads=True, block_size=1 << 22)
+        parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
+                                       ignore_empty_lines=True)
+        conv_opts = pcsv.ConvertOptions(include_columns=cols, strings_can_be_null=True,
+                                        null_values=NULL_VALUES,
+                                        column_types={c: pa.float64() for c in cols})
+        n = 0
+        fh.seek(pos)
+        # one reusable buffer (fresh memory is expensive to touch): [carry | new bytes]
+        buf = bytearray(RANGE_BYTES + (1 << 20))
+        view = memoryview(buf)
+        held = 0  # bytes of an incomplete last line carried to the next range
+        while True:
+            if held >= len(buf) - (1 << 16):  # a single line longer than the buffer
+                return None
+            got = fh.readinto(view[held:held + RANGE_BYTES])
+            end = held + got
+            if end == 0:
+                break
+            if got:
+                cut = buf.rfind(b"\n", 0, end) + 1
+                if cut == 0:
+                    held = end
+                    continue
+            else:
+                cut = end  # last line without a newline
+            tbl = pcsv.read_csv(pa.BufferReader(pa.py_buffer(view[:cut])), read_options=read_opts,
+                                parse_options=parse_opts, convert_options=conv_opts)
+            view[: end - cut] = view[cut:end]
+            held = end - cut
+            k = tbl.num_rows
+            if n + k > cap:
+                cap = max(int(cap * 1.25), n + k)
+                for c in cols:
+                    grown = np.empty(cap)
+                    grown[:n] = out[c][:n]
+                    out[c] = grown
+            for c in cols:
+                dst = out[c][n:n + k]
+                off = 0
+                for chunk in tbl.column(c).chunks:
+                    m = len(chunk)
+                    dst[off:off + m] = chunk.to_numpy(zero_copy_only=False)
+                    off += m
+            n += k
+            del tbl
+            if not got:
+                break
+    except (pa.ArrowInvalid, ValueError, OSError, KeyError):
+        return None
+    finally:
+        fh.close()
+    return {c: a[:n] for c, a in out.items()}
+
+
+def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] | None,
+                    names: list[str]) -> pa.Table:
+    import pyarrow.csv as pcsv
+
+    read_opts, parse_opts, conv_opts = _csv_options(delim, skip, names, columns)
     try:
         return pcsv.read_csv(src, read_options=read_opts, parse_options=parse_opts,
                              convert_options=conv_opts)
@@ -477,6 +589,8 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
 def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
     """A column as float64 with NaN for missing cells; a non-numeric cell is an error naming
     the row."""
+    if col in raw.owned and col in raw.exclusive:
+        return raw.owned.pop(col)  # writeable float64 from the streaming reader: no copy
     arr = raw.table.column(col)
     t = arr.type
     if pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t):
@@ -646,6 +760,10 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     source = raw.source
     g = prof.gyro
     n_rows = raw.table.num_rows
+    used = [roles.get(k) for k in ("time", "supply", "table_rate")]
+    for k in ("output", "temperature", "field", "extra"):
+        used.extend(roles.get(k) or [])
+    raw.exclusive = {c for c in used if c and used.count(c) == 1}
     kind = roles["kind"]
     units: dict[str, str] = {}
     # ---- time
@@ -1086,7 +1204,7 @@ def write_log(log: GyroLog, path: str | os.PathLike, fmt: str | None = None) -> 
             # plain, uncompressed float pages (gyro noise does not compress), large pages:
             # re-reading is close to a memory copy
             pq.write_table(table, tmp, compression="none", use_dictionary=False,
-                           write_statistics=False, data_page_size=64 << 20)
+                           write_statistics=False, data_page_size=8 << 20)
         elif fmt == "feather":
             import pyarrow.feather as feather
 

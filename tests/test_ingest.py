@@ -367,3 +367,37 @@ def test_atomic_write_permissions(tmp_path):
     finally:
         os.umask(old)
     assert (os.stat(tmp_path / "a.txt").st_mode & 0o777) == 0o644
+
+
+def test_streaming_reader_matches_whole_file_reader(tmp_path, rng, monkeypatch):
+    """Large text files are read block by block into float64 arrays: same values, NaN for
+    empty cells, mid-file comments skipped; text in a column falls back to the whole-file reader
+    (and its row-naming errors)."""
+    import gyrotest.ingest as ing
+
+    n = 20_000
+    d = pd.DataFrame({"t": np.arange(n) * 0.01, "rate": rng.normal(size=n),
+                      "temp": 20 + rng.normal(size=n), "vsupply": 15 + rng.normal(size=n)})
+    text = d.to_csv(index=False, lineterminator="\n", float_format="%.17g")
+    lines = text.splitlines(keepends=True)
+    lines.insert(5000, "# operator note in the middle\n")
+    p = tmp_path / "big.csv"
+    p.write_text("".join(lines))
+    ov_ = ov(rate_unit="deg/h", supply="vsupply")
+    whole = read_log(p, overrides=ov_)
+    monkeypatch.setattr(ing, "STREAM_MIN_BYTES", 0)
+    streamed = read_log(p, overrides=ov_)
+    np.testing.assert_array_equal(streamed.rate, whole.rate)
+    np.testing.assert_array_equal(streamed.temperature["temp"], whole.temperature["temp"])
+    np.testing.assert_array_equal(streamed.supply, whole.supply)
+    np.testing.assert_array_equal(streamed.t, whole.t)
+    # text in a used column: the whole-file reader reports the row
+    lines[7000] = "70.0,abc,20,15\n"
+    p.write_text("".join(lines))
+    with pytest.raises(InputError, match=r"non-numeric value 'abc' in column 'rate'"):
+        read_log(p, overrides=ov_)
+    # padded header names are matched after stripping
+    q = tmp_path / "pad.csv"
+    q.write_text("t , rate \n0,1\n1,2\n2,3\n")
+    log = read_log(q, overrides=ov(rate="rate", rate_unit="deg/h"))
+    np.testing.assert_array_equal(log.rate, [1, 2, 3])

@@ -209,9 +209,10 @@ def diagnosis_figures(diag) -> list[tuple[str, object]]:
     return figs
 
 
-def history_figures(steps) -> list[tuple[str, object]]:
-    """Residual RMS (fit, held-out, noise floor) and AIC per history step."""
-    fig, axes = new_figure(2, 1, size=(8, 6), sharex=True, height_ratios=[1.4, 1])
+def history_figures(steps, *, size: tuple[float, float] = (8, 6)) -> list[tuple[str, object]]:
+    """Residual RMS (fit, held-out, noise floor) and AIC per history step (``size`` inches);
+    each step is labelled under the x axis with its number and the terms it added/removed."""
+    fig, axes = new_figure(2, 1, size=size, sharex=True, height_ratios=[1.4, 1])
     x = np.arange(1, len(steps) + 1)
     ax = axes[0]
     ax.plot(x, [s.rms_fit_dph for s in steps], "o-", color=COLORS[0], label="fit")
@@ -227,16 +228,19 @@ def history_figures(steps) -> list[tuple[str, object]]:
     ax.set_ylabel("residual RMS, deg/h")
     ax.legend(loc="best")
     ax.set_title("model history: watch the error fall", loc="left")
-    for xi, s in zip(x, steps):
-        lab = " ".join([f"+{a}" for a in s.added] + [f"−{a}" for a in s.removed]) or "(same)"
-        ax.annotate(lab, (xi, s.rms_holdout_dph), textcoords="offset points", xytext=(4, 6),
-                    fontsize=7.5, rotation=20)
     ax = axes[1]
     ax.plot(x, [s.aic for s in steps], "o-", color=COLORS[2], label="AIC")
     ax.plot(x, [s.bic for s in steps], "s--", color=COLORS[3], label="BIC")
     ax.set_ylabel("information criterion")
-    ax.set_xlabel("step")
-    ax.set_xticks(x)
+    ax.set_xlabel("step: terms added (+) or removed (−)")
+    # the step labels go under the axis, where the layout makes room for them (annotations
+    # beside the points ran into the title and out of the axes)
+    labels = [f"{s.step}\n" + ("\n".join([f"+{a}" for a in s.added]
+                                          + [f"−{a}" for a in s.removed]) or "(same)")
+              for s in steps]
+    many = len(steps) > 5
+    ax.set_xticks(x, labels, fontsize=7.5, rotation=30 if many else 0,
+                  ha="right" if many else "center", rotation_mode="anchor")
     ax.legend(loc="best")
     return [("history", fig)]
 

@@ -19,11 +19,20 @@ def block_means(t: np.ndarray, x: np.ndarray, target: int = 2000) -> tuple[np.nd
     return t[:m].reshape(-1, k).mean(axis=1), x[:m].reshape(-1, k).mean(axis=1)
 
 
-def plot_bias(logs, runs, multi, path, *, skip_s: float = 0.0):
+def plot_bias(analysis, path, *, size: tuple[float, float] | None = None):
+    """Write :func:`figure_bias` to ``path`` (.png/.svg/.pdf); returns the path."""
+    return save_figure(figure_bias(analysis, size=size), path)
+
+
+def figure_bias(analysis, *, size: tuple[float, float] | None = None):
     """Rate (block means) vs time per run, the warm-up trim shaded, D_F ± 2σ; and for a
-    multi-position test the position means against the fitted model."""
+    multi-position test the position means against the fitted model. ``analysis`` is a
+    :class:`~gyrotest.bias.BiasAnalysis`; ``size`` in inches (default 8 wide, 4.6 per panel
+    high). Returns the matplotlib figure."""
+    logs, runs, multi = analysis.parts, analysis.runs, analysis.multi
+    skip_s = analysis.parts_skip_s
     nrow = 2 if multi else 1
-    fig, axes = new_figure(nrow, 1, size=(8, 4.6 * nrow))
+    fig, axes = new_figure(nrow, 1, size=size or (8, 4.6 * nrow))
     ax = axes[0] if multi else axes
     for i, (g, r) in enumerate(zip(logs, runs)):
         col = COLORS[i % len(COLORS)]
@@ -65,4 +74,4 @@ def plot_bias(logs, runs, multi, path, *, skip_s: float = 0.0):
         ax2.set_ylabel("mean output, deg/h")
         ax2.set_title("Multi-position test")
         ax2.legend(loc="best")
-    return save_figure(fig, path)
+    return fig

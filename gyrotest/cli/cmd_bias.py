@@ -66,7 +66,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
     if plot_path:
         from ..bias_plot import plot_bias
 
-        plot_bias(ba.parts, ba.runs, ba.multi, plot_path, skip_s=ba.parts_skip_s)
+        plot_bias(ba, plot_path)
         if not as_json:
             note(f"plot written to {plot_path}")
     if as_json:

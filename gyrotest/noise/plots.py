@@ -8,7 +8,9 @@
 * :func:`plot_psd`: the Welch rate PSD (two-sided, (deg/h)²/Hz), the fitted model's PSD, the
   detected lines, and the autocorrelation with its white-noise band.
 
-Formats .png/.svg/.pdf via :func:`gyrotest.plotting.save_figure`.
+Each has a figure-returning variant with a ``size`` (inches): :func:`figure_allan`,
+:func:`figure_psd` (the spec-sheet report lays them out at its own size); the ``plot_*``
+functions save that figure to .png/.svg/.pdf via :func:`gyrotest.plotting.save_figure`.
 """
 
 from __future__ import annotations
@@ -20,7 +22,10 @@ import numpy as np
 
 from ..plotting import COLORS, new_figure, save_figure
 
-__all__ = ["plot_allan", "plot_psd"]
+__all__ = ["figure_allan", "figure_psd", "plot_allan", "plot_psd"]
+
+ALLAN_SIZE = (11.5, 6.8)
+PSD_SIZE = (8.2, 6.6)
 
 _COMP_COLORS = ["#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#8C564B", "#999999",
                 "#F0E442"]
@@ -77,11 +82,22 @@ def _components(ax, fit, tf) -> None:
 
 
 def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
-               title: str | None = None, show_components: bool | None = None):
-    """Allan deviation figure (module docstring). ``items`` = [(source, AxisAnalysis), …];
-    ``labels`` overrides the legend label of each item. With one item, the components of the
-    fitted model are drawn; when the diagnosis added terms, the diagnosed model is the main
-    curve and the requested model is shown thin and grey with its residuals. Returns the path.
+               title: str | None = None, show_components: bool | None = None,
+               size: tuple[float, float] = ALLAN_SIZE):
+    """Write :func:`figure_allan` to ``path`` (.png/.svg/.pdf); returns the path."""
+    return save_figure(figure_allan(items, labels=labels, title=title,
+                                    show_components=show_components, size=size), path)
+
+
+def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+                 title: str | None = None, show_components: bool | None = None,
+                 size: tuple[float, float] = ALLAN_SIZE):
+    """Allan deviation figure (module docstring), ``size`` inches. ``items`` = [(source,
+    AxisAnalysis), …]; ``labels`` overrides the legend label of each item. With one item, the
+    components of the fitted model are drawn; when the diagnosis added terms, the diagnosed
+    model is the main curve and the requested model is shown thin and grey with its
+    residuals. Returns the matplotlib figure (close it, or save it with
+    :func:`gyrotest.plotting.save_figure`).
     """
     from pathlib import Path
 
@@ -89,7 +105,7 @@ def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[st
     many_sources = len({s for s, _ in items}) > 1
     many_axes = len({a.axis for _, a in items}) > 1
     single = len(items) == 1 if show_components is None else show_components
-    fig, (ax, axr) = new_figure(2, 1, size=(11.5, 6.8), height_ratios=[3.2, 1.0], sharex=True)
+    fig, (ax, axr) = new_figure(2, 1, size=size, height_ratios=[3.2, 1.0], sharex=True)
     all_tau, all_sig = [], []
     for i, (src, a) in enumerate(items):
         col = COLORS[i % len(COLORS)]
@@ -161,16 +177,24 @@ def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[st
     axr.set_xlabel("averaging time τ, s")
     axr.text(1.01, 0.5, "bands: ±1, ±2 CI\n△: beyond ±5 (clipped)", transform=axr.transAxes,
              ha="left", va="center", fontsize=7.5, color="0.3")
-    return save_figure(fig, path)
+    return fig
 
 
-def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None):
+def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
+             size: tuple[float, float] = PSD_SIZE):
+    """Write :func:`figure_psd` to ``path`` (.png/.svg/.pdf); returns the path."""
+    return save_figure(figure_psd(items, labels=labels, size=size), path)
+
+
+def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+               size: tuple[float, float] = PSD_SIZE):
     """Welch PSD with the fitted model PSD and detected lines, plus the autocorrelation
-    (module docstring). ``items`` = [(source, AxisAnalysis), …]. Returns the saved path."""
+    (module docstring), ``size`` inches. ``items`` = [(source, AxisAnalysis), …]. Returns the
+    matplotlib figure."""
     items = list(items)
     many_sources = len({s for s, _ in items}) > 1
     many_axes = len({a.axis for _, a in items}) > 1
-    fig, (ax, axc) = new_figure(2, 1, size=(8.2, 6.6), height_ratios=[2.4, 1.3])
+    fig, (ax, axc) = new_figure(2, 1, size=size, height_ratios=[2.4, 1.3])
     for i, (src, a) in enumerate(items):
         col = COLORS[i % len(COLORS)]
         lab = _label_for((src, a), many_sources, many_axes, labels[i] if labels else None)
@@ -210,4 +234,4 @@ def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str]
              ha="right", fontsize=7, color="0.35")
     if len(items) > 1:
         axc.legend(loc="upper right", fontsize=7.5)
-    return save_figure(fig, path)
+    return fig

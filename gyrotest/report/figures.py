@@ -1,22 +1,20 @@
 """Figures of the spec sheet, drawn by the analysis modules' own plotting functions.
 
-* Allan deviation with the fit, components and residuals: :func:`gyrotest.noise.plots.plot_allan`;
-* scale-factor linearity residuals: :func:`gyrotest.scalefactor.plot.plot_scale_factor`;
+* Allan deviation with the fit, components and residuals: :func:`gyrotest.noise.plots.figure_allan`;
+* scale-factor linearity residuals: :func:`gyrotest.scalefactor.plot.figure_scale_factor`;
 * thermal model vs measurement and residual: :func:`gyrotest.envmodel.plots.thermal_figures`;
 * magnetic response per axis: :func:`gyrotest.envmodel.plots.mag_figures`;
 * model history (error falling as terms are added): :func:`gyrotest.envmodel.plots.history_figures`.
 
-The functions that write a file are called with a temporary PNG path and the bytes read back;
-those that return matplotlib figures are saved here. Every figure is rendered at
-:data:`DPI` so that it stays sharp when scaled to the page width.
+Each returns matplotlib figures (the ``plot_*`` functions the commands use save the same
+figures to files); those that take a size are drawn at the report's size, the others are
+resized before saving. Every figure is rendered at :data:`DPI` so that it stays sharp when
+scaled to the page width.
 """
 
 from __future__ import annotations
 
-import contextlib
 import io
-import tempfile
-from pathlib import Path
 
 from .sheet import Figure
 
@@ -25,37 +23,6 @@ DPI = 150
 #: (8-10 pt) print at 7-9 pt
 SIZES = {"allan": (8.0, 5.4), "scale_factor": (9.6, 6.2), "thermal": (8.0, 3.4),
          "time": (8.0, 5.6), "levels": (9.0, 3.6), "history": (8.5, 5.0)}
-_TARGET: list[tuple[float, float]] = []
-
-
-def resize_hook(fig) -> None:
-    """matplotlib ``figure.hooks`` entry (rcParams): give a figure created by a module's
-    plotting function the report size before anything is drawn on it."""
-    if _TARGET:
-        fig.set_size_inches(*_TARGET[-1], forward=False)
-
-
-@contextlib.contextmanager
-def report_size(size: tuple[float, float]):
-    """Figures created inside get ``size`` (inches) through :func:`resize_hook`: the plotting
-    functions that write files keep their layout code and only the canvas changes."""
-    import matplotlib
-
-    _TARGET.append(size)
-    try:
-        with matplotlib.rc_context({"figure.hooks": [f"{__name__}:resize_hook"]}):
-            yield
-    finally:
-        _TARGET.pop()
-
-
-def _png_from_file(draw, name: str) -> tuple[bytes, float, float]:
-    """Call ``draw(path)`` with a temporary .png path; return the bytes and the size (in)."""
-    with tempfile.TemporaryDirectory(prefix="gyrotest-report-") as d:
-        p = Path(d) / f"{name}.png"
-        draw(p)
-        data = p.read_bytes()
-    return data, *_png_size(data)
 
 
 def _png_size(data: bytes) -> tuple[float, float]:
@@ -66,6 +33,8 @@ def _png_size(data: bytes) -> tuple[float, float]:
 
 
 def _png_from_fig(fig, size: tuple[float, float] | None = None) -> tuple[bytes, float, float]:
+    """PNG bytes of ``fig`` (resized to ``size`` inches first, if given) and its size (in);
+    the figure is closed."""
     import matplotlib.pyplot as plt
 
     from ..plotting import STYLE
@@ -91,19 +60,17 @@ def _close(figs) -> None:
 
 def allan_figure(source: str, axis_analysis) -> Figure:
     """Allan deviation, fitted model, its components and the residuals in CI units."""
-    from ..noise.plots import plot_allan
+    from ..noise.plots import figure_allan
 
-    with report_size(SIZES["allan"]):
-        png, w, h = _png_from_file(lambda p: plot_allan([(source, axis_analysis)], p), "allan")
+    png, w, h = _png_from_fig(figure_allan([(source, axis_analysis)], size=SIZES["allan"]))
     return Figure("allan", "", png, None, w, h)
 
 
 def scale_factor_figure(result) -> Figure:
     """Linearity error per rate with the nonlinearity model (residuals of the IEEE line)."""
-    from ..scalefactor.plot import plot_scale_factor
+    from ..scalefactor.plot import figure_scale_factor
 
-    with report_size(SIZES["scale_factor"]):
-        png, w, h = _png_from_file(lambda p: plot_scale_factor(result, p), "scale_factor")
+    png, w, h = _png_from_fig(figure_scale_factor(result, size=SIZES["scale_factor"]))
     return Figure("scale_factor", "", png, None, w, h)
 
 
@@ -143,9 +110,9 @@ def history_figure(steps) -> Figure:
     """Residual RMS (fit, held-out, noise floor) and AIC/BIC per model step."""
     from ..envmodel.plots import history_figures
 
-    figs = history_figures(steps)
+    figs = history_figures(steps, size=SIZES["history"])
     try:
-        png, w, h = _png_from_fig(figs[0][1], SIZES["history"])
+        png, w, h = _png_from_fig(figs[0][1])
     finally:
         _close(figs)
     return Figure("history", "", png, None, w, h)

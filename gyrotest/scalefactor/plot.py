@@ -1,6 +1,6 @@
 """Figures for ``gyrotest scale-factor``: model vs measurement.
 
-:func:`plot_scale_factor` draws
+:func:`figure_scale_factor` draws (and :func:`plot_scale_factor` saves)
 
 1. the linearity error of every plateau (ppm of full-scale output, IEEE 952 §12.9.4.2.1)
    vs input rate with ±1 SE error bars, one colour per run, the fitted f(I) model projected
@@ -71,13 +71,22 @@ def _history(fig, ax2, history) -> None:
     axh.grid(axis="y", visible=False)
 
 
-def plot_scale_factor(res, path, *, logs=None):
-    """Write the scale-factor figure (see module doc) to ``path`` (.png/.svg/.pdf)."""
+def plot_scale_factor(res, path, *, logs=None, size: tuple[float, float] | None = None):
+    """Write :func:`figure_scale_factor` to ``path`` (.png/.svg/.pdf); returns the path."""
+    return save_figure(figure_scale_factor(res, logs=logs, size=size), path)
+
+
+def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = None):
+    """The scale-factor figure (see module doc) of a
+    :class:`~gyrotest.scalefactor.ScaleFactorResult`; ``logs`` adds the output-vs-time panels
+    of up to four runs. ``size`` in inches (default 10 wide, 6.2 + 1.9 per run panel high).
+    Returns the matplotlib figure."""
     runs = res.runs
     show_logs = [lg for lg in (logs or [])][:4]
     n_raw = len(show_logs)
     ratios = [3.0, 1.5] + [1.25] * n_raw
-    fig, axes = new_figure(2 + n_raw, 1, size=(10.0, 6.2 + 1.9 * n_raw), height_ratios=ratios)
+    fig, axes = new_figure(2 + n_raw, 1, size=size or (10.0, 6.2 + 1.9 * n_raw),
+                           height_ratios=ratios)
     axes = np.atleast_1d(axes)
     ax, ax2 = axes[0], axes[1]
     fs = res.full_scale_dph
@@ -171,4 +180,4 @@ def plot_scale_factor(res, path, *, logs=None):
                          "shaded: averaging windows after settling", fontsize=9.5)
         a_.set_ylabel("output (S0 × raw),\ndeg/s")
         a_.set_xlabel(f"time, {unit_t}")
-    return save_figure(fig, path)
+    return fig

@@ -228,3 +228,16 @@ def format_duration(seconds: float) -> str:
     if s >= 0.5 and h < 10:
         out.append(f"{s:.0f} s")
     return " ".join(out)
+
+
+def format_number(x: float | None, digits: int = 4) -> str:
+    """Compact number for tables and messages: ``digits`` significant digits, scientific
+    outside 1e-3 … 1e5, ``—`` for None, NaN and infinities."""
+    if x is None or not math.isfinite(x):
+        return "—"
+    if x == 0:
+        return "0"
+    ax = abs(x)
+    if 1e-3 <= ax < 1e5:
+        return f"{x:.{digits}g}"
+    return f"{x:.{max(digits - 1, 1)}e}"

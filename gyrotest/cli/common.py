@@ -25,6 +25,7 @@ import click
 
 from ..errors import InputError
 from ..output import dumps
+from ..units import format_number
 
 
 @dataclass
@@ -236,15 +237,5 @@ def with_ingest(func):
     return wrapper
 
 
-def fmt_num(x: float | None, digits: int = 4) -> str:
-    """Compact number formatting for tables ('—' for None/NaN)."""
-    import math
-
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return "—"
-    if x == 0:
-        return "0"
-    ax = abs(x)
-    if 1e-3 <= ax < 1e5:
-        return f"{x:.{digits}g}"
-    return f"{x:.{max(digits - 1, 1)}e}"
+#: compact number formatting for tables ('—' for None/NaN), :func:`gyrotest.units.format_number`
+fmt_num = format_number

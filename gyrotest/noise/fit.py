@@ -75,6 +75,7 @@ from scipy import optimize, special, stats
 from scipy.optimize import nnls
 
 from ..errors import AnalysisError, InputError
+from ..units import format_number
 from .terms import (
     BIAS_INSTABILITY_PLATEAU,
     blue_markov_derivative_avar,
@@ -742,22 +743,22 @@ class FitTerm:
         """e.g. ``N = 0.01003 ± 0.00012 deg/sqrt(h)`` or ``R ≤ 0.0021 deg/h/h``."""
         u = self.units[self.main]
         if self.status == "not tested":
-            return f"{self.main} ≈ {_fmt(self.value, digits)} {u} (not tested)"
+            return f"{self.main} ≈ {format_number(self.value, digits)} {u} (not tested)"
         if self.status != "identified":
             if self.upper is None:
                 return f"{self.main} not identified (bound not computed) {u}"
-            return f"{self.main} ≤ {_fmt(self.upper, digits)} {u}"
+            return f"{self.main} ≤ {format_number(self.upper, digits)} {u}"
         s = self.sigma.get(self.main)
-        txt = f"{self.main} = {_fmt(self.value, digits + 1)}"
+        txt = f"{self.main} = {format_number(self.value, digits + 1)}"
         if s is not None and math.isfinite(s):
-            txt += f" ± {_fmt(s, 2)}"
+            txt += f" ± {format_number(s, 2)}"
         txt += f" {u}"
         for k in self.params:
             if k != self.main:
                 sk = self.sigma.get(k)
-                txt += f", {k} = {_fmt(self.params[k], digits + 1)}"
+                txt += f", {k} = {format_number(self.params[k], digits + 1)}"
                 if sk is not None and math.isfinite(sk):
-                    txt += f" ± {_fmt(sk, 2)}"
+                    txt += f" ± {format_number(sk, 2)}"
                 txt += f" {self.units[k]}"
         return txt
 
@@ -783,17 +784,6 @@ class FitTerm:
                          "bi_cutoff_hz": self.bi_f0},
             "notes": list(self.notes),
         }
-
-
-def _fmt(v: float | None, digits: int = 3) -> str:
-    if v is None or not math.isfinite(v):
-        return "—"
-    if v == 0:
-        return "0"
-    a = abs(v)
-    if 1e-3 <= a < 1e5:
-        return f"{v:.{digits}g}"
-    return f"{v:.{max(digits - 1, 1)}e}"
 
 
 @dataclass

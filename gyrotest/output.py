@@ -1,4 +1,5 @@
-"""Output plumbing shared by every command: atomic file writes and JSON serialisation.
+"""Output plumbing shared by every command: output-path checks, atomic file writes and JSON
+serialisation.
 
 Nothing here knows about the terminal. Results are dataclasses; :func:`jsonable` turns them
 (and numpy scalars/arrays, NaN, paths) into plain JSON values, so every ``--json`` output and
@@ -20,6 +21,8 @@ from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+
+from .errors import InputError
 
 
 def jsonable(obj: Any) -> Any:
@@ -107,3 +110,17 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:
     write_text(path, dumps(obj) + "\n")
+
+
+def check_output_path(path: str | os.PathLike, suffixes: tuple[str, ...], what: str, *,
+                      formats: str | None = None) -> Path:
+    """Validate an output path before any work: a known suffix (``formats`` says which, in
+    words; default ``.a or .b``) and an existing directory. InputError names ``what``."""
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise InputError(f"{what} {p}: unknown format {p.suffix or '(none)'!r}; use "
+                         + (formats or " or ".join(suffixes)))
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{what} {p}: directory {parent} does not exist")
+    return p

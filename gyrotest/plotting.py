@@ -16,8 +16,7 @@ matplotlib.use("Agg")  # no display needed; never opens windows
 
 import matplotlib.pyplot as plt  # noqa: E402
 
-from .errors import InputError  # noqa: E402
-from .output import atomic_path  # noqa: E402
+from .output import atomic_path, check_output_path  # noqa: E402
 
 FORMATS = (".png", ".svg", ".pdf")
 
@@ -60,13 +59,7 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, size=(7.5, 4.8), height_ratios
 
 def check_plot_path(path: str | os.PathLike) -> Path:
     """Validate a plot path before any work is done (suffix and directory)."""
-    p = Path(path)
-    if p.suffix.lower() not in FORMATS:
-        raise InputError(f"plot file {p}: unknown format {p.suffix or '(none)'!r}; use .png, .svg or .pdf")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"plot file {p}: directory {parent} does not exist")
-    return p
+    return check_output_path(path, FORMATS, "plot file", formats=".png, .svg or .pdf")
 
 
 def save_figure(fig, path: str | os.PathLike) -> Path:

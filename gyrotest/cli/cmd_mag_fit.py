@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..units import parse_duration
-from .cmd_model import check_output, render_fit, write_plot
+from .cmd_model import check_output, domain_fit_options, render_fit, write_plot
 from .common import (
     console,
     emit_json,
@@ -26,18 +26,8 @@ from .common import (
               help="Time dropped after every field step when averaging a plateau.")
 @click.option("--min-dwell", default="30s", show_default=True,
               help="Shortest constant-field stretch that counts as a plateau.")
-@click.option("--axis", default=None, help="Gyro axis (rate column); default the first.")
-@click.option("--skip", default="0", show_default=True, help="Drop the start of the log.")
-@click.option("--resolution", default="auto", show_default=True,
-              help="Working resolution (block length) or 'auto'.")
-@click.option("--smooth", default="auto", show_default=True,
-              help="Smoother window W or 'auto'.")
-@click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
-              help="Folds of the blocked cross-validation.")
-@click.option("-o", "--output", default=None,
-              help="Write the fitted model (.json/.toml) for 'gyrotest compensate'.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Plateau means per axis and residual plots (.png/.svg/.pdf).")
+@domain_fit_options(smooth_help="Smoother window W or 'auto'.",
+                    plot_help="Plateau means per axis and residual plots (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest

@@ -54,6 +54,31 @@ def prep_options(f):
     return f
 
 
+def domain_fit_options(*, smooth_help: str, plot_help: str):
+    """The log-preparation, model-file and plot options of ``thermal-fit`` and ``mag-fit``
+    (``--axis --skip --resolution --smooth --folds -o --plot``)."""
+    opts = [
+        click.option("--axis", default=None, help="Gyro axis (rate column); default the first."),
+        click.option("--skip", default="0", show_default=True, help="Drop the start of the log."),
+        click.option("--resolution", default="auto", show_default=True,
+                     help="Working resolution (block length) or 'auto'."),
+        click.option("--smooth", default="auto", show_default=True, help=smooth_help),
+        click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
+                     help="Folds of the blocked cross-validation."),
+        click.option("-o", "--output", default=None,
+                     help="Write the fitted model (.json/.toml) for 'gyrotest compensate'."),
+        click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+                     help=plot_help),
+    ]
+
+    def decorate(f):
+        for o in reversed(opts):
+            f = o(f)
+        return f
+
+    return decorate
+
+
 def term_options(f):
     opts = [
         click.option("--terms", "terms", multiple=True,
@@ -73,14 +98,9 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
     """Validate an output path before any work (suffix and directory)."""
     if path is None:
         return None
-    p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise InputError(f"{what} {p}: unknown format {p.suffix or '(none)'!r}; use "
-                         + " or ".join(suffixes))
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"{what} {p}: directory {parent} does not exist")
-    return p
+    from ..output import check_output_path
+
+    return check_output_path(path, suffixes, what)
 
 
 # ----------------------------------------------------------------------------- rendering

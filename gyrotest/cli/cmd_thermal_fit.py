@@ -7,7 +7,7 @@ import math
 import click
 
 from ..errors import InputError
-from .cmd_model import check_output, render_fit, write_plot
+from .cmd_model import check_output, domain_fit_options, render_fit, write_plot
 from .common import (
     console,
     emit_json,
@@ -46,18 +46,8 @@ def _coef_table(title, coefs):
               help="Two temperature channels A,B for D_gradTdot = d(T_A − T_B)/dt.")
 @click.option("--weighted", is_flag=True,
               help="Weight set-points by 1/sigma² (default: equal weights).")
-@click.option("--axis", default=None, help="Gyro axis (rate column); default the first.")
-@click.option("--skip", default="0", show_default=True, help="Drop the start of the log.")
-@click.option("--resolution", default="auto", show_default=True,
-              help="Working resolution (block length) or 'auto'.")
-@click.option("--smooth", default="auto", show_default=True,
-              help="Smoother window W for dT/dt or 'auto'.")
-@click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
-              help="Folds of the blocked cross-validation.")
-@click.option("-o", "--output", default=None,
-              help="Write the fitted model (.json/.toml) for 'gyrotest compensate'.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Drift vs temperature and residual plots (.png/.svg/.pdf).")
+@domain_fit_options(smooth_help="Smoother window W for dT/dt or 'auto'.",
+                    plot_help="Drift vs temperature and residual plots (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest

@@ -160,22 +160,32 @@ def profile_from_dict(data: dict, source: str = "profile") -> Profile:
     return prof
 
 
-def load_profile(path: str | Path) -> Profile:
-    """Read and validate a bench profile TOML file."""
+def read_toml(path: str | Path, *, not_found: str, expected: str, kind: str
+              ) -> tuple[dict[str, Any], bytes]:
+    """Parse a TOML file; returns (data, raw bytes). InputErrors start with the path:
+    ``<not_found>``, ``is a directory, expected <expected>``, ``not a text file; <kind> is
+    TOML text``, ``invalid TOML: ...``."""
     p = Path(path)
     try:
         raw = p.read_bytes()
     except FileNotFoundError:
-        raise InputError(f"{p}: profile not found; check the --profile path") from None
+        raise InputError(f"{p}: {not_found}") from None
     except IsADirectoryError:
-        raise InputError(f"{p}: is a directory, expected a TOML profile file") from None
+        raise InputError(f"{p}: is a directory, expected {expected}") from None
     try:
         data = tomllib.loads(raw.decode("utf-8"))
     except UnicodeDecodeError:
-        raise InputError(f"{p}: not a text file; a profile is TOML text") from None
+        raise InputError(f"{p}: not a text file; {kind} is TOML text") from None
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"{p}: invalid TOML: {e}") from None
-    return profile_from_dict(data, source=str(p))
+    return data, raw
+
+
+def load_profile(path: str | Path) -> Profile:
+    """Read and validate a bench profile TOML file."""
+    data, _ = read_toml(path, not_found="profile not found; check the --profile path",
+                        expected="a TOML profile file", kind="a profile")
+    return profile_from_dict(data, source=str(Path(path)))
 
 
 def merge(base: Profile | None, overrides: dict[str, dict[str, Any]]) -> Profile:

@@ -78,7 +78,6 @@ from __future__ import annotations
 import datetime as _dt
 import hashlib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -507,17 +506,8 @@ def _rel(root: Path, p: Path) -> str:
 
 def load_campaign(path: str | Path) -> Campaign:
     """Read and validate a campaign file (see the module docstring)."""
-    p = Path(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{p}: campaign file not found") from None
-    except IsADirectoryError:
-        raise InputError(f"{p}: is a directory, expected a campaign TOML file") from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a text file; a campaign is TOML text") from None
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"{p}: invalid TOML: {e}") from None
-    return parse_campaign(data, p.resolve(), hashlib.sha256(raw).hexdigest())
+    from ..profile import read_toml
+
+    data, raw = read_toml(path, not_found="campaign file not found",
+                          expected="a campaign TOML file", kind="a campaign")
+    return parse_campaign(data, Path(path).resolve(), hashlib.sha256(raw).hexdigest())

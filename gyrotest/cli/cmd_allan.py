@@ -115,7 +115,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
     results = [analyse_allan(
         g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-        detrend=None if detrend == "none" else detrend, run_diagnosis=not no_diagnose,
+        detrend=detrend, run_diagnosis=not no_diagnose,
         impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]

@@ -164,7 +164,6 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
     opts, iargv = ingest_opts(test, campaign)
-    detrend = test.opt("detrend", "none")
 
     def go():
         """The command body: returns (result, objects, logs)."""
@@ -177,7 +176,7 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             taus=parse_taus(test.opt("taus", "10/decade")),
             terms=parse_terms(test.opt("terms", "Q,N,B,K,R")), vehicle_rates=rates, axes=axes,
             confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
-            detrend=None if detrend == "none" else detrend,
+            detrend=test.opt("detrend", "none"),
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
             bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False)
         return allan_document([r]), r, [g]

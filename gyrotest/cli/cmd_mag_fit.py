@@ -45,7 +45,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
       gyrotest mag-fit helmholtz.csv --profile bench.toml
       gyrotest mag-fit long_run.csv --field-cols Hx,Hy,Hz --with T -o mag.json
     """
-    from ..envmodel.domain import analyse_mag, mag_terms
+    from ..envmodel.domain import analyse_mag, mag_document, mag_terms
 
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
@@ -65,9 +65,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
 
         write_plot(mag_figures(mg), plot_path)
     if as_json:
-        d = mg.to_dict()
-        d["model_file"] = str(out_path) if out_path else None
-        emit_json(d)
+        emit_json(mag_document(mg, model_file=str(out_path) if out_path else None))
         return
     from rich.table import Table
 

@@ -287,7 +287,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
       gyrotest model fit run.csv --terms "T(T_coil),Tlag(T_case),Hx,Hy,Hz" --plot fit.png
       gyrotest model fit run.csv --terms T --term "vib:extra.vib_g**2" --json
     """
-    from ..envmodel.fit import fit_log
+    from ..envmodel.fit import fit_document, fit_log
     from ..envmodel.history import append_history, session_paths
     from ..envmodel.prepare import collect_terms
 
@@ -333,9 +333,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 
         write_plot(fit_figures(res), plot_path)
     if as_json:
-        d = res.to_dict()
-        d["written"] = written
-        emit_json(d)
+        emit_json(fit_document(res, written=written))
         return
     render_fit(res)
     if written.get("model_file"):

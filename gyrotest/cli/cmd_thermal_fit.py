@@ -97,9 +97,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
         figs = (thermal_figures(th) if th else []) + (setpoint_figures(sp) if sp else [])
         write_plot(figs, plot_path)
     if as_json:
-        d = ta.to_dict()
-        d["model_file"] = str(out_path) if out_path else None
-        emit_json(d)
+        emit_json(ta.to_dict(model_file=str(out_path) if out_path else None))
         return
     c = console()
     if th:

@@ -539,11 +539,12 @@ class ThermalAnalysis:
     chamber: ThermalResult | None
     setpoints: SetpointResult | None
 
-    def to_dict(self) -> dict:
-        """The JSON document of ``gyrotest thermal-fit --json`` (no model file written)."""
+    def to_dict(self, model_file: str | None = None) -> dict:
+        """The JSON document of ``gyrotest thermal-fit --json`` (``model_file``: the model
+        written with ``-o``, if any)."""
         return {"chamber": self.chamber.to_dict() if self.chamber else None,
                 "setpoints": self.setpoints.to_dict() if self.setpoints else None,
-                "model_file": None}
+                "model_file": model_file}
 
 
 def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path | None = None,
@@ -578,6 +579,13 @@ def mag_terms(with_terms: str | None = None) -> tuple[list[str], list[TermSpec]]
     """(the ``--with`` terms, the term specs ``mag-fit`` needs: Hx, Hy, Hz and those)."""
     extra = split_terms(with_terms) if with_terms else []
     return extra, parse_terms(["Hx", "Hy", "Hz"] + extra)
+
+
+def mag_document(result: MagResult, *, model_file: str | None = None) -> dict:
+    """The JSON document of ``gyrotest mag-fit --json`` (``model_file``: written with ``-o``)."""
+    d = result.to_dict()
+    d["model_file"] = model_file
+    return d
 
 
 def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,

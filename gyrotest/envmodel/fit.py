@@ -837,6 +837,14 @@ def finish(res: FitResult, k_sigma: float = 4.0) -> None:
 
 
 
+def fit_document(res: FitResult, *, written: dict | None = None) -> dict:
+    """The JSON document of ``gyrotest model fit --json`` (``written``: the model and history
+    files written, if any)."""
+    d = res.to_dict()
+    d["written"] = written or {}
+    return d
+
+
 def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | None = None,
             skip: str | float = "0", t_ref: float | None = None, v_ref: float | None = None,
             resolution: str | None = "auto", smooth: str | None = "auto", folds: int = 5,

@@ -254,7 +254,7 @@ def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, terms: str, k
     """``gyrotest model fit LOG --terms TERMS [--t-ref T]`` (cli/cmd_model.py): one step of
     the model workbench, :func:`gyrotest.envmodel.fit.fit_log`; ``obj`` is the
     :class:`~gyrotest.envmodel.fit.FitResult`."""
-    from ..envmodel.fit import fit_log
+    from ..envmodel.fit import fit_document, fit_log
     from ..envmodel.prepare import collect_terms
 
     opts, iargv = ingest_opts(test, campaign)
@@ -266,9 +266,7 @@ def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, terms: str, k
         g = cache.get(path, opts, specs)
         res = fit_log(g, specs, path=str(path), t_ref=t_ref, folds=5, k_sigma=4.0,
                       **_prep_opts(test))
-        d = res.to_dict()
-        d["written"] = {}
-        return d, res, [g]
+        return fit_document(res), res, [g]
 
     res, obj, logs, dt = _timed(go)
     argv = ["model", "fit", campaign.rel(path), "--terms", terms]
@@ -292,7 +290,7 @@ def history_steps(analyses: list[Analysis]) -> list:
 def run_magnetic(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest mag-fit LOG [--settle] [--with T]`` (cli/cmd_mag_fit.py):
     :func:`gyrotest.envmodel.domain.analyse_mag`."""
-    from ..envmodel.domain import analyse_mag, mag_terms
+    from ..envmodel.domain import analyse_mag, mag_document, mag_terms
     from ..units import parse_duration
 
     opts, iargv = ingest_opts(test, campaign)
@@ -306,9 +304,7 @@ def run_magnetic(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
         g = cache.get(path, opts, specs)
         mg = analyse_mag(g, path=str(path), with_terms=test.opt("with"), settle_s=settle_s,
                          min_dwell_s=dwell_s, folds=5, **_prep_opts(test))
-        d = mg.to_dict()
-        d["model_file"] = None
-        return d, mg, [g]
+        return mag_document(mg), mg, [g]
 
     res, obj, logs, dt = _timed(go)
     argv = ["mag-fit", campaign.rel(path), *iargv, *option_argv(test)]

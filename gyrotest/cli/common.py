@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -53,7 +54,11 @@ def console():
     from rich.console import Console
 
     if _console is None or _console.file is not sys.stdout:
-        _console = Console(file=sys.stdout, highlight=False, soft_wrap=False)
+        # piped or captured: plain text at a comfortable width (COLUMNS wins), long lines are
+        # not broken (paths, notes), so that logs and `grep` see whole lines
+        width = None if sys.stdout.isatty() else int(os.environ.get("COLUMNS", 120))
+        _console = Console(file=sys.stdout, highlight=False, soft_wrap=not sys.stdout.isatty(),
+                           width=width)
     return _console
 
 

@@ -37,6 +37,21 @@ COMMANDS: dict[str, str] = {
     "simulate": "cmd_simulate",
 }
 
+# one line per command for `gyrotest --help` (the full text is `gyrotest CMD --help`)
+SHORT_HELP: dict[str, str] = {
+    "info": "Summarise a log: duration, rate, channels, gaps.",
+    "ingest": "Validate a log, convert it to Parquet/Feather.",
+    "bias": "Bias D_F with honest uncertainty, repeatability, positions.",
+    "allan": "Allan deviations with CIs, noise-model fit and diagnosis.",
+    "scale-factor": "Scale factor, linearity, asymmetry from rate-table runs.",
+    "model": "Model workbench: fit drift models, find the missing effect.",
+    "thermal-fit": "Thermal drift model (Antonova–Matveev; IEEE D_T, D_Ṫ, D_∇Ṫ).",
+    "mag-fit": "Magnetic sensitivities wx, wy, wz from Helmholtz-coil runs.",
+    "compensate": "Apply a drift model to another run: drift before and after.",
+    "report": "IEEE-952-style spec sheet of a campaign (Markdown/HTML/PDF).",
+    "simulate": "Simulate a bench log with known truth from a scenario TOML.",
+}
+
 
 class LazyGroup(click.Group):
     """A click group whose sub-commands are imported on first use."""
@@ -56,7 +71,7 @@ class LazyGroup(click.Group):
         for name in self.list_commands(ctx):
             cmd = self.get_command(ctx, name)
             if cmd is not None and not cmd.hidden:
-                rows.append((name, cmd.get_short_help_str(limit=70)))
+                rows.append((name, SHORT_HELP.get(name) or cmd.get_short_help_str(limit=70)))
         if rows:
             with formatter.section("Commands"):
                 formatter.write_dl(rows)

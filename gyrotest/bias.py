@@ -75,7 +75,8 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     is the variance of a mean over T for white rate noise (N²/T), rate random walk started at
     the record start (K²T/3) and Markov noise with T ≫ T_c (IEEE 952 Annex C relations), so this
     is honest for correlated noise, unlike σ/√n. Never smaller than the white-noise value
-    σ(τ0)·sqrt(τ0/T).
+    σ(τ0)·sqrt(τ0/T); the extrapolation from the longest measured τ to T stays between the
+    white-noise (∝ 1/τ) and random-walk (∝ τ) continuations of the measured level.
     """
     from .noise.deviations import compute_deviation
     from .noise.fit import fit_deviation
@@ -98,8 +99,16 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     var_T = float(fit.predict_avar([T])[0][0])
     var_bound = float(fit.predict_avar([T], conservative=True)[0][0])
     white_floor = float(dev.sigma[ok][0] ** 2 * dev.tau[ok][0] / T)
-    var_T = max(var_T, white_floor)
-    var_bound = max(var_bound, var_T)
+    # Beyond the longest measured τ the Allan variance can grow no faster than rate random walk
+    # (∝ τ) and fall no faster than white rate noise (∝ 1/τ): keep the extrapolation inside that
+    # envelope around the measured level (geometric mean of the last three points), so that a
+    # noisy long-τ end cannot swing a fitted K term to an absurd σ_A(T).
+    tail_s2, tail_tau = np.asarray(dev.sigma)[ok][-3:] ** 2, np.asarray(dev.tau)[ok][-3:]
+    level = float(np.exp(np.mean(np.log(tail_s2))))
+    t_a = float(np.exp(np.mean(np.log(tail_tau))))
+    lo, hi = level * t_a / T, level * T / t_a
+    var_T = min(max(var_T, white_floor, lo), hi)
+    var_bound = max(min(var_bound, hi), var_T)
     par = {t.key: t.params.get(t.key, 0.0) for t in fit.terms}
     return MeanUncertainty(
         sigma_dph=math.sqrt(var_T), record_s=T,

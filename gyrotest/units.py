@@ -218,14 +218,14 @@ def format_duration(seconds: float) -> str:
         return str(seconds)
     if seconds < 120:
         return f"{seconds:.4g} s"
-    h, rem = divmod(seconds, 3600)
+    h, rem = divmod(round(seconds), 3600)
     m, s = divmod(rem, 60)
     out = []
     if h:
         out.append(f"{int(h)} h")
     if m:
         out.append(f"{int(m)} min")
-    if s >= 0.5 and h < 10:
+    if s and h < 10:
         out.append(f"{s:.0f} s")
     return " ".join(out)
 

@@ -21,7 +21,7 @@ def command(log, as_json, ingest_opts):
 
     \b
     Example:
-      gyrotest info sample_data/static.csv --profile sample_data/static.profile.toml
+      gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
     g = load_log(log, ingest_opts, announce=not as_json)
     summary = g.summary()

@@ -266,9 +266,9 @@ def _check_columns(wanted: list[str], names: list[str], source: str) -> None:
 
 def _missing_column_msg(col: str, names: list[str], source: str, role: str | None = None) -> str:
     close = difflib.get_close_matches(col, names, n=1, cutoff=0.6)
-    hint = f"; did you mean {close[0]!r}?" if close else ""
+    hint = f"did you mean {close[0]!r}? " if close else ""
     what = f" (named for {role})" if role else ""
-    return (f"{source}: column {col!r}{what} not found{hint} Columns are: "
+    return (f"{source}: column {col!r}{what} not found; {hint}columns are: "
             f"{', '.join(names[:20])}{' ...' if len(names) > 20 else ''}")
 
 

@@ -1053,7 +1053,7 @@ def compute_deviation(
         raise AnalysisError(
             f"record too short for {kind}: {series.n_longest} samples in the longest segment give "
             f"no τ (stop ratio {ratio:g}; {kind} needs {_MIN_POINTS_TEXT[kind]} at τ = m·τ0); "
-            "record longer or use a smaller stop ratio"
+            "record a longer log or use a smaller stop ratio"
         )
 
     m_arr = np.array(rows_m, dtype=np.int64)

@@ -1050,7 +1050,7 @@ def fit_noise_model(
     if np.count_nonzero(used) < n_par + 1:
         raise AnalysisError(
             f"only {int(np.count_nonzero(used))} τ value(s) with EDF ≥ {min_edf:g} to fit "
-            f"{n_par} parameter(s) ({','.join(keys)}): record longer, use a denser τ grid "
+            f"{n_par} parameter(s) ({','.join(keys)}): record a longer log, use a denser τ grid "
             "(--taus 10/decade) or fewer --terms")
     dropped = ok & ~used & (edf < min_edf)
     if np.any(dropped):

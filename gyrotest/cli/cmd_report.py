@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from .common import emit_json, note, settings
+from .common import emit_json, err_console, note, settings
 
 
 def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
@@ -70,12 +70,21 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     figures = bool(pdf or htm) and not no_figures
     quiet = settings().quiet
 
-    def progress(name: str) -> None:
-        """One note per analysis on stderr (not with --json or -q)."""
-        if not quiet and not as_json:
-            note(f"report: {name} …")
+    import contextlib
+    import sys
 
-    sheet = make_report(camp, figures=figures, progress=progress)
+    live = not quiet and sys.stderr.isatty()
+    status_cm = err_console().status("report: reading the campaign …") if live else (
+        contextlib.nullcontext())
+    with status_cm as status:
+        def progress(name: str) -> None:
+            """A spinner line on a terminal; one note per analysis when piped (not -q/--json)."""
+            if status is not None:
+                status.update(f"report: {name} …")
+            elif not quiet and not as_json:
+                note(f"report: {name} …")
+
+        sheet = make_report(camp, figures=figures, progress=progress)
     t1 = time.perf_counter()
     outputs = []
     pdf_bytes = None

@@ -21,6 +21,7 @@ from .common import (
     json_option,
     load_for_terms,
     note,
+    progress,
     warn,
     with_ingest,
 )
@@ -388,9 +389,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
         check_plot_path(plot_path)
     cand = split_terms(candidates) if candidates else None
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
-    diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                        resolution=resolution, smooth=smooth, alpha=alpha,
-                        min_improvement_pct=min_improvement, folds=folds)
+    with progress("trying candidate terms") as advance:
+        diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref,
+                            v_ref=v_ref, resolution=resolution, smooth=smooth, alpha=alpha,
+                            min_improvement_pct=min_improvement, folds=folds,
+                            progress=lambda i, n, label: advance(
+                                1 if i else 0, total=n, description=f"trying {label}"))
     if plot_path:
         from ..envmodel.plots import diagnosis_figures
 

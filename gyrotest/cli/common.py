@@ -96,18 +96,28 @@ def emit_json(obj: Any) -> None:
 
 
 @contextlib.contextmanager
-def progress(description: str, total: float | None = None) -> Iterator[Callable[[float], None]]:
+def progress(description: str, total: float | None = None) -> Iterator[Callable[..., None]]:
     """A progress bar on stderr when it is a terminal (and not -q); otherwise silent.
-    Yields ``advance(amount)``."""
+    Yields ``advance(amount=1, total=None, description=None)`` (``total`` may be set late)."""
     if settings().quiet or not sys.stderr.isatty():
-        yield lambda amount=1: None
+        yield lambda amount=1, total=None, description=None: None
         return
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     with Progress(TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn(),
                   console=err_console(), transient=True) as prog:
         task = prog.add_task(description, total=total)
-        yield lambda amount=1: prog.advance(task, amount)
+
+        def advance(amount: float = 1, total: float | None = None,
+                    description: str | None = None) -> None:
+            kw = {}
+            if total is not None:
+                kw["total"] = total
+            if description is not None:
+                kw["description"] = description
+            prog.update(task, advance=amount, **kw)
+
+        yield advance
 
 
 # ----------------------------------------------------------------------------- options

@@ -132,14 +132,16 @@ def diagnose_log(log, specs: list[TermSpec], candidates: list[str] | None = None
                  t_ref: float | None = None, v_ref: float | None = None,
                  resolution: str | None = "auto", smooth: str | None = "auto",
                  alpha: float | None = None, min_improvement_pct: float = 1.0,
-                 folds: int = 5) -> Diagnosis:
+                 folds: int = 5, progress=None) -> Diagnosis:
     """``gyrotest model diagnose``: prepare ``log`` with the command's options
     (:func:`gyrotest.envmodel.prepare.prepare_log`) and :func:`diagnose` the model ``specs``
-    (``alpha`` default :data:`ALPHA`; ``min_improvement_pct`` in %)."""
+    (``alpha`` default :data:`ALPHA`; ``min_improvement_pct`` in %). ``progress(i, n, label)``
+    is called before each candidate term is tried."""
     wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
                      resolution=resolution, smooth=smooth, specs=specs)
     return diagnose(wd, specs, candidates, alpha=ALPHA if alpha is None else alpha,
-                    min_improvement=min_improvement_pct / 100.0, folds=folds)
+                    min_improvement=min_improvement_pct / 100.0, folds=folds,
+                    progress=progress)
 
 
 def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,

@@ -39,6 +39,8 @@ from typing import Any
 import numpy as np
 from scipy import integrate, special
 
+from ..earth import OMEGA_E_DPH
+
 __all__ = [
     "BIAS_INSTABILITY_PLATEAU",
     "EARTH_RATE_DPH",
@@ -59,8 +61,8 @@ SEC_PER_HOUR = 3600.0
 SQRT_SEC_PER_HOUR = 60.0
 #: sqrt(2 ln2 / pi): the bias-instability plateau sigma/B (IEEE 952 Annex C: "0.664").
 BIAS_INSTABILITY_PLATEAU = math.sqrt(2.0 * math.log(2.0) / math.pi)
-#: Sidereal earth rate, deg/h (7.2921150e-5 rad/s).
-EARTH_RATE_DPH = 7.2921150e-5 * 180.0 / math.pi * 3600.0
+#: Sidereal earth rate, deg/h (7.2921150e-5 rad/s): the one in :mod:`gyrotest.earth`.
+EARTH_RATE_DPH = OMEGA_E_DPH
 PLATFORM_BENIGN_LABEL = "platform-benign / strapdown-critical"
 
 ArrayLike = Any

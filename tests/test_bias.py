@@ -202,3 +202,23 @@ def test_bias_cli_bad_skip(tmp_path):
 def test_site_repr():
     s = Site(48.137, 0, 90, "up")
     assert s.to_dict()["earth_rate_ia_dph"] == pytest.approx(11.201724, abs=2e-5)
+
+
+def test_bias_cli_multi_position_from_several_files(tmp_path):
+    """One file per IA direction (--positions): bias separated from earth rate."""
+    truths = []
+    for name, ia in (("up", "up"), ("down", "down")):
+        sc = static_scenario(hours=1, N=0.003, B=0.001, K=0.0, ia=ia)
+        res = simulate(sc, seed=11 if ia == "up" else 12)
+        w = write_log(res, tmp_path / f"{name}.csv")
+        truths.append(json.loads(w.truths[0].read_text()))
+    r = run_cli(["bias", tmp_path / "up.csv", tmp_path / "down.csv", "--profile",
+                 tmp_path / "up.profile.toml", "--positions", "up,down", "--json"])
+    assert r.code == 0, r.err
+    m = json.loads(r.out)["multi_position"]
+    truth = truths[0]["bias"]["D_F_dph"]
+    assert abs(m["bias_D_F_dph"] - truth) < 3 * m["bias_sigma_dph"] + 1e-3
+    assert m["latitude_est_deg"] == pytest.approx(48.137, abs=3 * m["latitude_est_sigma_deg"] + 0.01)
+    r = run_cli(["bias", tmp_path / "up.csv", tmp_path / "down.csv", "--profile",
+                 tmp_path / "up.profile.toml", "--positions", "up"])
+    r.assert_clean_error("--positions", "one IA direction per file")

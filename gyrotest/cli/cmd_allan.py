@@ -27,6 +27,7 @@ from .common import (
     json_option,
     load_logs,
     note,
+    plot_option,
     warn,
     with_ingest,
 )
@@ -66,8 +67,7 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
               help="Analyse on the nominal τ0 even if the sample interval jitters > 10 %.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
               help="Write the deviation table(s) to this CSV file.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="σ(τ) with fit, components and residuals (.png/.svg/.pdf).")
+@plot_option("σ(τ) with fit, components and residuals (.png/.svg/.pdf).")
 @click.option("--psd", "psd_path", type=click.Path(dir_okay=False), default=None,
               help="Welch PSD and autocorrelation figure (.png/.svg/.pdf).")
 @ingest_options

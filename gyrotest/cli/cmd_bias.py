@@ -16,6 +16,7 @@ from .common import (
     json_option,
     load_logs,
     note,
+    plot_option,
     warn,
     with_ingest,
 )
@@ -31,8 +32,7 @@ from .common import (
 @click.option("--settle", default="0", show_default=True,
               help="Time dropped after every position change in a log with a position column.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
+@plot_option("Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest

@@ -13,6 +13,7 @@ from .common import (
     json_option,
     load_for_terms,
     note,
+    plot_option,
     warn,
     with_ingest,
 )
@@ -26,8 +27,7 @@ from .common import (
               help="Write the compensated log (.parquet or .feather, with metadata and the "
                    "model drift as column model_drift_dph).")
 @click.option("--keep-bias", is_flag=True, help="Do not subtract the model's constant bias.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Drift and Allan deviation before/after (.png/.svg/.pdf).")
+@plot_option("Drift and Allan deviation before/after (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest

@@ -21,6 +21,7 @@ from .common import (
     json_option,
     load_for_terms,
     note,
+    plot_option,
     progress,
     warn,
     with_ingest,
@@ -68,8 +69,7 @@ def domain_fit_options(*, smooth_help: str, plot_help: str):
                      help="Folds of the blocked cross-validation."),
         click.option("-o", "--output", default=None,
                      help="Write the fitted model (.json/.toml) for 'gyrotest compensate'."),
-        click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-                     help=plot_help),
+        plot_option(plot_help),
     ]
 
     def decorate(f):
@@ -265,8 +265,7 @@ def command():
 @click.option("--no-history", is_flag=True, help="Do not append to the model history.")
 @click.option("--k", "k_sigma", type=float, default=4.0, show_default=True,
               help="Excursion threshold: |smoothed residual| > k·σ.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Residual plots (.png/.svg: several files; .pdf: one document).")
+@plot_option("Residual plots (.png/.svg: several files; .pdf: one document).")
 @ingest_options
 @json_option
 @with_ingest
@@ -358,8 +357,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 @click.option("--min-improvement", type=float, default=1.0, show_default=True,
               help="Smallest held-out RMS improvement (%) that counts as a missing effect.")
 @click.option("--top", type=int, default=12, show_default=True, help="Rows to show.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Base residual and candidate bar chart (.png/.svg/.pdf).")
+@plot_option("Base residual and candidate bar chart (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest
@@ -410,8 +408,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
 @command.command("history")
 @click.argument("path", type=str, default="model.json")
 @click.option("--all", "show_all", is_flag=True, help="Show the steps of every log.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Residual RMS and AIC per step (.png/.svg/.pdf).")
+@plot_option("Residual RMS and AIC per step (.png/.svg/.pdf).")
 @json_option
 def history_cmd(path, show_all, plot_path, as_json):
     """Show the successive fits of a log: terms added, residual RMS, held-out RMS, AIC.

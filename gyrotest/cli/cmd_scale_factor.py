@@ -16,6 +16,7 @@ from .common import (
     json_option,
     load_logs,
     note,
+    plot_option,
     warn,
     with_ingest,
 )
@@ -73,8 +74,7 @@ def _duration(ctx, param, value):
               help="Runs tested at different rate sets: keep only the rates all runs share.")
 @click.option("--points", "points_path", type=click.Path(dir_okay=False), default=None,
               help="Write the plateau table (CSV) to this file.")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
-              help="Residuals vs input rate and output vs time (.png, .svg or .pdf).")
+@plot_option("Residuals vs input rate and output vs time (.png, .svg or .pdf).")
 @ingest_options
 @json_option
 @with_ingest

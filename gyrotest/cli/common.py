@@ -121,6 +121,12 @@ def progress(description: str, total: float | None = None) -> Iterator[Callable[
 
 
 # ----------------------------------------------------------------------------- options
+def plot_option(help: str):
+    """The ``--plot FILE`` option (.png/.svg/.pdf) with a command's own help text."""
+    return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
+                        help=help)
+
+
 def json_option(f):
     return click.option("--json", "as_json", is_flag=True,
                         help="Print the result as one JSON document on stdout (for scripts).")(f)

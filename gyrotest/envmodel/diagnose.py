@@ -1,25 +1,45 @@
 """Which physical effect is the model missing?
 
-Every library term the log's channels allow and the model lacks is tried in turn (a lagged
-temperature *replaces* the plain temperature of the same sensor when the model has one: the
-core lags the sensor). Each candidate model is scored by
+The procedure is greedy forward selection judged on augmented models, against a noise floor
+that the model under judgment cannot move:
 
-1. **held-out residual RMS** (blocked cross-validation, nonlinear parameters re-fitted per fold,
-   see :func:`gyrotest.envmodel.fit.holdout_folds`): what matters is prediction of data the fit
-   did not see, so a term that only follows noise does not help;
-2. **significance robust to autocorrelation**: a HAC Wald test of the added coefficient(s)
-   (for a lag replacement: of T_core(τ̂) in a model that keeps T), referred to a t/F
-   distribution with the regressor's effective degrees of freedom (a transient that lives in a
-   few blocks cannot be "significant" on the strength of 10⁴ blocks), the p-value multiplied
-   by the number of candidates and by the effective number of trials of a searched nonlinear
-   parameter (ln(τ_max/τ_min) for a time constant, (f_max − f_min)·T for a frequency):
-   p_adj = min(1, p · M · n_candidates).
+1. **The floor** (:mod:`gyrotest.envmodel.floor`) comes from the raw rate's short-τ noise, or
+   from a static reference run; it is fixed before any model is fitted and held through the
+   whole selection and the model history.
+2. **Candidates** (:mod:`gyrotest.envmodel.screen`): every library term the log's channels
+   allow and the model lacks, plus a screen of every logged channel (level, square, |x|,
+   rate, first-order lag with fitted τ, rate of the lag; products where physics has them),
+   and the nuisance terms (ramp, warm-up, free-frequency sinusoid, hysteresis).
+3. **Each candidate is fitted with the model** (a lagged temperature replaces the plain
+   temperature of the same sensor) and scored by its **held-out RMS** (blocked
+   cross-validation, :func:`gyrotest.envmodel.fit.holdout_folds`): prediction of data the
+   fit did not see is the primary evidence. Its coefficient gets a HAC Wald test *in the
+   augmented model*, referred to a t/F distribution with the regressor's effective degrees
+   of freedom; p × trials (the effective number of values a searched nonlinear parameter
+   can take: ln(τ_max/τ_min) for a time constant, (f_max − f_min)·T for a frequency) and
+   p_adj = p × trials × candidates.
+4. **A candidate is a missing effect** when either
+   * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 %; or
+   * *clear gain*: the base model's held-out RMS is above 1.2 × the floor, the candidate
+     cuts it by ≥ 5 %, and the test guards against a fluke with p × trials < 0.01
+     (0.001 for nuisance terms). An effect the base model lacks inflates the HAC error of
+     every other candidate, so a large held-out gain must not wait for a strict p-value;
+     the fold-to-fold scatter of the gain is reported with it.
+   A sinusoid whose period is that of a logged stimulus (a channel or its square explains
+   ≥ 10 % of its variance at that frequency) is not accepted: the stimulus acts through a
+   channel. Hysteresis widths are searched only above what the sensor can resolve.
+5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
+   nonlinear parameter. Among missing effects whose held-out RMS is within 1 % of the best,
+   a channel-based explanation is preferred to a nuisance term (library < second order <
+   generic channel < nuisance), and candidates whose fitted contributions correlate at
+   |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log.
+6. **Forward path**: the chosen term is added and the procedure repeats (at most
+   ``path_steps`` times) until no candidate is a missing effect or the held-out RMS is at
+   the floor; the verdict names the first effect and the path that follows.
 
-Ranking is by held-out RMS with a small complexity penalty, RMS_ho · (1 + p/n_blocks). A
-candidate counts as a **missing effect** when p_adj < α (0.001) and it lowers the held-out RMS
-by at least 1 %. With none, the verdict compares the held-out residual with the Allan-predicted
-noise floor (white + flicker level of the residual at the working resolution, see
-:func:`gyrotest.envmodel.stats.noise_floor`) and says "no missing effect found".
+"No missing effect" is said when the held-out RMS is within 1.1 × the floor, or when no
+candidate cuts the held-out RMS by more than the fold-to-fold scatter of its gain (and 1 %);
+otherwise the verdict is "possible missing effect".
 """
 
 from __future__ import annotations
@@ -32,11 +52,23 @@ import numpy as np
 from ..errors import AnalysisError, InputError
 from . import stats as st
 from .fit import FitResult, WorkData, fit_model
+from .floor import work_floor
 from .prepare import prepare_log
-from .terms import TermSpec, candidate_terms, describe, nonlinear_bounds, parse_terms, resolve_terms
+from .screen import CLASS_ORDER, NUISANCE, candidate_terms, period_match, term_class
+from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
 
 ALPHA = 0.001
 MIN_IMPROVEMENT = 0.01
+#: clear-gain route: minimum held-out gain, guard on p × trials, base/floor ratio
+CLEAR_GAIN = 0.05
+CLEAR_P = 0.01
+CLEAR_P_NUISANCE = 0.001
+ABOVE_FLOOR = 1.2
+#: a model is at the floor when its held-out RMS is within this factor of it
+AT_FLOOR = 1.1
+#: candidates within this fraction of the best held-out RMS count as equal evidence
+TIE = 0.01
+EQUIVALENT_R = 0.995
 
 
 @dataclass
@@ -58,28 +90,57 @@ class Candidate:
     n_params: int = 0
     spec: TermSpec | None = None
     error: str | None = None
+    klass: str = "library"
+    route: str | None = None  # strict | clear gain
+    gain_scatter_pct: float = math.nan  # fold-to-fold scatter (sd over folds) of the gain
+    rejected: str | None = None
+    equivalents: list[str] = field(default_factory=list)
+    custom: str | None = None  # the --term NAME:EXPR equivalent
+    r_residual: float = math.nan  # correlation of its contribution with the base residual
+    _fit: FitResult | None = None
+
+    @property
+    def p_trials(self) -> float:
+        return min(1.0, self.p * self.trials) if math.isfinite(self.p) else math.nan
 
     @property
     def evidence(self) -> str:
         if self.error:
             return self.error
         z = f"z = {self.z:.1f}" if math.isfinite(self.z) else "z = n/a"
-        return (f"held-out {-self.improvement_pct:+.1f} %, {z} (HAC), "
+        sc = (f" ± {self.gain_scatter_pct:.1f} % fold scatter"
+              if math.isfinite(self.gain_scatter_pct) else "")
+        return (f"held-out {-self.improvement_pct:+.1f} %{sc}, {z} (HAC), "
                 f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
                                                if self.trials > 1 else ""))
 
+    @property
+    def add_hint(self) -> str:
+        """How to add it: ``--terms LABEL`` (and the custom ``--term`` equivalent)."""
+        if self.spec is not None and self.spec.key == "custom":
+            return f"--term '{self.spec.name}:{self.spec.expr}'"
+        h = f"--terms '{self.term}'"
+        if self.custom:
+            h += f" (or --term '{self.custom}')"
+        return h
+
     def to_dict(self) -> dict:
-        return {"term": self.term, "effect": self.effect, "replaces": self.replaces,
+        return {"term": self.term, "effect": self.effect, "class": self.klass,
+                "replaces": self.replaces,
                 "rms_fit_dph": self.rms_fit, "rms_holdout_dph": self.rms_holdout,
-                "improvement_pct": self.improvement_pct, "z": self.z, "p": self.p,
+                "improvement_pct": self.improvement_pct,
+                "gain_fold_scatter_pct": self.gain_scatter_pct, "z": self.z, "p": self.p,
                 "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
+                "route": self.route, "rejected": self.rejected,
+                "equivalents": self.equivalents, "add": self.add_hint,
+                "custom_term": self.custom, "r_residual": self.r_residual,
                 "coefficients": self.coefficients, "n_params": self.n_params,
                 "evidence": self.evidence, "error": self.error}
 
 
 @dataclass
 class Diagnosis:
-    """Ranked candidates, the verdict, and the base fit."""
+    """Ranked candidates, the verdict, the forward path and the base fit."""
 
     base: FitResult
     candidates: list[Candidate]
@@ -88,10 +149,18 @@ class Diagnosis:
     ratio_to_floor: float
     alpha: float = ALPHA
     min_improvement_pct: float = 100 * MIN_IMPROVEMENT
+    floor_basis: str = ""
+    chosen: Candidate | None = None
+    path: list[dict] = field(default_factory=list)
 
     @property
     def found(self) -> list[Candidate]:
-        return [c for c in self.candidates if c.significant]
+        """Missing effects, the chosen one first."""
+        sig = [c for c in self.candidates if c.significant]
+        if self.chosen is not None and self.chosen in sig:
+            sig.remove(self.chosen)
+            sig.insert(0, self.chosen)
+        return sig
 
     @property
     def top(self) -> Candidate | None:
@@ -103,14 +172,22 @@ class Diagnosis:
             "base_rms_fit_dph": self.base.rms_fit,
             "base_rms_holdout_dph": self.base.rms_holdout,
             "noise_floor_dph": self.noise_floor_dph,
+            "noise_floor_basis": self.floor_basis,
             "ratio_to_floor": self.ratio_to_floor,
             "resolution_s": self.base.resolution_s,
             "resolution_note": self.base.resolution_note,
             "missing_effect": self.found[0].term if self.found else None,
+            "add": self.found[0].add_hint if self.found else None,
             "verdict": self.verdict,
+            "path": self.path,
             "rule": {"alpha": self.alpha, "min_improvement_pct": self.min_improvement_pct,
-                     "ranking": "held-out RMS x (1 + params/blocks)",
-                     "significance": "HAC Wald test, p x trials x candidates"},
+                     "clear_gain_pct": 100 * CLEAR_GAIN, "clear_gain_p_trials": CLEAR_P,
+                     "clear_gain_p_trials_nuisance": CLEAR_P_NUISANCE,
+                     "above_floor_ratio": ABOVE_FLOOR, "at_floor_ratio": AT_FLOOR,
+                     "ranking": "held-out RMS x (1 + params/blocks); ties within 1 % go to "
+                                "channel-based terms",
+                     "significance": "HAC Wald test in the augmented model; p x trials x "
+                                     "candidates (strict) or p x trials (clear gain)"},
             "candidates": [c.to_dict() for c in self.candidates],
             "excursions": [e.to_dict() for e in self.base.excursions],
             "base": self.base.to_dict(),
@@ -118,7 +195,7 @@ class Diagnosis:
 
 
 def _trials(spec: TermSpec, wd: WorkData) -> int:
-    b = nonlinear_bounds(spec, wd.duration_s, wd.resolution_s)
+    b = nonlinear_bounds(spec, wd.duration_s, wd.resolution_s, wd.refs)
     if not b:
         return 1
     (name, (lo, hi)), = b.items()
@@ -132,28 +209,68 @@ def diagnose_log(log, specs: list[TermSpec], candidates: list[str] | None = None
                  t_ref: float | None = None, v_ref: float | None = None,
                  resolution: str | None = "auto", smooth: str | None = "auto",
                  alpha: float | None = None, min_improvement_pct: float = 1.0,
-                 folds: int = 5, progress=None) -> Diagnosis:
+                 folds: int = 5, progress=None, reference=None,
+                 path_steps: int = 3) -> Diagnosis:
     """``gyrotest model diagnose``: prepare ``log`` with the command's options
-    (:func:`gyrotest.envmodel.prepare.prepare_log`) and :func:`diagnose` the model ``specs``
-    (``alpha`` default :data:`ALPHA`; ``min_improvement_pct`` in %). ``progress(i, n, label)``
-    is called before each candidate term is tried."""
+    (:func:`gyrotest.envmodel.prepare.prepare_log`; ``reference`` a static reference log for
+    the noise floor) and :func:`diagnose` the model ``specs`` (``alpha`` default
+    :data:`ALPHA`; ``min_improvement_pct`` in %). ``progress(i, n, label)`` is called before
+    each candidate term is tried."""
     wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                     resolution=resolution, smooth=smooth, specs=specs)
+                     resolution=resolution, smooth=smooth, specs=specs, reference=reference)
     return diagnose(wd, specs, candidates, alpha=ALPHA if alpha is None else alpha,
                     min_improvement=min_improvement_pct / 100.0, folds=folds,
-                    progress=progress)
+                    progress=progress, path_steps=path_steps)
 
 
 def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
              min_improvement: float = MIN_IMPROVEMENT, folds: int = 5,
-             base: FitResult | None = None, progress=None) -> Diagnosis:
-    """Rank every candidate term the model ``base_terms`` lacks (see the module docstring).
+             base: FitResult | None = None, progress=None, path_steps: int = 3) -> Diagnosis:
+    """Rank every candidate term the model ``base_terms`` lacks, choose the missing effect
+    and follow the forward path (see the module docstring).
 
-    ``candidates``: term texts/specs to try (default: every applicable library term). Returns a
-    :class:`Diagnosis` whose ``candidates`` are ranked best first.
+    ``candidates``: term texts/specs to try (default: the library and the channel screen,
+    :func:`gyrotest.envmodel.screen.candidate_terms`). Returns a :class:`Diagnosis` whose
+    ``candidates`` are ranked best first and whose ``found[0]`` is the chosen missing effect.
     """
     if base is None:
         base = fit_model(wd, base_terms, folds=folds)
+    floor = work_floor(wd)
+    cands, chosen = _step(wd, base, candidates, floor, alpha, min_improvement, folds, progress)
+    fl = floor.rms_dph
+    ratio = base.rms_holdout / fl if fl and math.isfinite(fl) and fl > 0 else math.nan
+    path: list[dict] = []
+    if chosen is not None:
+        path.append(_path_entry(chosen, base, fl))
+        cur = chosen._fit
+        for _ in range(max(0, path_steps - 1)):
+            if cur is None or (math.isfinite(fl) and cur.rms_holdout <= AT_FLOOR * fl):
+                break
+            nxt_c, nxt = _step(wd, cur, candidates, floor, alpha, min_improvement, folds, None)
+            if nxt is None:
+                break
+            path.append(_path_entry(nxt, cur, fl))
+            cur = nxt._fit
+    verdict = _verdict(base, cands, chosen, path, fl, ratio)
+    return Diagnosis(base=base, candidates=cands, verdict=verdict, noise_floor_dph=fl,
+                     ratio_to_floor=ratio, alpha=alpha,
+                     min_improvement_pct=100 * min_improvement, floor_basis=floor.basis,
+                     chosen=chosen, path=path)
+
+
+def _path_entry(c: Candidate, before: FitResult, floor: float) -> dict:
+    return {"term": c.term, "effect": c.effect, "replaces": c.replaces, "add": c.add_hint,
+            "rms_holdout_before_dph": before.rms_holdout, "rms_holdout_after_dph":
+            c.rms_holdout, "ratio_to_floor_after": (c.rms_holdout / floor if floor and
+                                                    math.isfinite(floor) else math.nan),
+            "evidence": c.evidence, "route": c.route}
+
+
+def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha: float,
+          min_improvement: float, folds: int, progress) -> tuple[list[Candidate],
+                                                                 Candidate | None]:
+    """Fit and judge every candidate against ``base``; return them ranked and the chosen
+    missing effect (or None)."""
     base_specs = [s for s in base.specs if s.key != "bias"]
     if candidates is None:
         cands = candidate_terms(wd.frame, base.specs)
@@ -163,34 +280,14 @@ def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
         cands = [c for c in cands if c.label not in have]
     thetas0 = dict(getattr(base, "_thetas", {}))
     n_c = max(1, len(cands))
+    fl = floor.rms_dph
+    base_ratio = base.rms_holdout / fl if fl and math.isfinite(fl) and fl > 0 else math.inf
     out: list[Candidate] = []
     for i, c in enumerate(cands):
         if progress:
             progress(i, len(cands), c.label)
-        replaces = None
-        specs = list(base_specs)
-        if c.key == "Tlag":
-            plain = TermSpec("T", c.channels)
-            if any(s.label == plain.label for s in specs):
-                specs = [s for s in specs if s.label != plain.label]
-                replaces = plain.label
-        specs.append(c)
-        trials = _trials(c, wd)
-        try:
-            r = fit_model(wd, specs, folds=folds, thetas0=thetas0, light=True)
-        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError) as e:
-            out.append(Candidate(c.label, describe(c), replaces, math.nan, math.nan, math.nan,
-                                 math.nan, math.nan, math.nan, trials, False, spec=c,
-                                 error=f"could not fit: {e}"))
-            continue
-        z, p = _significance(r, c, replaces, wd)
-        p_adj = min(1.0, p * trials * n_c) if math.isfinite(p) else math.nan
-        impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-        sig = bool(math.isfinite(p_adj) and p_adj < alpha and impr >= min_improvement)
-        coefs = [c2.to_dict() for c2 in r.coefficients if c2.term == c.label]
-        out.append(Candidate(c.label, describe(c) + (f" (replaces {replaces})" if replaces else ""),
-                             replaces, r.rms_fit, r.rms_holdout, 100 * impr, z, p, p_adj, trials,
-                             sig, coefs, r.n_params, spec=c))
+        out.append(_judge(wd, base, base_specs, c, thetas0, n_c, base_ratio, alpha,
+                          min_improvement, folds))
     nb = wd.nb
 
     def score(c: Candidate) -> float:
@@ -199,28 +296,169 @@ def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
         return c.rms_holdout * (1 + c.n_params / nb)
 
     out.sort(key=score)
-    floor = base.floor.rms_dph if base.floor else math.nan
-    ratio = base.rms_holdout / floor if floor and math.isfinite(floor) and floor > 0 else math.nan
-    found = [c for c in out if c.significant]
-    if found:
-        top = found[0]
+    sig = [c for c in out if c.significant]
+    chosen = None
+    if sig:
+        best = sig[0]
+        tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
+        chosen = min(tied, key=lambda c: (CLASS_ORDER.get(c.klass, 9), score(c)))
+        chosen.equivalents = _equivalents(chosen, out, base)
+    return out, chosen
+
+
+def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
+           min_improvement, folds) -> Candidate:
+    replaces = None
+    specs = list(base_specs)
+    if c.key == "Tlag":
+        plain = TermSpec("T", c.channels)
+        if any(s.label == plain.label for s in specs):
+            specs = [s for s in specs if s.label != plain.label]
+            replaces = plain.label
+    specs.append(c)
+    trials = _trials(c, wd)
+    klass = term_class(c)
+    try:
+        r = fit_model(wd, specs, folds=folds, thetas0=thetas0, light=True)
+    except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError) as e:
+        return Candidate(c.label, describe(c), replaces, math.nan, math.nan, math.nan,
+                         math.nan, math.nan, math.nan, trials, False, spec=c,
+                         error=f"could not fit: {e}", klass=klass)
+    z, p = _significance(r, c, replaces, wd)
+    p_adj = min(1.0, p * trials * n_c) if math.isfinite(p) else math.nan
+    impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+    scatter = _gain_scatter(base, r)
+    p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
+    strict = bool(math.isfinite(p_adj) and p_adj < alpha and impr >= min_improvement)
+    guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
+    clear = bool(math.isfinite(p_tr) and base_ratio > ABOVE_FLOOR and impr >= CLEAR_GAIN
+                 and p_tr < guard)
+    rejected = None
+    theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
+    if c.key == "sin" and (strict or clear):
+        m = period_match(wd.frame, float(theta["f_Hz"]))
+        if m is not None:
+            rejected = (f"its period {1 / theta['f_Hz']:.4g} s is that of the logged stimulus "
+                        f"{m[0]} (R² {m[1]:.2f}): an effect of that channel, not a periodic "
+                        "disturbance")
+    sig = (strict or clear) and rejected is None
+    route = ("strict" if strict else "clear gain") if sig else None
+    coefs = [c2.to_dict() for c2 in r.coefficients if c2.term == c.label]
+    from .channel_terms import custom_text
+
+    try:
+        custom = custom_text(c, theta, wd.frame)
+    except InputError:
+        custom = None
+    cand = Candidate(c.label, describe(c) + (f" (replaces {replaces})" if replaces else ""),
+                     replaces, r.rms_fit, r.rms_holdout, 100 * impr, z, p, p_adj, trials, sig,
+                     coefs, r.n_params, spec=c, klass=klass, route=route,
+                     gain_scatter_pct=100 * scatter, rejected=rejected, custom=custom)
+    cand.r_residual = _residual_corr(base, r, c)
+    cand._fit = r
+    return cand
+
+
+def _gain_scatter(base: FitResult, r: FitResult) -> float:
+    """Fold-to-fold scatter of the relative held-out gain: the standard deviation over the
+    folds of 1 − rms_f/rms_base,f."""
+    a = np.asarray(base.holdout_fold_rms, float)
+    b = np.asarray(r.holdout_fold_rms, float)
+    if len(a) != len(b) or len(a) < 2:
+        return math.nan
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = 1.0 - b / a
+    g = g[np.isfinite(g)]
+    if len(g) < 2:
+        return math.nan
+    return float(np.std(g, ddof=1))
+
+
+def _contribution(r: FitResult, label: str) -> np.ndarray:
+    from .fit import predict_blocks
+
+    spec = next(s for s in r.specs if s.label == label)
+    return predict_blocks(r, [spec])
+
+
+def _residual_corr(base: FitResult, r: FitResult, c: TermSpec) -> float:
+    try:
+        x = _contribution(r, c.label)
+    except (StopIteration, KeyError, ValueError):
+        return math.nan
+    e = base.resid
+    if e is None or np.std(x) == 0 or np.std(e) == 0:
+        return math.nan
+    return float(np.corrcoef(x, e)[0, 1])
+
+
+def _equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> list[str]:
+    """Candidates with (nearly) the same held-out RMS whose fitted contribution is the
+    chosen one's to |r| ≥ 0.995: explanations this log cannot tell apart."""
+    if chosen._fit is None:
+        return []
+    try:
+        x0 = _contribution(chosen._fit, chosen.term)
+    except (StopIteration, KeyError, ValueError):
+        return []
+    out = []
+    for c in cands:
+        if c is chosen or c._fit is None or not math.isfinite(c.rms_holdout):
+            continue
+        if c.rms_holdout > chosen.rms_holdout * (1 + 5 * TIE):
+            continue
+        try:
+            x = _contribution(c._fit, c.term)
+        except (StopIteration, KeyError, ValueError):
+            continue
+        if np.std(x) > 0 and np.std(x0) > 0 and abs(np.corrcoef(x, x0)[0, 1]) >= EQUIVALENT_R:
+            out.append(c.term)
+    return out
+
+
+def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
+             path: list[dict], floor: float, ratio: float) -> str:
+    fl_txt = (f"the noise floor ({floor:.3g} deg/h)" if math.isfinite(floor)
+              else "the noise floor (not estimated)")
+    if chosen is not None:
+        top = chosen
         v = (f"missing effect: {top.term} — {top.effect}; held-out RMS "
              f"{base.rms_holdout:.4g} → {top.rms_holdout:.4g} deg/h "
              f"({-top.improvement_pct:+.1f} %), {top.evidence.split(', ', 1)[1]}")
-        if len(found) > 1:
-            v += "; also significant: " + ", ".join(c.term for c in found[1:4])
-            v += " (add the top one and run diagnose again)"
-    elif math.isfinite(ratio) and ratio <= 1.25:
-        v = (f"no missing effect found: the held-out residual ({base.rms_holdout:.3g} deg/h) is "
-             f"at the Allan-predicted noise floor ({floor:.3g} deg/h, ratio {ratio:.2f})")
-    else:
-        v = ("no missing effect found among the candidates"
-             + (f"; the held-out residual is {ratio:.2g}x the Allan-predicted noise floor "
-                f"({floor:.3g} deg/h): an effect outside the library or noise slower than "
-                "white/flicker (random walk, Markov); see the excursions"
-                if math.isfinite(ratio) else ""))
-    return Diagnosis(base=base, candidates=out, verdict=v, noise_floor_dph=floor,
-                     ratio_to_floor=ratio, alpha=alpha, min_improvement_pct=100 * min_improvement)
+        if top.klass == "channel" and math.isfinite(top.r_residual):
+            ch = ", ".join(top.spec.channels) if top.spec else ""
+            v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"
+        v += f"; add it with {top.add_hint}"
+        if top.equivalents:
+            v += ("; indistinguishable in this log from " + ", ".join(top.equivalents[:3])
+                  + " (same fitted contribution)")
+        if len(path) > 1:
+            v += "; then " + ", then ".join(
+                f"{p['term']} (→ {p['rms_holdout_after_dph']:.3g} deg/h)" for p in path[1:])
+            last = path[-1]["ratio_to_floor_after"]
+            if math.isfinite(last):
+                v += f"; held-out/floor after the path {last:.2f}"
+        return v
+    if math.isfinite(ratio) and ratio <= AT_FLOOR:
+        return (f"no missing effect found: the held-out residual ({base.rms_holdout:.3g} "
+                f"deg/h) is at {fl_txt}, ratio {ratio:.2f}")
+    ok = [c for c in cands if math.isfinite(c.improvement_pct) and c.rejected is None]
+    best = max(ok, key=lambda c: c.improvement_pct) if ok else None
+    if (best is not None and math.isfinite(best.gain_scatter_pct)
+            and best.improvement_pct > max(best.gain_scatter_pct, 100 * MIN_IMPROVEMENT)):
+        return (f"possible missing effect: {best.term} — {best.effect}; held-out RMS "
+                f"{base.rms_holdout:.4g} → {best.rms_holdout:.4g} deg/h "
+                f"({-best.improvement_pct:+.1f} %, more than the fold-to-fold scatter "
+                f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}); "
+                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log")
+    rej = [c for c in cands if c.rejected]
+    v = ("no missing effect found among the candidates"
+         + (f"; the held-out residual is {ratio:.2g}x {fl_txt}: an effect outside the "
+            "library and the channel screen, or noise slower than white/flicker (random "
+            "walk, Markov); see the excursions" if math.isfinite(ratio) else ""))
+    if rej:
+        v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
+    return v
 
 
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
@@ -250,3 +488,7 @@ def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
     df = st.effective_df(Xa, [a], st.integrated_time(e))
     _, p, z = st.wald_t(beta[a:a + 1], cov[a:a + 1, a:a + 1], df)
     return z, p
+
+
+__all__ = ["ALPHA", "Candidate", "Diagnosis", "NUISANCE", "diagnose", "diagnose_log",
+           "work_floor"]

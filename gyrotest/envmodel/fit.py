@@ -93,6 +93,8 @@ class WorkData:
     axis: str
     info: dict[str, Any] = field(default_factory=dict)
     log: Any = None
+    #: the fixed noise floor (st.NoiseFloor) the models of this log are judged against
+    floor: Any = None
 
     @property
     def nb(self) -> int:
@@ -525,7 +527,8 @@ class _Fitter:
         self.wd = design.wd
         self.specs = specs
         self.nl = [s for s in specs if s.effect.nonlinear]
-        self.bounds = {s.label: nonlinear_bounds(s, self.wd.duration_s, self.wd.resolution_s)
+        self.bounds = {s.label: nonlinear_bounds(s, self.wd.duration_s, self.wd.resolution_s,
+                                                   self.wd.refs)
                        for s in self.nl}
 
     def X(self, thetas: dict[str, dict]) -> np.ndarray:
@@ -825,13 +828,10 @@ def finish(res: FitResult, k_sigma: float = 4.0) -> None:
     r = fine_residual(res)
     tau, sig = st.oadev(r, wd.frame.dt, segments=wd.frame.bounds)
     res.adev_tau, res.adev_sigma = tau, sig
-    # the floor: white noise from the raw residual's differences (robust to misfit spikes),
-    # flicker from the Allan deviation of the matched-smoothed residual beyond 2·W, where the
-    # smoothed derivative regressors are exact
-    nw = st.robust_white(r, wd.frame.dt, wd.frame.bounds)
-    ts, ss = st.oadev(wd.smooth(r), wd.frame.dt, segments=wd.frame.bounds)
-    res.floor = st.noise_floor(ts, ss, getattr(wd, "t_eff", wd.resolution_s), wd.duration_s,
-                               white_N=nw, fit_from_s=2.0 * wd.refs.smoothing_s)
+    from .floor import work_floor
+
+    # the floor is fixed per log (raw rate or reference run), never from this residual
+    res.floor = work_floor(wd)
     res.excursions = find_excursions(res, k_sigma=k_sigma)
     res.model.fit["noise_floor_dph"] = res.floor.rms_dph
 

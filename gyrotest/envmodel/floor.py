@@ -7,16 +7,14 @@ itself ("held-out/floor 1.6×" where the true misfit was 50×). gyrotest therefo
 floor once per log, from data the model cannot influence, and holds it fixed through a
 diagnosis and a model history:
 
-* **short-τ noise of the raw rate** (default): the overlapping Allan variance of the raw rate
-  (fine grid) is fitted over τ from the fine-grid step up to a quarter of the record with
-
-      σ²(τ) = N²/τ + B² + C·τ + D·τ²          (non-negative least squares, relative errors)
-
-  N (white) and B (flicker plateau, σ² = B² convention) are the noise.
-  rate steps and random walk and D·τ² smooth environmental drift, which both grow with τ while
-  the noise terms fall or stay flat, so slow environmental stimuli do not enter N and B.
-  Random walk and steps are inseparable in σ²(τ); the floor therefore holds white and flicker
-  noise only and says so.
+* **short-τ noise of the raw rate** (default): a *robust* overlapping Hadamard deviation of the
+  raw rate (fine grid; the MAD of the cluster differences instead of their mean square, so
+  sparse events -- field and supply steps, ramp corners, a warm-up -- do not count, and
+  second differences, so rate ramps do not either, :func:`robust_avar`) gives the white noise N from the τ range that white noise alone
+  explains, and the flicker plateau B as the lowest excess over white noise seen up to T/8
+  (environmental stimuli only add variance), :func:`white_flicker`. Random walk cannot be
+  told from slow environment in one record; this floor holds white and flicker noise only
+  and says so.
 * **a static reference run** (``--reference``): N, B and K fitted to the reference log's
   Allan variance over its whole τ range (σ² = N²/τ + B² + K²τ/3 + D·τ², the D term removing
   a slow ramp), random walk included.
@@ -34,6 +32,8 @@ from scipy import optimize
 
 from . import stats as st
 
+#: Hadamard / Allan plateau of flicker rate noise, (8 ln 2 − 3 ln 3)/(4 ln 2)
+HADAMARD_FLICKER = (8 * math.log(2) - 3 * math.log(3)) / (4 * math.log(2))
 #: ln 2 factor of the flicker plateau: σ² = B²·(2 ln 2)/… — see :func:`floor_rms`
 _LN2 = math.log(2.0)
 
@@ -87,8 +87,8 @@ def _model(c: dict[str, float], tau: np.ndarray) -> np.ndarray:
 
 
 def fit_noise_range(tau: np.ndarray, sig: np.ndarray, duration_s: float,
-                    cols: tuple[str, ...] = ("quant", "white", "flicker"), z_max: float = 3.0
-                    ) -> tuple[dict[str, float], int]:
+                    cols: tuple[str, ...] = ("quant", "white", "flicker"), z_max: float = 3.0,
+                    se_factor: float = 1.0) -> tuple[dict[str, float], int]:
     """Fit the noise columns ``cols`` to the shortest-τ part of an Allan curve that they
     explain: starting from the three shortest τ, the range is extended one τ at a time while
     every point stays within ``z_max`` standard errors of the fit (environmental stimuli only
@@ -99,39 +99,95 @@ def fit_noise_range(tau: np.ndarray, sig: np.ndarray, duration_s: float,
     best = _fit_allan(tau[:k], sig[:k], duration_s, list(cols))
     while k < n:
         trial = _fit_allan(tau[:k + 1], sig[:k + 1], duration_s, list(cols))
-        z = (sig[:k + 1] ** 2 - _model(trial, tau[:k + 1])) / _se(tau[:k + 1], sig[:k + 1],
-                                                                  duration_s)
+        z = (sig[:k + 1] ** 2 - _model(trial, tau[:k + 1])) / (
+            se_factor * _se(tau[:k + 1], sig[:k + 1], duration_s))
         if np.max(np.abs(z)) > z_max:
             break
         best, k = trial, k + 1
     return best, k
 
 
-def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: float
-                  ) -> tuple[float, float, tuple[float, float]]:
+def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: float,
+                  se_factor: float = 1.0) -> tuple[float, float, tuple[float, float]]:
     """White N and flicker B of a rate from its Allan curve without being misled by slow
     environmental stimuli.
 
-    Method: N from a fit of σ² = N²/τ to the τ up to max(T_eff/2, 3 points),
-    where white noise dominates; then the flicker plateau as the lowest excess over white
-    noise seen at τ from 2·τ0 up to T/8, B² = min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊ (SE the standard
-    error of σ²(τ)): flicker is flat in σ², while anything environmental only adds to it, so
-    the lowest excess bounds the flicker from above and equals it where the environment is
-    quiet. Returns (N (deg/h)·√s, B deg/h, (last τ of the white fit, last τ searched))."""
+    Method: σ² = N²/τ + B² is fitted to the shortest τ it explains (:func:`fit_noise_range`,
+    up to T/8). B counts only when detected (B² > 2 standard errors of the fit) and is capped
+    by the lowest excess over white noise seen at any τ, min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊:
+    flicker is flat in σ², anything environmental only adds to it. ``se_factor`` scales the
+    standard errors (1.65 for the MAD-based deviation of :func:`robust_avar`, whose
+    efficiency is 37 %). Returns (N (deg/h)·√s, B deg/h, (last τ of the fit, last τ
+    searched))."""
     keep = tau <= duration_s / 8.0
     if keep.sum() < 3:
         keep = np.arange(len(tau)) < 3
     tau, sig = tau[keep], sig[keep]
-    c, k = fit_noise_range(tau, sig, duration_s, cols=("white", "flicker"), z_max=3.0)
+    c, k = fit_noise_range(tau, sig, duration_s, cols=("white", "flicker"), z_max=3.0,
+                           se_factor=se_factor)
     N = math.sqrt(c["white"])
     B2 = c["flicker"]
+    if B2 > 0:
+        A = np.column_stack([1.0 / tau[:k], np.ones(k)])
+        w = 1.0 / (se_factor * _se(tau[:k], sig[:k], duration_s))
+        cov = np.linalg.pinv((A * w[:, None]).T @ (A * w[:, None]))
+        if not B2 > 2.0 * math.sqrt(max(cov[1, 1], 0.0)):
+            B2 = 0.0  # not detected
+            N = math.sqrt(_fit_allan(tau[:k], sig[:k], duration_s, ["white"])["white"])
     t_lo = t_hi = float(tau[k - 1])
     sel = tau >= 2.0 * tau[0]
     if sel.any() and B2 > 0:
-        ex = sig[sel] ** 2 - N * N / tau[sel] + _se(tau[sel], sig[sel], duration_s)
+        ex = (sig[sel] ** 2 - N * N / tau[sel]
+              + 0.5 * se_factor * _se(tau[sel], sig[sel], duration_s))
         B2 = min(B2, max(0.0, float(np.min(ex))))
         t_hi = float(tau[sel][-1])
     return N, math.sqrt(max(B2, 0.0)), (t_lo, t_hi)
+
+
+def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
+                max_frac: float = 0.25, hadamard: bool = False
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping Allan (or Hadamard) deviation with a robust scale: σ(τ) = 1.4826·MAD(d)/√2
+    over the differences d = ȳ_{k+m} − ȳ_k of adjacent overlapping τ-averages (Hadamard:
+    d = ȳ_{k+2m} − 2ȳ_{k+m} + ȳ_k and /√6), octave τ = m·dt, pooled over the gap-free
+    segments.
+
+    For Gaussian noise this equals the Allan (Hadamard) deviation; sparse environmental
+    events -- field or supply steps, the corners of temperature ramps, a warm-up transient --
+    only move the differences that straddle them and are ignored by the median, where they
+    would add to a mean square; the Hadamard form also ignores linear trends of the rate
+    (temperature ramps acting through D_T, a lag's exponential approach at short τ). For
+    white rate noise both give N²/τ; for flicker the Hadamard plateau is
+    (8 ln 2 − 3 ln 3)/(4 ln 2) = 0.811 of the Allan plateau. Source: IEEE Std 952-1997
+    Annex C (Allan variance); Riley, Handbook of Frequency Stability Analysis (NIST SP 1065,
+    2008) §5.2.8 (Hadamard variance); robust scale: Rousseeuw & Croux (1993) (MAD consistency
+    factor 1.4826).
+    """
+    rate = np.asarray(rate, float)
+    longest = max((b - a for a, b in segments), default=0)
+    taus, sigs = [], []
+    m = 1
+    while m <= max_frac * longest:
+        parts = []
+        for a, b in segments:
+            x = rate[a:b]
+            if len(x) < 2 * m + 1:
+                continue
+            c = np.concatenate([[0.0], np.cumsum(x - x[0])])
+            avg = (c[m:] - c[:-m]) / m
+            if hadamard:
+                if len(avg) <= 2 * m:
+                    continue
+                parts.append(avg[2 * m:] - 2.0 * avg[m:-m] + avg[:-2 * m])
+            else:
+                parts.append(avg[m:] - avg[:-m])
+        if parts:
+            d = np.concatenate(parts)
+            mad = float(np.median(np.abs(d - np.median(d))))
+            taus.append(m * dt)
+            sigs.append(1.4826 * mad / math.sqrt(6.0 if hadamard else 2.0))
+        m *= 2
+    return np.asarray(taus), np.asarray(sigs)
 
 
 def model_free_floor(wd) -> st.NoiseFloor:
@@ -139,16 +195,17 @@ def model_free_floor(wd) -> st.NoiseFloor:
     short-τ noise of its raw rate; see the module docstring. The result does not depend on
     any model."""
     fr = wd.frame
-    tau, sig = st.oadev(fr.rate, fr.dt, segments=fr.bounds)
+    tau, sig = robust_avar(fr.rate, fr.dt, fr.bounds, hadamard=True)
     ok = np.isfinite(sig) & (sig > 0) & (tau <= wd.duration_s / 4.0)
     tau, sig = tau[ok], sig[ok]
     t_eff = getattr(wd, "t_eff", wd.resolution_s)
     if len(tau) < 3:
         return st.NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0),
                              "record too short for an Allan estimate of the noise")
-    N, B, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, t_eff)
+    N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, t_eff, se_factor=1.65)
+    B = B_h / math.sqrt(HADAMARD_FLICKER)
     rms = floor_rms(N, B, 0.0, t_eff, wd.duration_s)
-    basis = (f"white noise of the raw rate (Allan variance at τ ≤ {t_lo:.3g} s) and flicker "
+    basis = (f"white noise of the raw rate (robust Hadamard variance at τ ≤ {t_lo:.3g} s) and flicker "
              f"from the lowest Allan level it leaves over {t_eff:.3g}–{t_hi:.3g} s "
              "(environmental stimuli only add variance); independent of the model; random "
              f"walk not included; at T_eff = {t_eff:.3g} s over {wd.duration_s:.0f} s")
@@ -180,3 +237,35 @@ def reference_floor(ref_log, wd, axis: str | None = None) -> st.NoiseFloor:
     fl = st.NoiseFloor(rms, N, B, (float(tau[0]), float(tau[-1])), basis)
     fl.random_walk_K = K  # type: ignore[attr-defined]
     return fl
+
+
+def work_floor(wd) -> st.NoiseFloor:
+    """The fixed noise floor of a prepared log: the reference run's when one was given
+    (``wd.floor`` set by :func:`gyrotest.envmodel.prepare.prepare_log`), else the model-free
+    estimate from the raw rate (computed once and kept on ``wd``)."""
+    fl = getattr(wd, "floor", None)
+    if fl is None:
+        fl = model_free_floor(wd)
+        wd.floor = fl
+    return fl
+
+
+def check_reference(ref_log, log, wd, floor: st.NoiseFloor) -> None:
+    """A reference run must be the same kind of record: InputError (one line, naming the
+    file and the fix) when its sample interval is not a divisor of the working grid or its
+    white noise differs from the log's by more than 10× (another unit or another gyro)."""
+    from ..errors import InputError
+
+    own = model_free_floor(wd)
+    if ref_log.tau0 > wd.frame.dt * (1 + 1e-6):
+        raise InputError(f"--reference {ref_log.source}: sampled every {ref_log.tau0:g} s, "
+                         f"coarser than the log's working grid ({wd.frame.dt:g} s); record "
+                         "the reference at the log's sample rate or faster")
+    if (math.isfinite(own.white_N) and math.isfinite(floor.white_N) and own.white_N > 0
+            and floor.white_N > 0):
+        r = floor.white_N / own.white_N
+        if r > 10 or r < 0.1:
+            raise InputError(f"--reference {ref_log.source}: its white noise "
+                             f"({floor.white_N:.3g} (deg/h)·√s) is {r:.3g}× that of "
+                             f"{log.source}; a different rate unit or another gyro? read it "
+                             "with the same --rate-unit/--profile as the log")

@@ -89,20 +89,30 @@ def duration_or_auto(text: str | None, what: str) -> float | None:
 def prepare_log(log, path: str | None, *, axis: str | None = None, skip: str | float = "0",
                 t_ref: float | None = None, v_ref: float | None = None,
                 resolution: str | None = "auto", smooth: str | None = "auto",
-                specs: Sequence[TermSpec] | None = None) -> WorkData:
+                specs: Sequence[TermSpec] | None = None, reference=None) -> WorkData:
     """Trim the first ``skip`` (duration text; the warm-up term then counts from the true
     power-on), then :func:`~gyrotest.envmodel.fit.prepare` at the working resolution
     (``resolution``/``smooth``: ``auto`` or a duration). ``path`` is the log file for the
     model's provenance (``-`` for stdin). When the log is too short, the message names
-    ``specs``."""
+    ``specs``. ``reference``: a static reference :class:`~gyrotest.data.GyroLog` of the same
+    gyro whose noise gives the floor (:func:`gyrotest.envmodel.floor.reference_floor`)
+    instead of the log's own short-τ noise."""
     try:
-        return _prepare(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                        resolution=resolution, smooth=smooth)
+        wd = _prepare(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                      resolution=resolution, smooth=smooth)
     except AnalysisError as e:
         if specs:
             names = ", ".join(s.label for s in specs)
             raise AnalysisError(f"terms {names}: {e}") from None
         raise
+    if reference is not None:
+        from .floor import check_reference, reference_floor
+
+        ax = wd.axis if wd.axis in reference.rates else None
+        fl = reference_floor(reference, wd, axis=ax)
+        check_reference(reference, log, wd, fl)
+        wd.floor = fl
+    return wd
 
 
 def _prepare(log, path, *, axis, skip, t_ref, v_ref, resolution, smooth) -> WorkData:

@@ -457,6 +457,9 @@ class Effect:
     smooth: bool = False  # the regressor is smooth: full-rate values may be interpolated
     prefiltered: bool = False  # already S_W-smoothed (derivatives): not smoothed again
     default_channel: int = 0  # field: X=0, Y=1, Z=2
+    #: builder (frame, spec, theta, refs) -> (n, n_coef) array for effects defined outside
+    #: this module (:mod:`gyrotest.envmodel.channel_terms`)
+    build: Callable | None = None
 
 
 EFFECTS: dict[str, Effect] = {}
@@ -623,8 +626,9 @@ def parse_term(text: str) -> list[TermSpec]:
         known = ", ".join(k for k in EFFECTS if k != "custom")
         raise InputError(f"term {s!r}: unknown term {key!r} (known: {known}, or "
                          "name:expression)")
-    need = {"temperature2": 2, "table+temp": 1}.get(EFFECTS[key].needs, 1)
-    if EFFECTS[key].needs == "none" and chans:
+    need = {"temperature2": 2, "table+temp": 1, "field2": 2, "any2": 2,
+            "fieldall": 0}.get(EFFECTS[key].needs, 1)
+    if EFFECTS[key].needs in ("none", "fieldall") and chans:
         raise InputError(f"term {s!r}: {key} takes no channel")
     if len(chans) > need:
         raise InputError(f"term {s!r}: {key} takes at most {need} channel(s)")
@@ -716,6 +720,36 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
                 raise InputError(f"term {label!r}: {src} has no field channel {chans[0]!r} "
                                  f"(field channels: {', '.join(have) or 'none'})")
             _check_channel(frame.field_uT[chans[0]], f"term {label!r}", chans[0], src)
+        elif e.needs in ("field2", "fieldall"):
+            have = list(frame.field_uT)
+            if e.needs == "fieldall":
+                if not have:
+                    raise InputError(f"term {label!r}: {src} has no magnetic-field channels; "
+                                     "name them with --field-cols X,Y,Z")
+                chans = []
+            elif len(chans) != 2 or chans[0] == chans[1]:
+                raise InputError(f"term {label!r}: name two different field channels, e.g. "
+                                 f"{sp.key}({','.join(have[:2]) or 'Hx_uT,Hy_uT'})")
+            for c in chans:
+                if c not in frame.field_uT:
+                    raise InputError(f"term {label!r}: {src} has no field channel {c!r} "
+                                     f"(field channels: {', '.join(have) or 'none'})")
+            if chans:
+                _check_channel(frame.field_uT[chans[0]] * frame.field_uT[chans[1]],
+                               f"term {label!r}", f"{chans[0]}·{chans[1]}", src)
+        elif e.needs in ("any", "any2"):
+            from .channel_terms import find_channel
+
+            n_need = 2 if e.needs == "any2" else 1
+            if len(chans) != n_need:
+                raise InputError(f"term {label!r}: name {'two channels' if n_need == 2 else 'the channel'}"
+                                 f", e.g. {sp.key}({'a,b' if n_need == 2 else 'RH_pct'})")
+            vals = [find_channel(frame, c)[1] for c in chans]
+            for c, v in zip(chans, vals):
+                _check_channel(v, f"term {label!r}", c, src,
+                               constant_ok=sp.key in ("dchan", "dchanlag"))
+            if n_need == 2:
+                _check_channel(vals[0] * vals[1], f"term {label!r}", "·".join(chans), src)
         elif e.needs == "supply":
             if frame.supply is None:
                 raise InputError(f"term {label!r}: {src} has no supply-voltage channel; name it "
@@ -773,11 +807,13 @@ class Refs:
     t_on_s: float = 0.0
     smoothing_s: float = 120.0
     hyst_threshold_c_per_h: dict[str, float] = field(default_factory=dict)
+    hyst_min_width_c: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"T_ref_degC": dict(self.t_ref_c), "V_ref_V": self.v_ref, "H0_uT": self.h0_ut,
                 "t_power_on_s": self.t_on_s, "smoothing_window_s": self.smoothing_s,
-                "hysteresis_threshold_degC_per_h": dict(self.hyst_threshold_c_per_h)}
+                "hysteresis_threshold_degC_per_h": dict(self.hyst_threshold_c_per_h),
+                "hysteresis_min_width_degC": dict(self.hyst_min_width_c)}
 
     @staticmethod
     def from_dict(d: dict) -> Refs:
@@ -786,7 +822,9 @@ class Refs:
                     t_on_s=float(d.get("t_power_on_s", 0.0)),
                     smoothing_s=float(d.get("smoothing_window_s", 120.0)),
                     hyst_threshold_c_per_h={k: float(v) for k, v in
-                                            (d.get("hysteresis_threshold_degC_per_h") or {}).items()})
+                                            (d.get("hysteresis_threshold_degC_per_h") or {}).items()},
+                    hyst_min_width_c={k: float(v) for k, v in
+                                      (d.get("hysteresis_min_width_degC") or {}).items()})
 
 
 def default_refs(frame: EnvFrame, *, t_ref: float | None = None, v_ref: float | None = None,
@@ -795,7 +833,9 @@ def default_refs(frame: EnvFrame, *, t_ref: float | None = None, v_ref: float | 
     """Reference values from the fitting data: T_ref = ``t_ref`` or the mean temperature
     rounded to 0.1 degC (per sensor), V_ref = ``v_ref`` or the mean supply rounded to 0.01 V,
     smoothing window W = ``smoothing_s`` or max(60 s, 2·resolution), hysteresis threshold =
-    max(0.1 degC/h, 0.2 × the 95th percentile of |dT/dt|)."""
+    max(0.1 degC/h, 0.2 × the 95th percentile of |dT/dt|); the narrowest resolvable hysteresis
+    half-width = max(5·σ_T (sensor noise from second differences), half the temperature change
+    within W at the 95th-percentile rate)."""
     if smoothing_s is None:
         smoothing_s = max(60.0, 2.0 * (resolution_s or 0.0), 4.0 * frame.dt)
     r = Refs(smoothing_s=float(smoothing_s), t_on_s=float(t_on_s))
@@ -807,6 +847,10 @@ def default_refs(frame: EnvFrame, *, t_ref: float | None = None, v_ref: float | 
         if len(fin) == len(v) and len(v) > 2:
             rate = temperature_rate(v, frame.dt, smoothing_s, frame.bounds)
             r.hyst_threshold_c_per_h[k] = max(0.1, 0.2 * float(np.percentile(np.abs(rate), 95)))
+            d2 = np.diff(v, 2)
+            sig = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+            r.hyst_min_width_c[k] = max(5.0 * sig, 0.5 * float(np.percentile(np.abs(rate), 95))
+                                        * smoothing_s / SEC_PER_HOUR)
         else:
             r.hyst_threshold_c_per_h[k] = 0.1
     if frame.supply is not None:
@@ -819,6 +863,8 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
     k = spec.key
     ch = spec.channels
     W = refs.smoothing_s
+    if spec.effect.build is not None:
+        return spec.effect.build(frame, spec, theta, refs)
     if k == "bias":
         x = bias(frame.n)
     elif k in ("T", "T2", "T3"):
@@ -870,63 +916,27 @@ def compiled(expr: str) -> SafeExpression:
     return _COMPILED[expr]
 
 
-def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float) -> dict[str, tuple[float, float]]:
+def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
+                     refs: Refs | None = None) -> dict[str, tuple[float, float]]:
     """Search ranges of a term's nonlinear parameters for a record of ``duration_s`` fitted at
-    ``resolution_s``: time constants from max(2·resolution, 10 s) to half the record (lag: up to
-    the record); frequency from 2/duration to 1/(4·resolution); hysteresis half-width 0.02 to
-    5 degC."""
+    ``resolution_s``: time constants from max(2·resolution, 10 s) to half the record (lags: up
+    to the record); frequency from 2/duration to 1/(4·resolution); hysteresis half-width from
+    the larger of 0.02 degC and the sensor's resolvable width (``refs.hyst_min_width_c``: a
+    branch narrower than the sensor noise or than the temperature change within the smoother
+    window only imitates sign(dT/dt)) to 5 degC."""
     lo_tau = max(2.0 * resolution_s, 10.0)
     if spec.key == "hyst":
-        return {"width_c": (0.02, 5.0)}
-    if spec.key == "Tlag":
+        lo_w = 0.02
+        if refs is not None and spec.channels:
+            lo_w = max(lo_w, refs.hyst_min_width_c.get(spec.channels[0], 0.0))
+        return {"width_c": (lo_w, max(5.0, 2.0 * lo_w))}
+    if spec.key in ("Tlag", "dTlagdt", "chanlag", "dchanlag"):
         return {"tau_s": (lo_tau, max(lo_tau * 2, duration_s))}
     if spec.key == "warmup":
         return {"tau_w_s": (lo_tau, max(lo_tau * 2, duration_s / 2))}
     if spec.key == "sin":
         return {"f_Hz": (2.0 / duration_s, 1.0 / (4.0 * resolution_s))}
     return {}
-
-
-def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
-    """Every library term that this log's channels allow and the model lacks (diagnosis
-    candidates): per temperature sensor T, T2, dTdt, Tlag, hyst; dGdt per sensor pair; Hx,
-    Hy, Hz; V; rate and rateT with a rate table; ramp, warmup, sin; g/g2 for acceleration-like
-    extra channels."""
-    have = {s.label for s in present}
-    keys_present = {s.key for s in present}
-    cands: list[TermSpec] = []
-    temps = [k for k, v in frame.temperature.items() if np.ptp(v) > 1e-9]
-    for c in temps:
-        for k in ("T", "T2", "T3", "dTdt", "Tlag", "hyst"):
-            if k == "T3" and TermSpec("T2", (c,)).label not in have:
-                continue
-            cands.append(TermSpec(k, (c,)))
-    for i, a in enumerate(temps):
-        for b in temps[i + 1:]:
-            if np.ptp(frame.temperature[a] - frame.temperature[b]) > 1e-9:
-                cands.append(TermSpec("dGdt", (a, b)))
-    for i, (name, v) in enumerate(frame.field_uT.items()):
-        if i < 3 and np.ptp(v) > 1e-9:
-            cands.append(TermSpec(f"H{'xyz'[i]}", (name,)))
-    if frame.supply is not None and np.ptp(frame.supply) > 1e-9:
-        cands.append(TermSpec("V"))
-    if frame.table_rate is not None and np.ptp(frame.table_rate) > 1e-9:
-        cands.append(TermSpec("rate"))
-        for c in temps:
-            cands.append(TermSpec("rateT", (c,)))
-    for name, v in frame.extra.items():
-        if _G_PATTERN.search(name) and np.ptp(v) > 1e-9:
-            cands.append(TermSpec("g", (name,)))
-            cands.append(TermSpec("g2", (name,)))
-    cands += [TermSpec("ramp"), TermSpec("warmup"), TermSpec("sin")]
-    out = []
-    for c in cands:
-        if c.label in have:
-            continue
-        if c.key in ("ramp", "warmup", "sin", "V", "rate") and c.key in keys_present:
-            continue
-        out.append(c)
-    return out
 
 
 def describe(spec: TermSpec) -> str:
@@ -945,3 +955,7 @@ def effect_table() -> list[dict]:
     return [{"term": e.key, "effect": e.title, "formula": e.formula, "unit": e.coef_unit,
              "nonlinear": [p.name for p in e.nonlinear], "source": e.source}
             for e in EFFECTS.values() if e.key != "custom"]
+
+
+# the effects defined in their own module register themselves in EFFECTS
+from . import channel_terms as _channel_terms  # noqa: E402,F401

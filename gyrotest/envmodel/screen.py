@@ -1,0 +1,140 @@
+"""The candidate terms a diagnosis tries: the library terms the log's channels allow, and a
+screen of every logged channel in the forms physics gives an effect.
+
+For each numeric channel the screen proposes, beside the library terms of its kind
+(temperature: T, T2, T3, dT/dt, lagged core, lagged-node rate, hysteresis; field: H_i, H_i²,
+H_i·H_j, |H|²; supply: V; acceleration: g, g², g_i·g_j), the generic forms of
+:mod:`gyrotest.envmodel.channel_terms` for channels the library has no term for (humidity,
+pressure, vibration, ... and the supply's square, rate and lag): level, square, magnitude,
+rate of change, first-order lag (fitted τ) and the rate of that lag. Nuisance terms that are
+tied to no channel (time ramp, warm-up, free-frequency sinusoid) close the list.
+
+Each candidate has a *class* used to break ties in the ranking: a channel-based explanation
+is preferred to a nuisance term when the evidence is equal.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .channel_terms import numeric_channels
+from .terms import _G_PATTERN, EnvFrame, TermSpec
+
+#: tie-break order (lower is preferred at equal evidence)
+CLASS_ORDER = {"library": 0, "second-order": 1, "channel": 2, "nuisance": 3}
+NUISANCE = ("ramp", "warmup", "sin", "hyst")
+SECOND_ORDER = ("T2", "T3", "Hsq", "Hprod", "Hmag2", "g2", "gprod", "Tlag", "dTlagdt")
+
+
+def term_class(spec: TermSpec) -> str:
+    """library | second-order | channel | nuisance (see :data:`CLASS_ORDER`)."""
+    if spec.key in NUISANCE:
+        return "nuisance"
+    if spec.key in ("chan", "chan2", "chanabs", "dchan", "chanlag", "dchanlag", "chanprod",
+                    "custom"):
+        return "channel"
+    if spec.key in SECOND_ORDER:
+        return "second-order"
+    return "library"
+
+
+def _varies(v: np.ndarray) -> bool:
+    v = np.asarray(v, float)
+    return bool(np.all(np.isfinite(v)) and np.ptp(v) > 1e-9 * max(1.0, float(np.max(np.abs(v)))))
+
+
+def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
+    """Every term this log's channels allow and the model ``present`` lacks (see the module
+    docstring). Terms the model already has, and nuisance terms of a kind it has, are left
+    out."""
+    have = {s.label for s in present}
+    keys_present = {s.key for s in present}
+    cands: list[TermSpec] = []
+    temps = [k for k, v in frame.temperature.items() if _varies(v)]
+    for c in temps:
+        for k in ("T", "T2", "T3", "dTdt", "Tlag", "dTlagdt", "hyst"):
+            if k == "T3" and TermSpec("T2", (c,)).label not in have:
+                continue
+            cands.append(TermSpec(k, (c,)))
+    for i, a in enumerate(temps):
+        for b in temps[i + 1:]:
+            if _varies(frame.temperature[a] - frame.temperature[b]):
+                cands.append(TermSpec("dGdt", (a, b)))
+    fields = [(i, n) for i, (n, v) in enumerate(frame.field_uT.items()) if i < 3 and _varies(v)]
+    for i, name in fields:
+        cands.append(TermSpec(f"H{'xyz'[i]}", (name,)))
+    for i, name in fields:
+        cands.append(TermSpec("Hsq", (name,)))
+    for j, (_i, a) in enumerate(fields):
+        for _k, b in fields[j + 1:]:
+            cands.append(TermSpec("Hprod", (a, b)))
+    if len(fields) >= 2:
+        cands.append(TermSpec("Hmag2"))
+    if frame.supply is not None and _varies(frame.supply):
+        cands.append(TermSpec("V"))
+        cands += [TermSpec(k, ("supply",)) for k in ("chan2", "dchan", "chanlag")]
+    if frame.table_rate is not None and _varies(frame.table_rate):
+        cands.append(TermSpec("rate"))
+        for c in temps:
+            cands.append(TermSpec("rateT", (c,)))
+    accel = []
+    for name, v in frame.extra.items():
+        if not _varies(v):
+            continue
+        if _G_PATTERN.search(name):
+            accel.append(name)
+            cands += [TermSpec("g", (name,)), TermSpec("g2", (name,))]
+            continue
+        cands += [TermSpec("chan", (name,)), TermSpec("chan2", (name,))]
+        v = np.asarray(v, float)
+        if np.min(v) < 0 < np.max(v):
+            cands.append(TermSpec("chanabs", (name,)))
+        cands += [TermSpec("dchan", (name,)), TermSpec("chanlag", (name,)),
+                  TermSpec("dchanlag", (name,))]
+    for j, a in enumerate(accel):
+        for b in accel[j + 1:]:
+            cands.append(TermSpec("gprod", (a, b)))
+    cands += [TermSpec("ramp"), TermSpec("warmup"), TermSpec("sin")]
+    out = []
+    for c in cands:
+        if c.label in have:
+            continue
+        if c.key in ("ramp", "warmup", "sin", "V", "rate", "Hmag2") and c.key in keys_present:
+            continue
+        out.append(c)
+    return out
+
+
+def stimulus_periods(frame: EnvFrame) -> dict[str, np.ndarray]:
+    """Every varying channel (and its square: a symmetric sweep of H shows in H² at twice the
+    frequency) as a zero-mean series on the frame's grid, for the period check of a fitted
+    sinusoid (:func:`period_match`)."""
+    out = {}
+    for name, (_g, v) in numeric_channels(frame).items():
+        if not _varies(v):
+            continue
+        x = v - np.mean(v)
+        out[name] = x
+        x2 = x * x
+        out[f"{name}²"] = x2 - np.mean(x2)
+    return out
+
+
+def period_match(frame: EnvFrame, f_hz: float, min_r2: float = 0.1) -> tuple[str, float] | None:
+    """The logged channel whose variation has the period 1/``f_hz`` (the fraction of its
+    variance a sinusoid at f explains, R² ≥ ``min_r2``), or None. A free-frequency sinusoid
+    that matches a stimulus period is that stimulus acting through a channel, not a periodic
+    disturbance."""
+    t = frame.t
+    w = 2 * np.pi * f_hz * t
+    S = np.column_stack([np.cos(w), np.sin(w)])
+    best = None
+    for name, x in stimulus_periods(frame).items():
+        v = float(x @ x)
+        if v <= 0:
+            continue
+        b, *_ = np.linalg.lstsq(S, x, rcond=None)
+        r2 = float(np.sum((S @ b) ** 2)) / v
+        if r2 >= min_r2 and (best is None or r2 > best[1]):
+            best = (name, r2)
+    return best

@@ -3,7 +3,8 @@ screen of every logged channel in the forms physics gives an effect.
 
 For each numeric channel the screen proposes, beside the library terms of its kind
 (temperature: T, T2, T3, dT/dt, lagged core, lagged-node rate, hysteresis; field: H_i, H_i²,
-H_i·H_j, |H|²; supply: V; acceleration: g, g², g_i·g_j), the generic forms of
+H_i·H_j, |H|²; supply: V; acceleration: g, g², g_i·g_j; a moving IA: the earth-rate
+projection), the generic forms of
 :mod:`gyrotest.envmodel.channel_terms` for channels the library has no term for (humidity,
 pressure, vibration, ... and the supply's square, rate and lag): level, square, magnitude,
 rate of change, first-order lag (fitted τ) and the rate of that lag. Nuisance terms that are
@@ -94,12 +95,15 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
     for j, a in enumerate(accel):
         for b in accel[j + 1:]:
             cands.append(TermSpec("gprod", (a, b)))
+    if frame.earth_dph is not None and _varies(frame.earth_dph):
+        cands.append(TermSpec("earth"))
     cands += [TermSpec("ramp"), TermSpec("warmup"), TermSpec("sin")]
     out = []
     for c in cands:
         if c.label in have:
             continue
-        if c.key in ("ramp", "warmup", "sin", "V", "rate", "Hmag2") and c.key in keys_present:
+        if (c.key in ("ramp", "warmup", "sin", "V", "rate", "Hmag2", "earth")
+                and c.key in keys_present):
             continue
         out.append(c)
     return out

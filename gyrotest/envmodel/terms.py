@@ -59,6 +59,9 @@ class EnvFrame:
     table_rate: np.ndarray | None = None
     extra: dict[str, np.ndarray] = field(default_factory=dict)
     source: str = "log"
+    #: earth-rate component along the IA per sample, deg/h, when the log has a position or
+    #: IA-attitude channel and a site latitude (:func:`earth_projection`); else None
+    earth_dph: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -110,6 +113,7 @@ def frame_from_log(log, *, axis: str | None = None, dt: float | None = None,
     t = log.t
     m = 1 if dt is None else max(1, int(round(dt / log.tau0)))
     chans: dict[str, Any] = {
+        "earth_dph": earth_projection(log),
         "rate": rate,
         "temperature": dict(log.temperature),
         "field_uT": dict(log.field_uT),
@@ -159,7 +163,47 @@ def frame_from_log(log, *, axis: str | None = None, dt: float | None = None,
         field_uT={k: binmean(v) for k, v in chans["field_uT"].items()},
         supply=binmean(chans["supply"]), table_rate=binmean(chans["table_rate"]),
         extra={k: binmean(v) for k, v in chans["extra"].items()},
+        earth_dph=binmean(chans["earth_dph"]),
     )
+
+
+_ELEV_NAMES = ("ia_elevation_deg", "ia_el_deg", "ia_elev_deg", "elevation_deg", "elev_deg")
+_AZIM_NAMES = ("ia_azimuth_deg", "ia_az_deg", "ia_azim_deg", "azimuth_deg", "azim_deg")
+
+
+def earth_projection(log) -> np.ndarray | None:
+    """Earth-rate component along the input axis for every sample of ``log``, deg/h, when the
+    IA direction changes during the log (a tumble or multi-position test): from the position
+    labels (``up``, ``north``, ``AZ/EL``, ...) or from numeric IA elevation/azimuth channels
+    (``ia_elevation_deg``, ``ia_azimuth_deg``), at the site latitude. None without a
+    latitude or such a channel. Formula: Ω_IA = Ω_E (cos φ cos e cos A + sin φ sin e)
+    (:func:`gyrotest.earth.earth_rate_component`)."""
+    from ..earth import earth_rate_component, parse_ia
+
+    site = getattr(log, "site", None)
+    if site is None:
+        return None
+    lat = site.latitude_deg
+    pos = getattr(log, "position", None)
+    if pos is not None:
+        labels = np.asarray(pos).astype(str)
+        uniq, inv = np.unique(labels, return_inverse=True)
+        vals = []
+        for u in uniq:
+            try:
+                az, el, _ = parse_ia(u)
+            except InputError:
+                return None
+            vals.append(earth_rate_component(lat, az, el))
+        return np.asarray(vals, float)[inv]
+    low = {k.lower(): k for k in log.extra}
+    el_k = next((low[n] for n in _ELEV_NAMES if n in low), None)
+    if el_k is None:
+        return None
+    el = np.asarray(log.extra[el_k], float)
+    az_k = next((low[n] for n in _AZIM_NAMES if n in low), None)
+    az = np.asarray(log.extra[az_k], float) if az_k else site.ia_azimuth_deg
+    return np.asarray(earth_rate_component(lat, az, el), float)
 
 
 def _numeric(v) -> bool:
@@ -412,6 +456,18 @@ def thermal_branch(temp_c: np.ndarray, width_c: float,
     return out
 
 
+def earth_rate_projection(earth_dph: np.ndarray) -> np.ndarray:
+    """Earth rate along an input axis whose direction changes (tumble, multi-position).
+
+    Formula: x = Ω_E (cos φ cos e cos A + sin φ sin e) per sample (deg/h), from the position or
+    IA-attitude channel (:func:`earth_projection`). Units: deg/h; coefficient k_E,
+    dimensionless (1 when the positions and the latitude are right; the fitted value checks
+    them). Source: IEEE Std 952-1997 §12.11.4.1.1 (earth-rate component along the IA);
+    without it a tumble test reads earth rate as g-sensitivity.
+    """
+    return np.asarray(earth_dph, float)
+
+
 def input_rate(omega_dph: np.ndarray) -> np.ndarray:
     """Input (rate-table) rate for a scale-factor error, in units of 1e6 deg/h.
 
@@ -508,6 +564,9 @@ _reg(Effect("hyst", "thermal hysteresis (heating vs cooling branch)",
             "play-operator branch state s ∈ [−1, 1], half-width w", ("D_hyst",), "deg/h",
             "play operator; heating/cooling check", "temperature", thermal_branch,
             nonlinear=(NLParam("width_c", "degC", "tau"),), smooth=True))
+_reg(Effect("earth", "earth-rate projection on a moving input axis",
+            "Ω_E (cos φ cos e cos A + sin φ sin e)", ("k_E",), "1 (deg/h per deg/h)",
+            "IEEE 952 §12.11.4.1.1 earth rate along the IA", "earth", earth_rate_projection))
 _reg(Effect("rate", "scale-factor error on the input rate", "Ω_in·1e-6", ("eps_K",), "ppm",
             "IEEE 952 §8.3 ε_K", "table_rate", input_rate))
 _reg(Effect("rateT", "scale-factor temperature sensitivity", "Ω_in·(T − T_ref)·1e-6",
@@ -627,8 +686,8 @@ def parse_term(text: str) -> list[TermSpec]:
         raise InputError(f"term {s!r}: unknown term {key!r} (known: {known}, or "
                          "name:expression)")
     need = {"temperature2": 2, "table+temp": 1, "field2": 2, "any2": 2,
-            "fieldall": 0}.get(EFFECTS[key].needs, 1)
-    if EFFECTS[key].needs in ("none", "fieldall") and chans:
+            "fieldall": 0, "earth": 0}.get(EFFECTS[key].needs, 1)
+    if EFFECTS[key].needs in ("none", "fieldall", "earth") and chans:
         raise InputError(f"term {s!r}: {key} takes no channel")
     if len(chans) > need:
         raise InputError(f"term {s!r}: {key} takes at most {need} channel(s)")
@@ -750,6 +809,12 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
                                constant_ok=sp.key in ("dchan", "dchanlag"))
             if n_need == 2:
                 _check_channel(vals[0] * vals[1], f"term {label!r}", "·".join(chans), src)
+        elif e.needs == "earth":
+            if frame.earth_dph is None:
+                raise InputError(f"term {label!r}: {src} has no position or IA-attitude channel "
+                                 "with a site latitude; name them with --position-col (or "
+                                 "ia_elevation_deg/ia_azimuth_deg columns) and --latitude")
+            _check_channel(frame.earth_dph, f"term {label!r}", "earth-rate projection", src)
         elif e.needs == "supply":
             if frame.supply is None:
                 raise InputError(f"term {label!r}: {src} has no supply-voltage channel; name it "
@@ -892,6 +957,8 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
         return sinusoid(frame.t, theta["f_Hz"])
     elif k == "hyst":
         x = thermal_branch(frame.temperature[ch[0]], theta["width_c"], frame.bounds)
+    elif k == "earth":
+        x = earth_rate_projection(frame.earth_dph)
     elif k == "rate":
         x = input_rate(frame.table_rate)
     elif k == "rateT":

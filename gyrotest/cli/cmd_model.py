@@ -20,6 +20,7 @@ from .common import (
     ingest_options,
     json_option,
     load_for_terms,
+    load_log,
     note,
     plot_option,
     progress,
@@ -50,6 +51,10 @@ def prep_options(f):
                           "'auto'."),
         click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
                      help="Folds of the blocked cross-validation (held-out RMS)."),
+        click.option("--reference", default=None, metavar="LOG",
+                     help="Static reference run of the same gyro (read with the same ingest "
+                          "options): its white, flicker and random-walk noise give the noise "
+                          "floor. Default: the log's own short-tau noise."),
     ]
     for o in reversed(opts):
         f = o(f)
@@ -155,10 +160,11 @@ def render_fit(res, *, title: str = "model fit") -> None:
     out.print(f"  held-out scheme: {res.holdout_scheme}")
     if res.floor:
         f = res.floor
-        out.print(f"  noise floor (Allan-predicted at this resolution): {fmt_num(f.rms_dph)} deg/h "
-                  f"(white N = {fmt_num(f.arw_deg_rt_h, 3)} deg/√h, flicker plateau "
-                  f"{fmt_num(f.flicker_B, 3)} deg/h); held-out / floor = "
+        out.print(f"  noise floor (fixed for this log, not from this model's residual): "
+                  f"{fmt_num(f.rms_dph)} deg/h (white N = {fmt_num(f.arw_deg_rt_h, 3)} deg/√h, "
+                  f"flicker plateau {fmt_num(f.flicker_B, 3)} deg/h); held-out / floor = "
                   f"{fmt_num(res.rms_holdout / f.rms_dph, 3)}")
+        out.print(f"    basis: {f.basis}", markup=False)
     out.print(f"  AIC {res.aic:.1f}, BIC {res.bic:.1f} ({res.n_params} parameters, "
               f"{res.n_blocks} blocks; compare models on the same log only)")
     out.print(f"  uncertainty: {res.hac.method}, bandwidth {res.hac.bandwidth:.3g} blocks; "
@@ -182,30 +188,58 @@ def render_fit(res, *, title: str = "model fit") -> None:
         warn(w)
 
 
+def load_reference(path: str | None, opts: dict, quiet: bool):
+    """The ``--reference`` log, read with the same ingest options (errors name the option)."""
+    if not path:
+        return None
+    try:
+        return load_log(path, opts, announce=not quiet)
+    except InputError as e:
+        raise InputError(f"--reference: {e}") from None
+
+
 def render_diagnosis(diag, top: int = 12) -> None:
+    from rich.markup import escape
     from rich.table import Table
 
     out = console()
     b = diag.base
-    out.print(f"[bold]model diagnose[/bold]: base terms {' + '.join(b.terms)}; held-out RMS "
-              f"{fmt_num(b.rms_holdout)} deg/h, noise floor {fmt_num(diag.noise_floor_dph)} deg/h")
+    out.print(f"[bold]model diagnose[/bold]: base terms {escape(' + '.join(b.terms))}; held-out "
+              f"RMS {fmt_num(b.rms_holdout)} deg/h, noise floor {fmt_num(diag.noise_floor_dph)} "
+              f"deg/h (held-out/floor {fmt_num(diag.ratio_to_floor, 3)})")
+    out.print(f"  noise floor: {escape(diag.floor_basis)}")
     out.print(f"  working resolution: {_short(b)}")
-    t = Table(title="candidate terms, best first (held-out residual; HAC significance)")
+    t = Table(title="candidate terms, best first (held-out residual; HAC significance in the "
+                    "augmented model)")
     for col, just in (("#", "right"), ("term", "left"), ("physical effect", "left"),
-                      ("held-out RMS", "right"), ("gain", "right"), ("evidence", "left"),
-                      ("missing?", "left")):
+                      ("held-out RMS, deg/h", "right"), ("gain", "right"),
+                      ("evidence", "left"), ("missing?", "left")):
         t.add_column(col, justify=just)
     for i, c in enumerate(diag.candidates[:top], 1):
-        eff = c.effect.split(" [")[0] + (" (replaces T)" if c.replaces else "")
-        ev = (c.error or (f"z {c.z:.1f}, p_adj {c.p_adj:.1g}" if math.isfinite(c.z) else "—"))
-        t.add_row(str(i), c.term, eff, fmt_num(c.rms_holdout),
+        eff = c.effect.split(" [")[0] + (f" (replaces {c.replaces})" if c.replaces else "")
+        ev = (c.error or (f"z {c.z:.1f}, p·trials {c.p_trials:.1g}, p_adj {c.p_adj:.1g}"
+                          if math.isfinite(c.z) else "—"))
+        if c.rejected:
+            ev += "; rejected: period of a logged stimulus"
+        mark = ("[green]yes[/green]" + (" (chosen)" if c is diag.chosen else "")
+                if c.significant else "no")
+        t.add_row(str(i), escape(c.term), escape(eff), fmt_num(c.rms_holdout),
                   f"{c.improvement_pct:+.1f}%" if math.isfinite(c.improvement_pct) else "—",
-                  ev, "[green]yes[/green]" if c.significant else "no")
+                  escape(ev), mark)
     out.print(t)
     style = "green" if diag.found else "bold"
-    out.print(f"[{style}]{diag.verdict}[/{style}]")
+    out.print(f"[{style}]{escape(diag.verdict)}[/{style}]")
+    if len(diag.path) > 1:
+        out.print("  forward path (each step judged in the model with the steps before it):")
+        for k, p in enumerate(diag.path, 1):
+            out.print(f"    {k}. +{escape(p['term'])}: held-out "
+                      f"{fmt_num(p['rms_holdout_before_dph'])} → "
+                      f"{fmt_num(p['rms_holdout_after_dph'])} deg/h (held-out/floor "
+                      f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
     out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
-              f"and HAC p × trials × candidates < {diag.alpha:g}")
+              f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
+              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis) while the model is "
+              "above 1.2x the noise floor; ties go to channel-based terms")
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)
@@ -269,8 +303,8 @@ def command():
 @ingest_options
 @json_option
 @with_ingest
-def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds, output,
-            session, no_history, k_sigma, plot_path, as_json, ingest_opts):
+def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds, reference,
+            output, session, no_history, k_sigma, plot_path, as_json, ingest_opts):
     """Fit a drift model with the given terms and show where it fails.
 
     The gyro rate (minus the rate-table rate, if any) is modelled as a bias plus the TERMS, in
@@ -305,8 +339,10 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
         if not parent.is_dir():
             raise InputError(f"--session {session}: directory {parent} does not exist")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+    ref = load_reference(reference, ingest_opts, as_json)
     res = fit_log(g, specs, path=log, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                  resolution=resolution, smooth=smooth, folds=folds, k_sigma=k_sigma)
+                  resolution=resolution, smooth=smooth, folds=folds, k_sigma=k_sigma,
+                  reference=ref)
     written: dict = {}
     if session:
         from ..envmodel.history import load_history
@@ -356,20 +392,29 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
               help="Family-wise significance level (default 0.001).")
 @click.option("--min-improvement", type=float, default=1.0, show_default=True,
               help="Smallest held-out RMS improvement (%) that counts as a missing effect.")
+@click.option("--path", "path_steps", type=click.IntRange(1, 10), default=3, show_default=True,
+              help="Steps of the forward path: after the missing effect, look for the next "
+                   "one in the model that has it (several effects are often missing at once).")
 @click.option("--top", type=int, default=12, show_default=True, help="Rows to show.")
 @plot_option("Base residual and candidate bar chart (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest
 def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds,
-                 candidates, alpha, min_improvement, top, plot_path, as_json, ingest_opts):
+                 reference, candidates, alpha, min_improvement, path_steps, top, plot_path,
+                 as_json, ingest_opts):
     """Which physical effect does the model lack? Try every candidate and rank them.
 
-    Each candidate term (every library term the log's channels allow, not in the model) is
-    added in turn and scored by how much it lowers the held-out residual RMS, with a HAC
-    significance test corrected for the number of candidates and for searched time constants
-    or frequencies. Says "no missing effect found" when none passes, and compares the
-    residual with the Allan-predicted noise floor.
+    Candidates: every library term the log's channels allow and the model lacks, and a screen
+    of every logged channel (level, square, |x|, rate of change, first-order lag with a fitted
+    time constant, rate of that lag; H_i², H_i·H_j, |H|², g_i·g_j). Each is added in turn
+    and scored by its held-out residual RMS (blocked cross-validation), with a HAC test of
+    its coefficient in the augmented model. A missing effect either passes the strict test
+    (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
+    while the model is above 1.2x the noise floor, p x trials < 0.01). The noise floor is
+    fixed before any model is fitted: from the log's short-tau noise, or from --reference.
+    The verdict names the effect, how to add it (--terms or the equivalent --term), the
+    explanations this log cannot tell apart, and the forward path (--path) to the floor.
 
     \b
     Examples:
@@ -387,10 +432,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
         check_plot_path(plot_path)
     cand = split_terms(candidates) if candidates else None
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+    ref = load_reference(reference, ingest_opts, as_json)
     with progress("trying candidate terms") as advance:
         diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref,
                             v_ref=v_ref, resolution=resolution, smooth=smooth, alpha=alpha,
                             min_improvement_pct=min_improvement, folds=folds,
+                            reference=ref, path_steps=path_steps,
                             progress=lambda i, n, label: advance(
                                 1 if i else 0, total=n, description=f"trying {label}"))
     if plot_path:

@@ -19,8 +19,8 @@ import numpy as np
 
 from ..errors import InputError
 from .terms import (
-    H0_UT,
     EFFECTS,
+    H0_UT,
     Effect,
     EnvFrame,
     NLParam,

@@ -848,15 +848,15 @@ def fit_document(res: FitResult, *, written: dict | None = None) -> dict:
 def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | None = None,
             skip: str | float = "0", t_ref: float | None = None, v_ref: float | None = None,
             resolution: str | None = "auto", smooth: str | None = "auto", folds: int = 5,
-            k_sigma: float = 4.0) -> FitResult:
+            k_sigma: float = 4.0, reference=None) -> FitResult:
     """``gyrotest model fit``: prepare ``log`` with the command's options
     (:func:`gyrotest.envmodel.prepare.prepare_log`; ``path`` for the model's provenance), fit
     ``specs`` (:func:`fit_model`) and add the residual Allan deviation, noise floor and
-    excursions (:func:`finish`)."""
+    excursions (:func:`finish`). ``reference``: a static reference log for the noise floor."""
     from .prepare import prepare_log
 
     wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                     resolution=resolution, smooth=smooth, specs=specs)
+                     resolution=resolution, smooth=smooth, specs=specs, reference=reference)
     res = fit_model(wd, specs, folds=folds, light=True)
     finish(res, k_sigma=k_sigma)
     return res

@@ -8,7 +8,7 @@ floor once per log, from data the model cannot influence, and holds it fixed thr
 diagnosis and a model history:
 
 * **short-τ noise of the raw rate** (default): a *robust* overlapping Hadamard deviation of the
-  raw rate (fine grid; the MAD of the cluster differences instead of their mean square, so
+  raw rate (fine grid; the trimmed scale of the cluster differences, not their mean square, so
   sparse events -- field and supply steps, ramp corners, a warm-up -- do not count, and
   second differences, so rate ramps do not either, :func:`robust_avar`) gives the white noise N from the τ range that white noise alone
   explains, and the flicker plateau B as the lowest excess over white noise seen up to T/8
@@ -116,8 +116,7 @@ def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: 
     up to T/8). B counts only when detected (B² > 2 standard errors of the fit) and is capped
     by the lowest excess over white noise seen at any τ, min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊:
     flicker is flat in σ², anything environmental only adds to it. ``se_factor`` scales the
-    standard errors (1.65 for the MAD-based deviation of :func:`robust_avar`, whose
-    efficiency is 37 %). Returns (N (deg/h)·√s, B deg/h, (last τ of the fit, last τ
+    standard errors (1.2 for the trimmed deviation of :func:`robust_avar`). Returns (N (deg/h)·√s, B deg/h, (last τ of the fit, last τ
     searched))."""
     keep = tau <= duration_s / 8.0
     if keep.sum() < 3:
@@ -144,13 +143,31 @@ def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: 
     return N, math.sqrt(max(B2, 0.0)), (t_lo, t_hi)
 
 
+#: variance of a standard normal truncated at ±4σ: 1 − 8φ(4)/(2Φ(4) − 1)
+_TRUNC4 = 1.0 - 8.0 * math.exp(-8.0) / math.sqrt(2 * math.pi) / math.erf(4.0 / math.sqrt(2))
+
+
+def _robust_scale(d: np.ndarray) -> float:
+    """Standard deviation of the Gaussian bulk of ``d``: the MAD scale (1.4826·MAD) finds the
+    bulk, values beyond 4 of those from the median are dropped, and the standard deviation of
+    the rest is corrected for the truncation. Sparse large outliers (steps) are removed
+    entirely, where a MAD alone would still be inflated by the fraction they occupy."""
+    med = float(np.median(d))
+    s0 = 1.4826 * float(np.median(np.abs(d - med)))
+    if not s0 > 0:
+        return float(np.std(d))
+    keep = np.abs(d - med) < 4.0 * s0
+    return float(np.std(d[keep]) / math.sqrt(_TRUNC4))
+
+
 def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
                 max_frac: float = 0.25, hadamard: bool = False
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Overlapping Allan (or Hadamard) deviation with a robust scale: σ(τ) = 1.4826·MAD(d)/√2
-    over the differences d = ȳ_{k+m} − ȳ_k of adjacent overlapping τ-averages (Hadamard:
+    """Overlapping Allan (or Hadamard) deviation with a robust scale: σ(τ) = s(d)/√2 over the
+    differences d = ȳ_{k+m} − ȳ_k of adjacent overlapping τ-averages (Hadamard:
     d = ȳ_{k+2m} − 2ȳ_{k+m} + ȳ_k and /√6), octave τ = m·dt, pooled over the gap-free
-    segments.
+    segments; s(d) the standard deviation of the Gaussian bulk of d (:func:`_robust_scale`:
+    MAD to find it, a 4σ cut, truncation-corrected standard deviation).
 
     For Gaussian noise this equals the Allan (Hadamard) deviation; sparse environmental
     events -- field or supply steps, the corners of temperature ramps, a warm-up transient --
@@ -183,9 +200,8 @@ def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
                 parts.append(avg[m:] - avg[:-m])
         if parts:
             d = np.concatenate(parts)
-            mad = float(np.median(np.abs(d - np.median(d))))
             taus.append(m * dt)
-            sigs.append(1.4826 * mad / math.sqrt(6.0 if hadamard else 2.0))
+            sigs.append(_robust_scale(d) / math.sqrt(6.0 if hadamard else 2.0))
         m *= 2
     return np.asarray(taus), np.asarray(sigs)
 
@@ -202,13 +218,14 @@ def model_free_floor(wd) -> st.NoiseFloor:
     if len(tau) < 3:
         return st.NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0),
                              "record too short for an Allan estimate of the noise")
-    N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, t_eff, se_factor=1.65)
+    N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, t_eff, se_factor=1.2)
     B = B_h / math.sqrt(HADAMARD_FLICKER)
     rms = floor_rms(N, B, 0.0, t_eff, wd.duration_s)
-    basis = (f"white noise of the raw rate (robust Hadamard variance at τ ≤ {t_lo:.3g} s) and flicker "
-             f"from the lowest Allan level it leaves over {t_eff:.3g}–{t_hi:.3g} s "
-             "(environmental stimuli only add variance); independent of the model; random "
-             f"walk not included; at T_eff = {t_eff:.3g} s over {wd.duration_s:.0f} s")
+    basis = (f"white and flicker noise of the raw rate (robust Hadamard deviation over τ = "
+             f"{tau[0]:.3g}–{t_lo:.3g} s, before environmental stimuli add to it; flicker "
+             f"{'capped by the lowest excess up to ' + format(t_hi, '.3g') + ' s' if B > 0 else 'not detected'}"
+             f"), independent of the model; random walk not included; at T_eff = "
+             f"{t_eff:.3g} s over {wd.duration_s:.0f} s")
     return st.NoiseFloor(rms, N, B, (float(tau[0]), float(t_hi)), basis)
 
 

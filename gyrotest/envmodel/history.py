@@ -118,7 +118,8 @@ def make_step(res, steps: list[HistoryStep], model_file: str | None = None) -> H
         n_params=res.n_params, rms_fit_dph=res.rms_fit, rms_holdout_dph=res.rms_holdout,
         aic=res.aic, bic=res.bic,
         noise_floor_dph=res.floor.rms_dph if res.floor else None,
-        resolution_s=res.resolution_s, model_file=model_file)
+        resolution_s=res.resolution_s, model_file=model_file,
+        extra={"noise_floor_basis": res.floor.basis} if res.floor else {})
 
 
 def append_history(path: str | Path, res, model_file: str | None = None) -> HistoryStep:

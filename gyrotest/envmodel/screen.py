@@ -64,7 +64,7 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
     fields = [(i, n) for i, (n, v) in enumerate(frame.field_uT.items()) if i < 3 and _varies(v)]
     for i, name in fields:
         cands.append(TermSpec(f"H{'xyz'[i]}", (name,)))
-    for i, name in fields:
+    for _i, name in fields:
         cands.append(TermSpec("Hsq", (name,)))
     for j, (_i, a) in enumerate(fields):
         for _k, b in fields[j + 1:]:

@@ -793,8 +793,8 @@ class Builder:
             sec.add(P(
                 "Fit quality: residual RMS "
                 f"{s.t(['chamber', 'fit', 'rms_fit_dph'], U_DPH)}, held-out "
-                f"{s.t(['chamber', 'fit', 'rms_holdout_dph'], U_DPH)}, Allan-predicted "
-                f"noise floor {s.t(['chamber', 'fit', 'noise_floor_dph'], U_DPH)}; "
+                f"{s.t(['chamber', 'fit', 'rms_holdout_dph'], U_DPH)}, noise "
+                f"floor (fixed for the log) {s.t(['chamber', 'fit', 'noise_floor_dph'], U_DPH)}; "
                 f"working resolution: {f.get('resolution_note', '')}."))
             h = ch.get("hysteresis", {})
             if "heating_minus_cooling_dph" in h:

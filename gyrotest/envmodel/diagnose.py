@@ -20,9 +20,10 @@ that the model under judgment cannot move:
    p_adj = p × trials × candidates.
 4. **A candidate is a missing effect** when either
    * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 %; or
-   * *clear gain*: the base model's held-out RMS is above 1.2 × the floor, the candidate
-     cuts it by ≥ 5 %, and the test guards against a fluke with p × trials < 0.01
-     (0.001 for nuisance terms). An effect the base model lacks inflates the HAC error of
+   * *clear gain*: the base model's held-out RMS is above 1.2 × the floor (or the candidate
+     cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
+     ≥ 5 %, and the test guards against a fluke with p × trials < 0.01 (0.001 for nuisance
+     terms). An effect the base model lacks inflates the HAC error of
      every other candidate, so a large held-out gain must not wait for a strict p-value;
      the fold-to-fold scatter of the gain is reported with it.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -31,8 +32,11 @@ that the model under judgment cannot move:
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 1 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
-   generic channel < nuisance), and candidates whose fitted contributions correlate at
-   |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log.
+   generic channel < nuisance; within a class the simpler form, x before x²), a lag whose
+   time constant is not resolved (at the bottom of its range or below the smoother window)
+   gives way to the plain term, and candidates whose fitted contributions correlate at
+   |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log. Candidates the
+   model already spans (R² > 1 − 10⁻⁶ on its columns) are not tried.
 6. **Forward path**: the chosen term is added and the procedure repeats (at most
    ``path_steps`` times) until no candidate is a missing effect or the held-out RMS is at
    the floor; the verdict names the first effect and the path that follows.
@@ -64,6 +68,8 @@ CLEAR_GAIN = 0.05
 CLEAR_P = 0.01
 CLEAR_P_NUISANCE = 0.001
 ABOVE_FLOOR = 1.2
+#: a held-out gain this large shows the model was not at the floor, whatever its estimate
+BIG_GAIN = 0.2
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: candidates within this fraction of the best held-out RMS count as equal evidence
@@ -152,6 +158,7 @@ class Diagnosis:
     floor_basis: str = ""
     chosen: Candidate | None = None
     path: list[dict] = field(default_factory=list)
+    possible: Candidate | None = None  # "possible missing effect" (gain > scatter, no test)
 
     @property
     def found(self) -> list[Candidate]:
@@ -177,6 +184,7 @@ class Diagnosis:
             "resolution_s": self.base.resolution_s,
             "resolution_note": self.base.resolution_note,
             "missing_effect": self.found[0].term if self.found else None,
+            "possible_effect": self.possible.term if self.possible else None,
             "add": self.found[0].add_hint if self.found else None,
             "verdict": self.verdict,
             "path": self.path,
@@ -251,11 +259,11 @@ def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
                 break
             path.append(_path_entry(nxt, cur, fl))
             cur = nxt._fit
-    verdict = _verdict(base, cands, chosen, path, fl, ratio)
+    verdict, possible = _verdict(base, cands, chosen, path, fl, ratio)
     return Diagnosis(base=base, candidates=cands, verdict=verdict, noise_floor_dph=fl,
                      ratio_to_floor=ratio, alpha=alpha,
                      min_improvement_pct=100 * min_improvement, floor_basis=floor.basis,
-                     chosen=chosen, path=path)
+                     chosen=chosen, path=path, possible=possible)
 
 
 def _path_entry(c: Candidate, before: FitResult, floor: float) -> dict:
@@ -282,6 +290,8 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     n_c = max(1, len(cands))
     fl = floor.rms_dph
     base_ratio = base.rms_holdout / fl if fl and math.isfinite(fl) and fl > 0 else math.inf
+    cands = _not_in_model(base, cands)
+    n_c = max(1, len(cands))
     out: list[Candidate] = []
     for i, c in enumerate(cands):
         if progress:
@@ -301,9 +311,67 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
-        chosen = min(tied, key=lambda c: (CLASS_ORDER.get(c.klass, 9), score(c)))
+        chosen = min(tied, key=lambda c: (CLASS_ORDER.get(c.klass, 9),
+                                          FORM_ORDER.get(c.spec.key if c.spec else "", 5),
+                                          score(c)))
+        chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = _equivalents(chosen, out, base)
     return out, chosen
+
+
+#: within a class, simpler forms first at equal evidence (x before x², a lag before a rate)
+FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,
+              "chanprod": 6, "Tlag": 0, "dTlagdt": 1, "Hsq": 2, "Hmag2": 2, "Hprod": 3,
+              "T2": 2, "T3": 4, "g2": 2, "gprod": 3}
+#: a lag term and the term it becomes when its time constant is not resolved
+UNLAGGED = {"Tlag": "T", "dTlagdt": "dTdt", "chanlag": "chan", "dchanlag": "dchan"}
+
+
+def _unresolved_lag(chosen: Candidate, sig: list[Candidate], wd: WorkData) -> Candidate:
+    """A lag whose fitted time constant is at the bottom of its range or shorter than the
+    smoother window is not resolved by this log: the plain term of the same channel (a
+    missing effect too) is the honest name."""
+    key = chosen.spec.key if chosen.spec else ""
+    if key not in UNLAGGED or chosen._fit is None:
+        return chosen
+    tau = (chosen._fit._thetas.get(chosen.term) or {}).get("tau_s")  # type: ignore[attr-defined]
+    lo = nonlinear_bounds(chosen.spec, wd.duration_s, wd.resolution_s,
+                          wd.refs).get("tau_s", (0.0, 0.0))[0]
+    if tau is None or tau > max(1.05 * lo, wd.refs.smoothing_s):
+        return chosen
+    plain = TermSpec(UNLAGGED[key], chosen.spec.channels).label
+    alt = next((c for c in sig if c.term == plain), None)
+    return alt if alt is not None else chosen
+
+
+def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
+    """Leave out linear candidates whose regressor the model already spans (R² > 1 − 1e-6 on
+    the base model's columns), e.g. ``chan(P)`` when the model has a custom term
+    ``p:extra.P``: they add nothing but a tie."""
+    try:
+        X = base._fitter.X(base._thetas)  # type: ignore[attr-defined]
+        d = base._fitter.d  # type: ignore[attr-defined]
+    except AttributeError:
+        return cands
+    out = []
+    for c in cands:
+        if c.effect.nonlinear:
+            out.append(c)
+            continue
+        try:
+            x = d.block(c, None)
+        except (InputError, ValueError, KeyError):
+            out.append(c)
+            continue
+        xc = x - x.mean(axis=0)
+        tot = float(np.sum(xc * xc))
+        if tot <= 0:
+            continue
+        b, rss = st.lstsq(X, x[:, 0]) if x.shape[1] == 1 else (None, tot)
+        if x.shape[1] == 1 and rss < 1e-6 * tot:
+            continue
+        out.append(c)
+    return out
 
 
 def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
@@ -331,8 +399,8 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
     strict = bool(math.isfinite(p_adj) and p_adj < alpha and impr >= min_improvement)
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
-    clear = bool(math.isfinite(p_tr) and base_ratio > ABOVE_FLOOR and impr >= CLEAR_GAIN
-                 and p_tr < guard)
+    clear = bool(math.isfinite(p_tr) and (base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN)
+                 and impr >= CLEAR_GAIN and p_tr < guard)
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     if c.key == "sin" and (strict or clear):
@@ -417,7 +485,7 @@ def _equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> 
 
 
 def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
-             path: list[dict], floor: float, ratio: float) -> str:
+             path: list[dict], floor: float, ratio: float) -> tuple[str, Candidate | None]:
     fl_txt = (f"the noise floor ({floor:.3g} deg/h)" if math.isfinite(floor)
               else "the noise floor (not estimated)")
     if chosen is not None:
@@ -438,10 +506,10 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             last = path[-1]["ratio_to_floor_after"]
             if math.isfinite(last):
                 v += f"; held-out/floor after the path {last:.2f}"
-        return v
+        return v, None
     if math.isfinite(ratio) and ratio <= AT_FLOOR:
         return (f"no missing effect found: the held-out residual ({base.rms_holdout:.3g} "
-                f"deg/h) is at {fl_txt}, ratio {ratio:.2f}")
+                f"deg/h) is at {fl_txt}, ratio {ratio:.2f}"), None
     ok = [c for c in cands if math.isfinite(c.improvement_pct) and c.rejected is None]
     best = max(ok, key=lambda c: c.improvement_pct) if ok else None
     if (best is not None and math.isfinite(best.gain_scatter_pct)
@@ -450,7 +518,7 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
                 f"{base.rms_holdout:.4g} → {best.rms_holdout:.4g} deg/h "
                 f"({-best.improvement_pct:+.1f} %, more than the fold-to-fold scatter "
                 f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}); "
-                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log")
+                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log"), best
     rej = [c for c in cands if c.rejected]
     v = ("no missing effect found among the candidates"
          + (f"; the held-out residual is {ratio:.2g}x {fl_txt}: an effect outside the "
@@ -458,7 +526,7 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             "walk, Markov); see the excursions" if math.isfinite(ratio) else ""))
     if rej:
         v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
-    return v
+    return v, None
 
 
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData

@@ -81,11 +81,14 @@ class SafeExpression:
     tree: ast.Expression
     channels: list[ChannelRef] = field(default_factory=list)
 
-    def evaluate(self, frame: Any, *, smoothing_s: float) -> np.ndarray:
+    def evaluate(self, frame: Any, *, smoothing_s: float, raw_ddt: bool = False) -> np.ndarray:
         """Evaluate on ``frame`` (an :class:`~gyrotest.envmodel.terms.EnvFrame`); returns a
-        float64 array of the frame's length (scalars are broadcast)."""
+        float64 array of the frame's length (scalars are broadcast). ``raw_ddt``: ``ddt(x)``
+        is the plain central-difference derivative, for a caller that applies the working
+        smoother to the whole expression afterwards (the smoother then acts once, as on the
+        gyro rate: S_W(dx/dt) = d(S_W x)/dt)."""
         with np.errstate(all="ignore"):
-            out = _Evaluator(frame, smoothing_s, self.text).visit(self.tree.body)
+            out = _Evaluator(frame, smoothing_s, self.text, raw_ddt).visit(self.tree.body)
         out = np.broadcast_to(np.asarray(out, dtype=np.float64), (frame.n,)).copy()
         return out
 
@@ -189,10 +192,11 @@ def _validate(node: ast.AST, text: str, channels: list[ChannelRef]) -> None:
 
 
 class _Evaluator:
-    def __init__(self, frame: Any, smoothing_s: float, text: str):
+    def __init__(self, frame: Any, smoothing_s: float, text: str, raw_ddt: bool = False):
         self.frame = frame
         self.smoothing_s = smoothing_s
         self.text = text
+        self.raw_ddt = raw_ddt
 
     def visit(self, node: ast.AST):
         ref = _channel_of(node, self.text)
@@ -212,6 +216,12 @@ class _Evaluator:
                 from .terms import smoothed_rate
 
                 x = np.broadcast_to(np.asarray(self.visit(node.args[0]), float), (self.frame.n,))
+                if self.raw_ddt:
+                    out = np.zeros(self.frame.n)
+                    for a, b in self.frame.bounds:
+                        if b - a > 1:
+                            out[a:b] = np.gradient(x[a:b], self.frame.dt) * 3600.0
+                    return out
                 return smoothed_rate(x, self.frame.dt, self.smoothing_s, self.frame.bounds)
             if name == "lag":
                 from .terms import first_order_lag

@@ -35,7 +35,8 @@ validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
 max(6·W, duration/500) (at least 2·folds chunks); chunk c belongs to fold c mod folds; each
 fold is predicted from a fit on the other folds (linear coefficients re-fitted, a searched
 frequency searched afresh on the training folds, time constants kept at the full-data value,
-which a fold without the start-up could not pin down), leaving out 2·W on either side of each
+which a fold without the start-up could not pin down, and so are the coefficients of
+regressors that barely vary outside the held-out chunk), leaving out 2·W on either side of each
 held-out chunk so that neither the smoother nor short-memory noise carries held-out data into
 the training set.
 """
@@ -367,10 +368,10 @@ class Design:
         return xb
 
     def _filtered(self, spec: TermSpec, theta: dict[str, float]) -> np.ndarray:
-        xf = build_term(self.wd.frame, spec, theta, self.wd.refs)
         if spec.key == "bias" or spec.effect.prefiltered:
-            return xf
-        return self.wd.smooth(xf)
+            return build_term(self.wd.frame, spec, theta, self.wd.refs)
+        return self.wd.smooth(build_term(self.wd.frame, spec, theta, self.wd.refs,
+                                         to_be_smoothed=True))
 
     def fine(self, spec: TermSpec, theta: dict[str, float] | None = None) -> np.ndarray:
         return build_term(self.wd.frame, spec, theta or {}, self.wd.refs)
@@ -711,8 +712,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     Allan deviation and noise floor, excursions (|residual| > k·σ) and the portable
     :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
     """
-    specs = parse_terms(terms) if not (isinstance(terms, list) and terms
-                                       and isinstance(terms[0], TermSpec)) else list(terms)
+    specs = parse_terms(terms)  # texts and TermSpecs, mixed freely
     specs = [s for s in specs if s.key != "bias"]
     specs = resolve_terms(specs, wd.frame)
     if bias:
@@ -771,7 +771,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             continue
         th_f = fitter.optimise(thetas, m, local=True, kinds=("freq",), fresh=("freq",))
         Xf = fitter.X(th_f)
-        bf, _ = st.lstsq(Xf[m], wd.y[m])
+        bf = _fold_coefficients(Xf, wd.y, m, beta)
         held = fold == f
         hres[held] = wd.y[held] - Xf[held] @ bf
         fold_rms.append(float(np.sqrt(np.mean(hres[held] ** 2))))
@@ -805,6 +805,32 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     if not light:
         finish(res, k_sigma=k_sigma)
     return res
+
+
+#: a column whose training-fold variation is below this fraction of its full variation keeps
+#: its full-data coefficient in that fold
+MIN_FOLD_SUPPORT = 0.02
+
+
+def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
+                       beta_full: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients on the training blocks of a fold. A regressor that lives
+    almost only in the held-out chunk (a warm-up transient shorter than a chunk: its
+    variation over the training blocks below :data:`MIN_FOLD_SUPPORT` of its variation over
+    the record) cannot be estimated without it; it keeps its full-data coefficient, as the
+    time constants do, instead of being extrapolated from its tail."""
+    full = X - X.mean(axis=0)
+    xt = X[train] - X[train].mean(axis=0)
+    v_all = np.sum(full * full, axis=0)
+    v_tr = np.sum(xt * xt, axis=0)
+    fixed = (v_all > 0) & (v_tr < MIN_FOLD_SUPPORT * v_all)
+    if not fixed.any():
+        return st.lstsq(X[train], y[train])[0]
+    free = ~fixed
+    yt = y[train] - X[train][:, fixed] @ beta_full[fixed]
+    b = np.array(beta_full, dtype=float)
+    b[free] = st.lstsq(X[train][:, free], yt)[0]
+    return b
 
 
 def fine_residual(res: FitResult) -> np.ndarray:

@@ -923,8 +923,11 @@ def default_refs(frame: EnvFrame, *, t_ref: float | None = None, v_ref: float | 
     return r
 
 
-def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: Refs) -> np.ndarray:
-    """The regressor column(s) of one term on ``frame``: shape (n, n_coef)."""
+def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: Refs, *,
+               to_be_smoothed: bool = False) -> np.ndarray:
+    """The regressor column(s) of one term on ``frame``: shape (n, n_coef).
+    ``to_be_smoothed``: the caller applies the working smoother afterwards (the fit's design
+    matrix), so a custom expression's ``ddt`` is not smoothed a second time."""
     k = spec.key
     ch = spec.channels
     W = refs.smoothing_s
@@ -965,7 +968,7 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
         x = input_rate_temperature(frame.table_rate, frame.temperature[ch[0]],
                                    refs.t_ref_c.get(ch[0], 0.0))
     elif k == "custom":
-        x = compiled(spec.expr or "").evaluate(frame, smoothing_s=W)
+        x = compiled(spec.expr or "").evaluate(frame, smoothing_s=W, raw_ddt=to_be_smoothed)
         if not np.all(np.isfinite(x)):
             raise InputError(f"term {spec.name!r}: expression {spec.expr!r} gives NaN/inf "
                              "values on this log (e.g. log or sqrt of a negative number)")

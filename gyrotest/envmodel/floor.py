@@ -63,7 +63,7 @@ def _fit_allan(tau: np.ndarray, sig: np.ndarray, duration_s: float, cols: list[s
     ``flicker`` 1, ``rw`` τ/3, ``drift`` τ²), each point weighted by its relative precision
     (σ²(τ)·√(2/ν), ν ≈ T/τ degrees of freedom)."""
     funcs = {"quant": 1.0 / tau ** 2, "white": 1.0 / tau, "flicker": np.ones_like(tau),
-             "rw": tau / 3.0, "drift": tau ** 2}
+             "rw": tau / 3.0, "step": tau, "drift": tau ** 2}
     w = 1.0 / _se(tau, sig, duration_s)
     A = np.column_stack([funcs[c] for c in cols]) * w[:, None]
     scale = np.sqrt(np.sum(A * A, axis=0))
@@ -82,7 +82,7 @@ def _se(tau: np.ndarray, sig: np.ndarray, duration_s: float) -> np.ndarray:
 
 def _model(c: dict[str, float], tau: np.ndarray) -> np.ndarray:
     funcs = {"quant": 1.0 / tau ** 2, "white": 1.0 / tau, "flicker": np.ones_like(tau),
-             "rw": tau / 3.0, "drift": tau ** 2}
+             "rw": tau / 3.0, "step": tau, "drift": tau ** 2}
     return sum(v * funcs[k] for k, v in c.items())
 
 
@@ -112,28 +112,40 @@ def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: 
     """White N and flicker B of a rate from its Allan curve without being misled by slow
     environmental stimuli.
 
-    Method: σ² = N²/τ + B² is fitted to the shortest τ it explains (:func:`fit_noise_range`,
-    up to T/8). B counts only when detected (B² > 2 standard errors of the fit) and is capped
-    by the lowest excess over white noise seen at any τ, min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊:
-    flicker is flat in σ², anything environmental only adds to it. ``se_factor`` scales the
+    Method: white noise alone, σ² = N²/τ, is fitted to the shortest τ it explains
+    (:func:`fit_noise_range`, up to T/8). Flicker counts only when σ² = N²/τ + B² + C·τ
+    explains at least four τ with B² above two standard errors: the C·τ term takes up random
+    walk and the dense steps of a stimulus (whose share of the cluster differences grows
+    with τ), so only a flat excess counts as flicker. B² is then capped by the lowest excess
+    over white noise seen at any τ, min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊ (anything environmental
+    only adds to it). Flicker whose plateau is reached only where the environment already
+    dominates cannot be told from it in one record: give a static reference run
+    (:func:`reference_floor`). ``se_factor`` scales the
     standard errors (1.2 for the trimmed deviation of :func:`robust_avar`). Returns (N (deg/h)·√s, B deg/h, (last τ of the fit, last τ
     searched))."""
     keep = tau <= duration_s / 8.0
     if keep.sum() < 3:
         keep = np.arange(len(tau)) < 3
     tau, sig = tau[keep], sig[keep]
-    c, k = fit_noise_range(tau, sig, duration_s, cols=("white", "flicker"), z_max=3.0,
-                           se_factor=se_factor)
-    N = math.sqrt(c["white"])
-    B2 = c["flicker"]
-    if B2 > 0:
-        A = np.column_stack([1.0 / tau[:k], np.ones(k)])
+    cw, kw = fit_noise_range(tau, sig, duration_s, cols=("white",), z_max=3.0,
+                             se_factor=se_factor)
+    N = math.sqrt(cw["white"])
+    B2 = 0.0
+    t_lo = t_hi = float(tau[kw - 1])
+    for cols in (("white", "flicker", "step"),):
+        c, k = fit_noise_range(tau, sig, duration_s, cols=cols, z_max=3.0,
+                               se_factor=se_factor)
+        if not (c["flicker"] > 0 and k >= 4):
+            continue
+        A = np.column_stack([{"white": 1.0 / tau[:k], "flicker": np.ones(k),
+                              "step": tau[:k]}[col] for col in cols])
         w = 1.0 / (se_factor * _se(tau[:k], sig[:k], duration_s))
         cov = np.linalg.pinv((A * w[:, None]).T @ (A * w[:, None]))
-        if not B2 > 2.0 * math.sqrt(max(cov[1, 1], 0.0)):
-            B2 = 0.0  # not detected
-            N = math.sqrt(_fit_allan(tau[:k], sig[:k], duration_s, ["white"])["white"])
-    t_lo = t_hi = float(tau[k - 1])
+        if not c["flicker"] > 2.0 * math.sqrt(max(cov[1, 1], 0.0)):
+            continue
+        N, B2 = math.sqrt(c["white"]), c["flicker"]
+        t_lo = t_hi = float(tau[k - 1])
+        break
     sel = tau >= 2.0 * tau[0]
     if sel.any() and B2 > 0:
         ex = (sig[sel] ** 2 - N * N / tau[sel]

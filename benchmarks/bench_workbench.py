@@ -37,16 +37,33 @@ working resolution):
 * ``magnitude`` = RMS(B(e) − mean) / floor (the realised size; the brief's definition) and
   ``magnitude_unique`` = the same for the part of B(e) not explained by a bias, the other true
   effects and the base model's spurious terms (what any method could at best attribute to e);
+  "strong" = magnitude >= 3;
 * **found** (recall): the final model accounts for the effect: the RMS of B(e) left unexplained
   by the final model's block regressors is at most half of what the base model's regressors
   left unexplained (``capture`` >= 0.5; regressors from the fits' design matrices);
 * **named**: found and one of the terms the loop added (each the top "missing effect" of its
   step) is in the effect's ``accept`` list (key and channels, channel order ignored);
-* **false alarm**: a null case (nothing missing) whose first diagnosis reports a missing effect;
-* **final/true**: final model's held-out RMS / true model's held-out RMS (ok when <= 1.1);
+  ``named_equiv`` also accepts a term the verdict listed as indistinguishable from the one it
+  chose (``Candidate.equivalents``, when the installed gyrotest provides it);
+* **false alarm**: a null case (nothing missing) whose first diagnosis reports a missing
+  effect; it is *spurious* when the added term explains < 0.1 floor of the injected truth
+  (otherwise it repairs the base model, e.g. a smoother regressor for a noisy-sensor term).
+  "possible missing effect" verdicts (no ``found``) are counted separately, not as alarms;
+* **final/true**: final model's held-out RMS / true model's held-out RMS (ok when <= 1.1),
+  also restricted to cases whose true model is within 1.2x of the injected floor;
 * **floor ratio check**: the first diagnosis' printed held-out/floor ratio vs the true ratio
-  base held-out / true model's held-out (ok when within a factor 2);
-* **unmatched additions**: terms the loop added that name no missing effect.
+  base held-out / true model's held-out (ok when within a factor 2); and the printed floor vs
+  the injected floor (within a factor 2);
+* **added terms**: how many terms the loop added in non-null cases, how many name no missing
+  effect, and how many explain < 0.1 floor of the injected truth (per step, the RMS of the
+  noise-free truth left unexplained by the model's regressors is tracked in floor units);
+* **harness checks**: true model's held-out RMS / injected floor, and true-model
+  coefficients vs the injected ones (z with the HAC standard error);
+* ``regressor_error``: RMS of B(e) minus the truth term's regressor as gyrotest computes it
+  from the *logged* channels (noisy, quantised) times the true coefficient, in floor units.
+  An effect with regressor error >= 1 floor cannot be modelled to the floor from the logged
+  channels by any method (errors in variables: a noisy sensor's derivative, ...); the
+  "observable" recall row leaves such effects out.
 
 A crash anywhere (ingest, prepare, a fit, a diagnosis) is recorded in the row (``error``,
 ``crash_stage``) and the campaign goes on. Output: Markdown tables (overall, per run kind,
@@ -90,6 +107,7 @@ FLOOR_FACTOR = 2.0
 STRONG = 3.0
 SPURIOUS = 0.1
 TRUE_AT_FLOOR = 1.2
+OBSERVABLE = 1.0
 
 
 # ============================================================================ helpers
@@ -117,6 +135,7 @@ _ACC = re.compile(r"^([A-Za-z0-9_]+)(?:\((.*)\))?$")
 
 
 def _parse_accept(text: str) -> tuple[str, frozenset[str] | None]:
+    """``key(a,b)`` -> (key, {a, b}); ``key`` -> (key, None) (also for candidate labels)."""
     m = _ACC.match(text.replace(" ", ""))
     if not m:
         return text, None
@@ -238,6 +257,18 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True) ->
                 checks.append({"term": e.term_label, "true": e.coef_term, "fit": None,
                                "stderr": None, "z": None})
         row["coef_checks"] = checks
+        # how well the truth terms, computed by gyrotest from the *logged* (noisy) channels,
+        # reproduce the injected signals: regressor error x coefficient, in floor units
+        X_true = _design(true_fit)
+        offs = getattr(getattr(true_fit, "_fitter", None), "_offsets", lambda: {})()
+        for t, e in zip(row["truth"], case.truth):
+            a_b = offs.get(e.term_label)
+            if X_true is None or a_b is None or a_b[1] - a_b[0] != 1:
+                t["regressor_error"] = None
+                continue
+            b = mags[e.name]["block"]
+            xr = X_true[:, a_b[0]] * e.coef_term
+            t["regressor_error"] = _rms((b - b.mean()) - (xr - xr.mean())) / floor
         if not loop:
             row["times"]["total_s"] = time.perf_counter() - T0
             return row
@@ -273,8 +304,13 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True) ->
             if found:
                 top = found[0]
                 step["top"] = {**_spec_info(top.spec), "replaces": top.replaces,
-                               "improvement_pct": top.improvement_pct, "p_adj": top.p_adj}
-                added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces})
+                               "improvement_pct": top.improvement_pct, "p_adj": top.p_adj,
+                               "p_trials": getattr(top, "p_trials", None),
+                               "cv_t": getattr(top, "cv_t", None),
+                               "route": getattr(top, "route", None),
+                               "class": getattr(top, "klass", None)}
+                added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,
+                              "equivalents": list(getattr(top, "equivalents", None) or [])})
             row["steps"].append(step)
             if not found:
                 final_fit = d.base
@@ -324,11 +360,18 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True) ->
                 t["found"] = bool(named_by)
             t["named"] = bool(t["found"] and named_by)
             t["named_at_step"] = named_by[0]["step"] if named_by else None
+            t["named_equiv"] = bool(t["found"] and (named_by or any(
+                names_effect(*_parse_accept(q), e.accept) for a in added
+                for q in a["equivalents"])))
         row["unmatched_added"] = [a["label"] for a in added if not any(
             names_effect(a["key"], a["channels"], e.accept) for e in case.missing)]
         row["spurious_added"] = [a["label"] for a in added
                                  if a["truth_reduction_floor"] is not None
                                  and a["truth_reduction_floor"] < SPURIOUS]
+        # a false alarm whose term explains part of the truth repairs the base model (e.g. a
+        # smoother regressor for a noisy-sensor term); a spurious one follows noise
+        row["alarm_spurious"] = bool(case.is_null and added and added[0]["label"]
+                                     in row["spurious_added"])
     except Exception as e:  # noqa: BLE001 - record and go on
         row.update(status="crash", crash_stage=stage, error=_fmt_err(e),
                    traceback=traceback.format_exc(limit=6))
@@ -352,6 +395,21 @@ def _effects(rows: list[dict]) -> list[dict]:
     return out
 
 
+def _other_names(rows: list[dict], cls: str, top: int = 3) -> list[tuple[str, int]]:
+    """For effects of class ``cls`` found but not named: the keys of the first term the loop
+    added, most common first."""
+    count: dict[str, int] = {}
+    for r in rows:
+        for t in r.get("truth", []):
+            if t["cls"] == cls and t["missing"] and t.get("found") and not t.get("named") \
+                    and r.get("added"):
+                k = r["added"][0]["key"]
+                if any(_parse_accept(a)[0] == k for a in t["accept"]):
+                    k += " (other channel)"
+                count[k] = count.get(k, 0) + 1
+    return sorted(count.items(), key=lambda kv: -kv[1])[:top]
+
+
 def summarise(rows: list[dict]) -> dict:
     """Campaign measures over ``rows`` (from :func:`run_case`): overall, per run kind and per
     effect class; every rate as {k, n, frac}."""
@@ -361,6 +419,8 @@ def summarise(rows: list[dict]) -> dict:
         eff = _effects(rs)
         strong = [e for e in eff if e["magnitude"] >= STRONG]
         strong_u = [e for e in eff if e["magnitude_unique"] >= STRONG]
+        strong_o = [e for e in eff if e["magnitude_unique"] >= STRONG
+                    and (e.get("regressor_error") or 0.0) < OBSERVABLE]
         nulls = [r for r in ok if r["null"]]
         tr = [r for r in rs if "true_over_floor" in r]
         fin = [r for r in ok if math.isfinite(r.get("final_over_true", math.nan))]
@@ -377,14 +437,22 @@ def summarise(rows: list[dict]) -> dict:
             "recall": _frac(sum(e["found"] for e in eff), len(eff)),
             "recall_strong": _frac(sum(e["found"] for e in strong), len(strong)),
             "recall_strong_unique": _frac(sum(e["found"] for e in strong_u), len(strong_u)),
+            "recall_strong_observable": _frac(sum(e["found"] for e in strong_o), len(strong_o)),
+            "named_strong_observable": _frac(sum(e["named"] for e in strong_o), len(strong_o)),
             "named": _frac(sum(e["named"] for e in eff), len(eff)),
             "named_strong": _frac(sum(e["named"] for e in strong), len(strong)),
             "named_given_found": _frac(sum(e["named"] for e in eff),
                                        sum(e["found"] for e in eff)),
+            "named_equiv": _frac(sum(e.get("named_equiv", False) for e in eff), len(eff)),
             "false_alarms": _frac(sum(r["alarm"] for r in nulls), len(nulls)),
+            "false_alarms_spurious": _frac(sum(r.get("alarm_spurious", False) for r in nulls),
+                                           len(nulls)),
             "final_ok": _frac(sum(r["final_over_true"] <= FINAL_OK for r in fin), len(fin)),
             "floor_ok": _frac(sum(1 / FLOOR_FACTOR <= r["floor_check_factor"] <= FLOOR_FACTOR
                                   for r in flo), len(flo)),
+            "floor_vs_injected_ok": _frac(sum(
+                1 / FLOOR_FACTOR <= r["noise_floor_printed_dph"] / r["floor_true_dph"]
+                <= FLOOR_FACTOR for r in flo), len(flo)),
             "final_ok_at_floor": _frac(sum(r["final_over_true"] <= FINAL_OK for r in fin
                                            if r["true_over_floor"] <= TRUE_AT_FLOOR),
                                        sum(r["true_over_floor"] <= TRUE_AT_FLOOR for r in fin)),
@@ -402,7 +470,11 @@ def summarise(rows: list[dict]) -> dict:
         }
 
     out = {"overall": block(rows), "by_kind": {}, "by_effect": {}, "crashes": [],
-           "skipped": [], "coef": {}}
+           "skipped": [], "coef": {}, "candidate_errors": {}}
+    for r in rows:
+        for st in r.get("steps", []):
+            for lab in st.get("candidate_errors", []):
+                out["candidate_errors"][lab] = out["candidate_errors"].get(lab, 0) + 1
     for k in sorted({r["kind"] for r in rows}):
         out["by_kind"][k] = block([r for r in rows if r["kind"] == k])
     eff = _effects(rows)
@@ -415,6 +487,7 @@ def summarise(rows: list[dict]) -> dict:
             "named": _frac(sum(e["named"] for e in es), len(es)),
             "named_strong": _frac(sum(e["named"] for e in strong), len(strong)),
             "library": bool(es[0].get("library", True)),
+            "other_names": _other_names(rows, c),
             "median_magnitude": statistics.median(e["magnitude"] for e in es),
         }
     for r in rows:
@@ -455,14 +528,24 @@ def markdown(s: dict, *, title: str = "") -> str:
         f"| recall, all missing effects | {_pct(o['recall'])} |",
         f"| recall, magnitude >= {STRONG:g}x floor | {_pct(o['recall_strong'])} |",
         f"| recall, unique magnitude >= {STRONG:g}x floor | {_pct(o['recall_strong_unique'])} |",
+        f"| recall, unique magnitude >= {STRONG:g}x and regressor error < {OBSERVABLE:g} "
+        f"floor | {_pct(o['recall_strong_observable'])} |",
         f"| named correctly, all | {_pct(o['named'])} |",
         f"| named correctly, magnitude >= {STRONG:g}x | {_pct(o['named_strong'])} |",
+        f"| named correctly, unique >= {STRONG:g}x and regressor error < {OBSERVABLE:g} "
+        f"floor | {_pct(o['named_strong_observable'])} |",
         f"| named correctly when found | {_pct(o['named_given_found'])} |",
+        f"| named correctly or among the verdict's indistinguishable equivalents | "
+        f"{_pct(o['named_equiv'])} |",
         f"| false alarms on null cases | {_pct(o['false_alarms'])} |",
+        f"| ... whose added term explains < {SPURIOUS:g} floor of the truth (spurious) | "
+        f"{_pct(o['false_alarms_spurious'])} |",
         f"| final held-out / true held-out <= {FINAL_OK:g} | {_pct(o['final_ok'])} |",
         f"| ... among cases whose true model is at the floor | {_pct(o['final_ok_at_floor'])} |",
         f"| printed floor ratio within {FLOOR_FACTOR:g}x of the true ratio | "
         f"{_pct(o['floor_ok'])} |",
+        f"| printed noise floor within {FLOOR_FACTOR:g}x of the injected floor | "
+        f"{_pct(o['floor_vs_injected_ok'])} |",
         f"| \"possible missing effect\" on null cases (not an alarm) | "
         f"{_pct(o['possible_on_nulls'])} |",
         f"| loops stopped by the step limit | {o['step_limit']} |",
@@ -485,17 +568,22 @@ def markdown(s: dict, *, title: str = "") -> str:
                      f"{_pct(b['recall_strong'])} | {_pct(b['named'])} | "
                      f"{_pct(b['named_strong'])} | {_pct(b['final_ok'])} | "
                      f"{_pct(b['floor_ok'])} | {b['crashed']} | {b['time_median_s']:.1f} |")
-    lines += ["", "| effect | in library today | missing | median magnitude | recall | "
-              "recall >= 3x | named | named >= 3x |", "|---|---|---|---|---|---|---|---|"]
+    lines += ["", "| effect | truth term | missing | median magnitude | recall | "
+              "recall >= 3x | named | named >= 3x | found but named first as |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for c, b in s["by_effect"].items():
-        lines.append(f"| {c} | {'yes' if b['library'] else 'no'} | {b['n']} | "
+        other = ", ".join(f"{k} ({n})" for k, n in b["other_names"]) or "–"
+        lines.append(f"| {c} | {'library' if b['library'] else 'custom'} | {b['n']} | "
                      f"{b['median_magnitude']:.1f} | {_pct(b['recall'])} | "
                      f"{_pct(b['recall_strong'])} | {_pct(b['named'])} | "
-                     f"{_pct(b['named_strong'])} |")
+                     f"{_pct(b['named_strong'])} | {other} |")
     if s["crashes"]:
         lines += ["", "Crashes:", ""]
         lines += [f"* seed {c['seed']} ({c['kind']}), {c['stage']}: {c['error']}"
                   for c in s["crashes"]]
+    if s["candidate_errors"]:
+        lines += ["", "Candidates that could not be fitted (count over all diagnoses): "
+                  + ", ".join(f"{k} ({v})" for k, v in sorted(s["candidate_errors"].items()))]
     if s["skipped"]:
         lines += ["", "Skipped: " + ", ".join(f"{c['seed']} ({c['why']})" for c in s["skipped"])]
     return "\n".join(lines)
@@ -568,6 +656,12 @@ def gyrotest_state() -> dict:
     except (OSError, subprocess.CalledProcessError):
         pass
     return out
+
+
+def run_quick(jobs: int = 2, progress: bool = False) -> list[dict]:
+    """The ``--quick`` campaign (for the test suite): seeds 100-119, kinds cycled, <= 3 h."""
+    return run_campaign(list(QUICK_SEEDS), kinds=list(ws.KINDS), jobs=jobs,
+                        max_hours=QUICK_MAX_HOURS, progress=progress)
 
 
 def _json_default(o):

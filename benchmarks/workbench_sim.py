@@ -58,8 +58,9 @@ Method
 
 5. **Truth terms.** Every effect carries the exact gyrotest term that models it: a library term
    when one is exact (``T(c)``, ``dTdt(c)``, ``dGdt(a,b)``, ``hyst(c)``, ``V``, ``g(c)``, ...)
-   or a custom expression with the true parameters (``coil:lag(temp.T_case, 1500)``,
-   ``hsq:((0.998*field.Hx+...)/100)**2``, ``wu:exp(-t/900)``, ...). ``user_term`` is how a
+   or a custom expression with the true parameters (``coil_lag:lag(temp.T_case, 1500)``,
+   ``coil_rate:(temp.T_case - lag(temp.T_case, 1500))*2.4`` (the rate of a first-order lag,
+   exactly), ``hsq:((0.998*field.Hx+...)/100)**2``, ``wu:exp(-t/900)``, ...). ``user_term`` is how a
    user would write it in a starting model (library terms with fitted parameters where they
    exist: ``Tlag(c)``, ``warmup``, ``sin``, ``Hx,Hy,Hz``). ``accept`` lists the candidate names
    (``key(channels)``) that name the effect correctly, including the generic channel forms
@@ -306,6 +307,7 @@ class _Run:
         self.n = n
         self.t = np.arange(n, dtype=float)
         self.nodes: dict[str, np.ndarray] = {}  # true temperatures
+        self.lag_parent: dict[str, str] = {}  # node -> node it is an exact first-order lag of
         self.sensors: list[_Sensor] = []
         self.temp_cols: dict[str, np.ndarray] = {}  # logged
         self.field_true: np.ndarray | None = None  # (3, n) coil frame, uT
@@ -373,12 +375,14 @@ class _Run:
             name = str(rng.choice(["P_hPa", "baro_mbar", "press", "p_amb", "P_lab"]))
             x = 1013 + rng.uniform(-15, 15) + rng.uniform(-4, 4) * t / t[-1] \
                 + rng.uniform(0.3, 1.0) * np.sin(2 * math.pi * t / 43200 + rng.uniform(0, 6))
-            for _ in range(int(rng.integers(0, 4))):  # door openings / HVAC changes
+            for _ in range(int(rng.integers(2, 6))):  # door openings / HVAC changes
                 a = int(rng.integers(0, n))
                 b = min(n, a + int(rng.uniform(300, 2400)))
-                x[a:b] += rng.uniform(-0.6, 0.6)
-            x = lag(x, 30.0)
-            logged = np.round(x + rng.normal(scale=0.02, size=n), 2)
+                x[a:b] += rng.choice([-1, 1]) * rng.uniform(0.3, 1.5)
+            x = lag(x, rng.uniform(30.0, 120.0))
+            # a good barometer (0.002-0.01 hPa noise): dP/dt effects are only observable
+            # through the logged channel when its derivative noise is small
+            logged = np.round(x + rng.normal(scale=loguniform(rng, 0.002, 0.01), size=n), 3)
             kinds = ["chan", "dchan"]
         elif what == "vibration":
             name = str(rng.choice(["vib_grms", "vib_level", "shaker_g", "pump_vib", "accel_rms"]))
@@ -447,6 +451,8 @@ def _build_static(run: _Run) -> None:
     if rng.random() < 0.5:  # self-heating after power-on
         case = case + rng.uniform(1, 6) * (1 - np.exp(-run.t / rng.uniform(600, 3000)))
         run.desc.append("self-heating after power-on")
+    else:
+        run.lag_parent["case"] = "air"
     run.nodes.update(air=air, case=case)
     ccol = str(rng.choice(_CASE_NAMES))
     slag = rng.uniform(60, 600) if rng.random() < 0.2 else 0.0
@@ -489,9 +495,12 @@ def _build_chamber(run: _Run) -> None:
     sp = _setpoints(rng, n)
     air = lag(sp, rng.uniform(150, 400))
     case = lag(air, rng.uniform(400, 1500))
-    mount = lag(case, rng.uniform(200, 800)) if rng.random() < 0.5 else lag(air, rng.uniform(
-        1500, 4000))
+    if rng.random() < 0.5:
+        parent, mount = "case", lag(case, rng.uniform(200, 800))
+    else:
+        parent, mount = "air", lag(air, rng.uniform(1500, 4000))
     run.nodes.update(air=air, case=case, mount=mount)
+    run.lag_parent.update(case="air", mount=parent)
     ccol = str(rng.choice(_CASE_NAMES))
     slag = rng.uniform(60, 600) if rng.random() < 0.2 else 0.0
     run.log_sensor(ccol, "case", slag)
@@ -674,7 +683,8 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
     if key == "T":
         c = chans[0]
         x = run.nodes[_node(run, c)]
-        return [Effect(f"T {c}", "T", f"T({c})", f"T({c})", [f"T({c})", f"chan({c})"],
+        eq = [a for p in _lag_parents(run, c) for a in (f"Tlag({p})", f"chanlag({p})")]
+        return [Effect(f"T {c}", "T", f"T({c})", f"T({c})", [f"T({c})", f"chan({c})"] + eq,
                        signal=x - x.mean())]
     if key == "T2":
         c = chans[0]
@@ -686,8 +696,9 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
     if key == "dTdt":
         c = chans[0]
         x = ddt_per_h(run.nodes[_node(run, c)])
+        eq = [a for p in _lag_parents(run, c) for a in (f"dTlagdt({p})", f"dchanlag({p})")]
         return [Effect(f"dT/dt {c}", "dTdt", f"dTdt({c})", f"dTdt({c})",
-                       [f"dTdt({c})", f"dchan({c})"], signal=x)]
+                       [f"dTdt({c})", f"dchan({c})"] + eq, signal=x)]
     if key == "dGdt":
         a, b = chans
         x = ddt_per_h(run.nodes[_node(run, a)] - run.nodes[_node(run, b)])
@@ -702,7 +713,9 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
             return [Effect(f"lagged node ({tau} s) of {c}", "Tlag", expr, f"Tlag({c})",
                            [f"Tlag({c})", f"chanlag({c})"], library=False,
                            signal=node - node.mean(), params={"tau_s": tau})]
-        expr = f"coil_rate:ddt(lag(temp.{c}, {tau}))"
+        # d/dt lag(x, tau) = (x - lag(x, tau))/tau exactly (per hour: * 3600/tau); written
+        # without ddt() so that the truth term does not depend on how gyrotest smooths ddt()
+        expr = f"coil_rate:(temp.{c} - lag(temp.{c}, {tau}))*{3600.0 / tau:.9g}"
         return [Effect(f"rate of a lagged node ({tau} s) of {c}", "dTlagdt", expr, expr,
                        [f"dTlagdt({c})", f"dchanlag({c})"], library=False,
                        signal=ddt_per_h(node), params={"tau_s": tau})]
@@ -823,6 +836,13 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
 
 def _node(run: _Run, col: str) -> str:
     return next(s.node for s in run.sensors if s.col == col)
+
+
+def _lag_parents(run: _Run, col: str) -> list[str]:
+    """Logged (non-lagging) sensors of the node that ``col``'s node is an exact first-order
+    lag of: its level is then exactly Tlag of that sensor, its rate dTlagdt."""
+    parent = run.lag_parent.get(_node(run, col))
+    return [s.col for s in run.sensors if parent and s.node == parent and s.lag_s == 0]
 
 
 def _id(name: str) -> str:

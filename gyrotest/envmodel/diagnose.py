@@ -19,11 +19,16 @@ that the model under judgment cannot move:
    can take: ln(τ_max/τ_min) for a time constant, (f_max − f_min)·T for a frequency) and
    p_adj = p × trials × candidates.
 4. **A candidate is a missing effect** when either
-   * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 %; or
+   * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 % (5 % for the nuisance
+     terms ramp, warm-up, sinusoid and hysteresis, whose flexibility a HAC test undercounts);
+     or
    * *clear gain*: the base model's held-out RMS is above 1.2 × the floor (or the candidate
      cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
-     ≥ 5 %, and the test guards against a fluke with p × trials < 0.01 (0.001 for nuisance
-     terms). An effect the base model lacks inflates the HAC error of
+     ≥ 5 %, and either the HAC test gives p × trials < 0.01 (0.001 for nuisance terms) or
+     the gain is ≥ 20 % and consistent across the folds -- gain / (fold scatter/√folds) ≥ 4
+     (6 for nuisance terms) -- with p × trials < 0.05. Another missing effect inflates the
+     HAC error of every candidate, so strong cross-validated evidence may carry a weaker
+     test. An effect the base model lacks inflates the HAC error of
      every other candidate, so a large held-out gain must not wait for a strict p-value;
      the fold-to-fold scatter of the gain is reported with it.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -70,6 +75,12 @@ CLEAR_P_NUISANCE = 0.001
 ABOVE_FLOOR = 1.2
 #: a held-out gain this large shows the model was not at the floor, whatever its estimate
 BIG_GAIN = 0.2
+#: cross-validated evidence that stands without a strong HAC test (another missing effect
+#: inflates every HAC error): gain / (fold scatter/√folds) at least this, and p × trials
+#: below WEAK_P (the coefficient is not noise)
+CV_T = 4.0
+CV_T_NUISANCE = 6.0
+WEAK_P = 0.05
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: candidates within this fraction of the best held-out RMS count as equal evidence
@@ -103,6 +114,7 @@ class Candidate:
     equivalents: list[str] = field(default_factory=list)
     custom: str | None = None  # the --term NAME:EXPR equivalent
     r_residual: float = math.nan  # correlation of its contribution with the base residual
+    cv_t: float = math.nan  # gain / (fold scatter / √folds)
     _fit: FitResult | None = None
 
     @property
@@ -135,7 +147,8 @@ class Candidate:
                 "replaces": self.replaces,
                 "rms_fit_dph": self.rms_fit, "rms_holdout_dph": self.rms_holdout,
                 "improvement_pct": self.improvement_pct,
-                "gain_fold_scatter_pct": self.gain_scatter_pct, "z": self.z, "p": self.p,
+                "gain_fold_scatter_pct": self.gain_scatter_pct, "cv_t": self.cv_t,
+                "z": self.z, "p": self.p,
                 "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
                 "route": self.route, "rejected": self.rejected,
                 "equivalents": self.equivalents, "add": self.add_hint,
@@ -397,10 +410,17 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
     scatter = _gain_scatter(base, r)
     p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
-    strict = bool(math.isfinite(p_adj) and p_adj < alpha and impr >= min_improvement)
+    strict = bool(math.isfinite(p_adj) and p_adj < alpha
+                  and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
+                               else min_improvement))
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
-    clear = bool(math.isfinite(p_tr) and (base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN)
-                 and impr >= CLEAR_GAIN and p_tr < guard)
+    t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
+            else math.inf if impr > 0 else 0.0)
+    above = base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN
+    cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
+    clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
+                 and (p_tr < guard or (t_cv >= cv_min and p_tr < WEAK_P
+                                       and impr >= BIG_GAIN)))
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     if c.key == "sin" and (strict or clear):
@@ -423,6 +443,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                      coefs, r.n_params, spec=c, klass=klass, route=route,
                      gain_scatter_pct=100 * scatter, rejected=rejected, custom=custom)
     cand.r_residual = _residual_corr(base, r, c)
+    cand.cv_t = t_cv
     cand._fit = r
     return cand
 

@@ -6,8 +6,9 @@ For each numeric channel the screen proposes, beside the library terms of its ki
 H_i·H_j, |H|²; supply: V; acceleration: g, g², g_i·g_j; a moving IA: the earth-rate
 projection), the generic forms of
 :mod:`gyrotest.envmodel.channel_terms` for channels the library has no term for (humidity,
-pressure, vibration, ... and the supply's square, rate and lag): level, square, magnitude,
-rate of change, first-order lag (fitted τ) and the rate of that lag. Nuisance terms that are
+pressure, vibration, tilt, ... and the supply's square, rate and lag): level, square,
+magnitude, rate of change, first-order lag (fitted τ), the rate of that lag, and the products
+of pairs of such channels (the first six). Nuisance terms that are
 tied to no channel (time ramp, warm-up, free-frequency sinusoid) close the list.
 
 Each candidate has a *class* used to break ties in the ranking: a channel-based explanation
@@ -24,6 +25,8 @@ from .terms import _G_PATTERN, EnvFrame, TermSpec
 #: tie-break order (lower is preferred at equal evidence)
 CLASS_ORDER = {"library": 0, "second-order": 1, "channel": 2, "nuisance": 3}
 NUISANCE = ("ramp", "warmup", "sin", "hyst")
+#: products are screened between at most this many generic channels (pairs grow as n²)
+MAX_PRODUCT_CHANNELS = 6
 SECOND_ORDER = ("T2", "T3", "Hsq", "Hprod", "Hmag2", "g2", "gprod", "Tlag", "dTlagdt")
 
 
@@ -78,7 +81,7 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
         cands.append(TermSpec("rate"))
         for c in temps:
             cands.append(TermSpec("rateT", (c,)))
-    accel = []
+    accel, plain = [], []
     for name, v in frame.extra.items():
         if not _varies(v):
             continue
@@ -86,6 +89,7 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
             accel.append(name)
             cands += [TermSpec("g", (name,)), TermSpec("g2", (name,))]
             continue
+        plain.append(name)
         cands += [TermSpec("chan", (name,)), TermSpec("chan2", (name,))]
         v = np.asarray(v, float)
         if np.min(v) < 0 < np.max(v):
@@ -95,6 +99,11 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
     for j, a in enumerate(accel):
         for b in accel[j + 1:]:
             cands.append(TermSpec("gprod", (a, b)))
+    # products of other channels (tilt, vibration axes, ...): pairs of the first few
+    few = plain[:MAX_PRODUCT_CHANNELS]
+    for j, a in enumerate(few):
+        for b in few[j + 1:]:
+            cands.append(TermSpec("chanprod", (a, b)))
     if frame.earth_dph is not None and _varies(frame.earth_dph):
         cands.append(TermSpec("earth"))
     cands += [TermSpec("ramp"), TermSpec("warmup"), TermSpec("sin")]

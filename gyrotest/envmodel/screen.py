@@ -47,6 +47,17 @@ def _varies(v: np.ndarray) -> bool:
     return bool(np.all(np.isfinite(v)) and np.ptp(v) > 1e-9 * max(1.0, float(np.max(np.abs(v)))))
 
 
+def _curved(v: np.ndarray) -> bool:
+    """Whether x² differs from a straight line in x over the logged range (|r(x, x²)| <
+    0.999): a channel far from zero (supply 15 V, pressure 1013 hPa) makes x² a copy of x,
+    a tie the screen should not offer."""
+    x = np.asarray(v, float)
+    x2 = x * x
+    if np.std(x) == 0 or np.std(x2) == 0:
+        return False
+    return abs(float(np.corrcoef(x, x2)[0, 1])) < 0.999
+
+
 def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
     """Every term this log's channels allow and the model ``present`` lacks (see the module
     docstring). Terms the model already has, and nuisance terms of a kind it has, are left
@@ -76,7 +87,9 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
         cands.append(TermSpec("Hmag2"))
     if frame.supply is not None and _varies(frame.supply):
         cands.append(TermSpec("V"))
-        cands += [TermSpec(k, ("supply",)) for k in ("chan2", "dchan", "chanlag")]
+        cands += [TermSpec(k, ("supply",)) for k in ("dchan", "chanlag")]
+        if _curved(frame.supply):
+            cands.append(TermSpec("chan2", ("supply",)))
     if frame.table_rate is not None and _varies(frame.table_rate):
         cands.append(TermSpec("rate"))
         for c in temps:
@@ -90,7 +103,9 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
             cands += [TermSpec("g", (name,)), TermSpec("g2", (name,))]
             continue
         plain.append(name)
-        cands += [TermSpec("chan", (name,)), TermSpec("chan2", (name,))]
+        cands.append(TermSpec("chan", (name,)))
+        if _curved(v):
+            cands.append(TermSpec("chan2", (name,)))
         v = np.asarray(v, float)
         if np.min(v) < 0 < np.max(v):
             cands.append(TermSpec("chanabs", (name,)))

@@ -26,9 +26,10 @@ that the model under judgment cannot move:
      cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
      ≥ 5 %, and either the HAC test gives p × trials < 0.01 (0.001 for nuisance terms) or
      the gain is ≥ 20 % and consistent across the folds -- gain / (fold scatter/√folds) ≥ 4
-     (6 for nuisance terms) -- with p × trials < 0.05. Another missing effect inflates the
-     HAC error of every candidate, so strong cross-validated evidence may carry a weaker
-     test. An effect the base model lacks inflates the HAC error of
+     (6 for nuisance terms) -- with p × trials < 0.05, or ≥ 10 (15) whatever the test.
+     Another missing effect inflates the HAC error of every candidate, and a short log
+     leaves the test few degrees of freedom, so strong cross-validated evidence may carry a
+     weaker test. An effect the base model lacks inflates the HAC error of
      every other candidate, so a large held-out gain must not wait for a strict p-value;
      the fold-to-fold scatter of the gain is reported with it.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -81,6 +82,9 @@ BIG_GAIN = 0.2
 CV_T = 4.0
 CV_T_NUISANCE = 6.0
 WEAK_P = 0.05
+#: cross-validated evidence that stands on its own (a short log gives a t test few degrees
+#: of freedom): gain ≥ 20 % at gain / (scatter/√folds) ≥ 10 (15 for nuisance terms)
+CV_STRONG = 10.0
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: candidates within this fraction of the best held-out RMS count as equal evidence
@@ -419,8 +423,9 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     above = base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN
     cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
     clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
-                 and (p_tr < guard or (t_cv >= cv_min and p_tr < WEAK_P
-                                       and impr >= BIG_GAIN)))
+                 and (p_tr < guard
+                      or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
+                      or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T)))
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     if c.key == "sin" and (strict or clear):

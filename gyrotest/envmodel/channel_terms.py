@@ -74,7 +74,8 @@ def lagged_node_rate(temp_c: np.ndarray, t: np.ndarray, tau_s: float, dt: float,
     :func:`gyrotest.envmodel.terms.first_order_lag`), differentiated after the working
     smoother as in :func:`gyrotest.envmodel.terms.smoothed_rate`. Units: degC/h; coefficient
     (deg/h)/(degC/h) (IEEE D_Ṫ acting on the lagging node); τ in s, fitted. Source: IEEE Std
-    952-1997 §8.3 E-term D_Ṫ·dT/dt; Antonova & Matveev (2020) w_ΔV term on the node
+    952-1997 §8.3 E-term D_Ṫ·dT/dt; Antonova & Matveev, "Model of error of a
+    fiber-optic gyro exposed to thermal and magnetic fields", w_ΔV term on the node
     temperature; first-order lumped thermal model.
     """
     return smoothed_rate(first_order_lag(temp_c, t, tau_s, bounds), dt, window_s, bounds)
@@ -84,7 +85,7 @@ def field_square(field_ut: np.ndarray, h0_ut: float = H0_UT) -> np.ndarray:
     """Second-order magnetic sensitivity to one field component.
 
     Formula: x = (H_i/H0)², H0 = 100 uT. Units: dimensionless; coefficient deg/h per
-    (100 uT)². Source: Antonova & Matveev (2020) eq. (2), Δω(H) = Σ_{m} w_m·(H/H0)^m with
+    (100 uT)². Source: Antonova & Matveev eq. (2), Δω(H) = Σ_{m} w_m·(H/H0)^m with
     m = 2 allowed; IEEE Std 952-1997 §8.3 (magnetic field among the E-terms).
     """
     return (np.asarray(field_ut, float) / h0_ut) ** 2
@@ -95,7 +96,7 @@ def field_product(field_a_ut: np.ndarray, field_b_ut: np.ndarray,
     """Mixed second-order magnetic term.
 
     Formula: x = H_i·H_j/H0². Units: dimensionless; coefficient deg/h per (100 uT)².
-    Source: Antonova & Matveev (2020) eq. (2) at m = 2 (cross products of the components).
+    Source: Antonova & Matveev eq. (2) at m = 2 (cross products of the components).
     """
     return np.asarray(field_a_ut, float) * np.asarray(field_b_ut, float) / h0_ut ** 2
 
@@ -105,7 +106,7 @@ def field_magnitude_square(components_ut: list[np.ndarray], h0_ut: float = H0_UT
     """Second-order sensitivity to the field magnitude.
 
     Formula: x = |H|²/H0² = Σ_i H_i²/H0². Units: dimensionless; coefficient deg/h per
-    (100 uT)². Source: Antonova & Matveev (2020) eq. (2), m = 2 in |H|.
+    (100 uT)². Source: Antonova & Matveev eq. (2), m = 2 in |H|.
     """
     return sum((np.asarray(c, float) / h0_ut) ** 2 for c in components_ut)
 
@@ -115,7 +116,7 @@ def acceleration_product(g_a: np.ndarray, g_b: np.ndarray) -> np.ndarray:
 
     Formula: x = g_i·g_j (g in units of standard gravity). Units: g²; coefficient deg/h/g².
     Source: IEEE Std 952-1997 §8.3 (acceleration-squared E-terms); anisoelastic drift of
-    mechanical and vibratory gyros, Antonova & Matveev (2020) eq. (1) at m = 2.
+    mechanical and vibratory gyros, Antonova & Matveev eq. (1) at m = 2.
     """
     return np.asarray(g_a, float) * np.asarray(g_b, float)
 

@@ -1,8 +1,9 @@
 """Where a model fails: stretches of large residual, described by what the channels did.
 
 Rule: the block residual is smoothed with a centred moving mean over w blocks (w ≈ 1 min,
-at least 3 blocks); σ is the noise floor of the log (fixed, :mod:`gyrotest.envmodel.floor`) at the working
-resolution (or, without one, 1.4826·MAD of the smoothed series); an excursion is a run where
+at least 3 blocks); σ is the noise floor of the log (fixed;
+:mod:`gyrotest.envmodel.floor`) at the working resolution (or, without one, 1.4826·MAD of
+the smoothed series); an excursion is a run where
 |smoothed residual| > k·σ (k = 4 on the command line), runs closer than 3·w blocks are merged. Each
 excursion is described from the channels over the same time: temperature ramp up/down or
 turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,

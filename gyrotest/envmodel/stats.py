@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
 #: largest eigenvalue modulus allowed in the VAR(1) prewhitening filter (Andrews–Monahan)
 PREWHITEN_MAX_EIG = 0.97
@@ -364,77 +364,3 @@ class NoiseFloor:
         return {"rms_dph": self.rms_dph, "white_N_dph_rts": self.white_N,
                 "arw_deg_per_rt_h": self.arw_deg_rt_h, "flicker_plateau_dph": self.flicker_B,
                 "tau_range_s": list(self.tau_range_s), "basis": self.basis}
-
-
-def robust_white(x: np.ndarray, dt: float, segments: list[tuple[int, int]] | None = None
-                 ) -> float:
-    """White rate noise N ((deg/h)·√s) of a series on a grid of spacing dt, from the median
-    absolute first difference (insensitive to sparse steps and spikes).
-
-    Formula: for white noise of per-sample σ, Var(x_{k+1} − x_k) = 2σ²; σ = 1.4826·MAD(Δx)/√2;
-    N = σ·√dt (σ²(τ) = N²/τ).
-    """
-    x = np.asarray(x, float)
-    parts = [np.diff(x[a:b]) for a, b in (segments or [(0, len(x))]) if b - a > 2]
-    if not parts:
-        return float("nan")
-    d = np.concatenate(parts)
-    mad = float(np.median(np.abs(d - np.median(d))))
-    return 1.4826 * mad / math.sqrt(2.0) * math.sqrt(dt)
-
-
-def noise_floor(tau: np.ndarray, sigma: np.ndarray, resolution_s: float,
-                duration_s: float, fit_upto_s: float | None = None,
-                white_N: float | None = None, fit_from_s: float = 0.0) -> NoiseFloor:
-    """Allan-predicted RMS of working-resolution residuals if they were white + flicker only.
-
-    Fit σ²(τ) = N²/τ + B² (non-negative LS on relative errors weighted by √(T/τ)) over the short-τ part of the
-    residual's Allan curve: τ up to the point before the Allan minimum (at least three points;
-    at most ``fit_upto_s``), where slow unmodelled effects have not yet entered. Then the RMS of mean-removed residuals at an
-    effective averaging time T_eff (``resolution_s``; the block mean combined with the working
-    smoother) over a record of length T is predicted as
-
-        rms² = N²/T_eff + B²·ln(T/(2T_eff))/(2 ln 2)
-
-    (white noise averaged over T_eff; flicker with one-sided PSD h/f = B²/(2 ln 2 f) integrated
-    from 1/T to 1/(2T_eff)). With ``white_N`` (e.g. from :func:`robust_white`, which sparse
-    misfit spikes cannot inflate) N is fixed and only B is fitted, over τ ≥ ``fit_from_s``
-    when at least two points remain there. Source: IEEE 952 Annex C (σ² of white and flicker noise);
-    gyrotest.
-    """
-    tau = np.asarray(tau, float)
-    sigma = np.asarray(sigma, float)
-    ok = np.isfinite(sigma) & (sigma > 0)
-    tau, sigma = tau[ok], sigma[ok]
-    if len(tau) == 0:
-        return NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0), "no Allan data")
-    if fit_from_s > 0 and np.sum(tau >= fit_from_s) >= 2:
-        keep = tau >= fit_from_s
-        tau, sigma = tau[keep], sigma[keep]
-    # fit only up to the Allan minimum (beyond it drift, misfit or random walk take over)
-    imin = int(np.argmin(sigma))
-    # the minimum itself may already carry the drift that ends the fall: stop one octave short
-    # of it when enough points remain
-    upto = tau[imin - 1] if imin >= 4 else tau[max(imin, min(2, len(tau) - 1))]
-    if fit_upto_s is not None:
-        upto = min(upto, max(fit_upto_s, tau[min(2, len(tau) - 1)]))
-    sel = tau <= upto
-    t, s = tau[sel], sigma[sel]
-    # relative residuals weighted by the square root of the number of clusters (precision)
-    w = np.sqrt(duration_s / t) / s ** 2
-    if white_N is not None and math.isfinite(white_N):
-        N = float(white_N)
-        rest = np.clip(s ** 2 - N * N / t, 0.0, None)
-        B = math.sqrt(max(float(np.sum(w * w * rest) / np.sum(w * w)), 0.0))
-    else:
-        A = np.column_stack([1.0 / t, np.ones_like(t)]) * w[:, None]
-        coef, _ = optimize.nnls(A, s ** 2 * w)
-        N = math.sqrt(max(coef[0], 0.0))
-        B = math.sqrt(max(coef[1], 0.0))
-    ratio = duration_s / (2.0 * resolution_s)
-    flick = B * B * math.log(ratio) / (2 * math.log(2)) if ratio > 1 else 0.0
-    rms = math.sqrt(N * N / resolution_s + flick)
-    basis = ("white N from the residual's sample-to-sample differences, flicker B from its "
-             "Allan deviation" if white_N is not None else
-             "white + flicker fitted to the residual Allan deviation at short tau")
-    return NoiseFloor(rms, N, B, (float(t[0]), float(t[-1])), basis)

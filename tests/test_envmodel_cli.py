@@ -168,3 +168,28 @@ def test_compensate_with_model_needing_missing_channel(logs, tmp_path):
     r = run_cli(["compensate", small, "--temp-col", "T_case", "--model", m, "-o", out])
     r.assert_clean_error("T(T_coil_C)", "T_coil_C")
     assert not out.exists()
+
+
+def test_diagnose_reference_floor_and_bad_reference(logs, tmp_path):
+    """--reference: a static run of the same gyro gives the floor (its basis is printed in the
+    JSON); a reference in another rate unit, or a missing file, is a one-line exit 2."""
+    log, prof = logs["rate1"]
+    rng = np.random.default_rng(5)
+    good, bad = tmp_path / "static.csv", tmp_path / "static_dps.csv"
+    for p, scale in ((good, 1.0), (bad, 3600.0)):
+        with open(p, "w") as fh:
+            fh.write("t_s,omega_dph\n")
+            for i in range(20000):
+                fh.write(f"{i * 0.5:.1f},{scale * 0.42 * rng.standard_normal():.6f}\n")
+    common = ["model", "diagnose", log, "--profile", prof, "--terms", "T(T_case_C)",
+              "--t-ref", "21"]
+    r = run_cli(common + ["--reference", str(good), "--json"])
+    assert r.code == 0, r.err
+    d = json.loads(r.out)
+    assert "static reference run" in d["noise_floor_basis"]
+    assert "static.csv" in d["noise_floor_basis"]
+    assert d["missing_effect"] == "dTdt(T_case_C)" and d["add"]
+    run_cli(common + ["--reference", str(bad)]).assert_clean_error(
+        "--reference", "static_dps.csv", "rate unit")
+    run_cli(common + ["--reference", str(tmp_path / "nope.csv")]).assert_clean_error(
+        "--reference", "nope.csv")

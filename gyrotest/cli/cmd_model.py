@@ -20,7 +20,6 @@ from .common import (
     ingest_options,
     json_option,
     load_for_terms,
-    load_log,
     note,
     plot_option,
     progress,
@@ -189,11 +188,27 @@ def render_fit(res, *, title: str = "model fit") -> None:
 
 
 def load_reference(path: str | None, opts: dict, quiet: bool):
-    """The ``--reference`` log, read with the same ingest options (errors name the option)."""
+    """The ``--reference`` log, read with the same ingest options (units, gyro output, time);
+    the auxiliary channels a profile names (temperatures, fields, ...) are not required of a
+    static run. Errors name the option."""
     if not path:
         return None
+    import dataclasses
+
+    from ..ingest import read_log
+    from ..profile import load_profile
+    from .common import ingest_overrides
+
+    aux = ("temperature", "field", "supply", "table_rate", "position", "extra")
     try:
-        return load_log(path, opts, announce=not quiet)
+        prof = load_profile(opts["profile"]) if opts.get("profile") else None
+        if prof is not None:
+            prof = dataclasses.replace(prof, columns={k: v for k, v in prof.columns.items()
+                                                      if k not in aux})
+        ov = ingest_overrides(opts)
+        ov["columns"] = {k: v for k, v in ov["columns"].items() if k not in aux}
+        return read_log(path, profile=prof, overrides=ov,
+                        nan_policy=opts.get("nan_policy") or "error")
     except InputError as e:
         raise InputError(f"--reference: {e}") from None
 
@@ -497,6 +512,7 @@ def terms_cmd(as_json):
     Terms take an optional channel: T(T_coil), dGdt(T_a,T_b), Hx(Mag_X), g(acc_z). Groups:
     H = Hx,Hy,Hz; poly2 = T,T2; poly3 = T,T2,T3. Custom terms: --term NAME:EXPRESSION.
     """
+    from rich.markup import escape
     from rich.table import Table
 
     from ..envmodel.terms import effect_table
@@ -511,5 +527,6 @@ def terms_cmd(as_json):
     for r in rows:
         reg = r["formula"] + (f"  [fitted: {', '.join(r['nonlinear'])}]" if r["nonlinear"]
                               else "")
-        t.add_row(r["term"], r["effect"], reg, r["unit"], r["source"])
+        t.add_row(*(escape(str(x)) for x in (r["term"], r["effect"], reg, r["unit"],
+                                              r["source"])))
     console().print(t)

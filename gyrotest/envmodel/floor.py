@@ -16,8 +16,8 @@ diagnosis and a model history:
   told from slow environment in one record; this floor holds white and flicker noise only
   and says so.
 * **a static reference run** (``--reference``): N, B and K fitted to the reference log's
-  Allan variance over its whole τ range (σ² = N²/τ + B² + K²τ/3 + D·τ², the D term removing
-  a slow ramp), random walk included.
+  Allan variance up to an eighth of its length (σ² = N²/τ + B² + K²τ/3; flicker and random
+  walk kept only where they exceed two standard errors), random walk included.
 
 Either is turned into the RMS of the block-mean residual at the working resolution by
 :func:`floor_rms`.
@@ -251,14 +251,26 @@ def reference_floor(ref_log, wd, axis: str | None = None) -> st.NoiseFloor:
                         dt=wd.frame.dt if wd.frame.dt > ref_log.tau0 * 1.5 else None)
     tau, sig = st.oadev(fr.rate, fr.dt, segments=fr.bounds)
     dur = fr.duration_s
-    ok = np.isfinite(sig) & (sig > 0) & (tau <= dur / 4.0)
+    ok = np.isfinite(sig) & (sig > 0) & (tau <= dur / 8.0)
     tau, sig = tau[ok], sig[ok]
     t_eff = getattr(wd, "t_eff", wd.resolution_s)
     if len(tau) < 3:
         return st.NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0),
                              f"reference {ref_log.source} too short for an Allan estimate")
-    c = _fit_allan(tau, sig, dur, ["quant", "white", "flicker", "rw", "drift"])
-    N, B, K = (math.sqrt(c[k]) for k in ("white", "flicker", "rw"))
+    cols = ["white", "flicker", "rw"]
+    while True:  # keep only the noise terms the reference detects (> 2 standard errors)
+        c = _fit_allan(tau, sig, dur, cols)
+        funcs = {"white": 1.0 / tau, "flicker": np.ones_like(tau), "rw": tau / 3.0}
+        A = np.column_stack([funcs[k] for k in cols]) / _se(tau, sig, dur)[:, None]
+        cov = np.linalg.pinv(A.T @ A)
+        weak = [k for i, k in enumerate(cols) if k != "white"
+                and not c[k] > 2.0 * math.sqrt(max(cov[i, i], 0.0))]
+        if not weak:
+            break
+        cols.remove(weak[0])
+    N = math.sqrt(c["white"])
+    B = math.sqrt(c.get("flicker", 0.0))
+    K = math.sqrt(c.get("rw", 0.0))
     rms = floor_rms(N, B, K, t_eff, wd.duration_s)
     basis = (f"white, flicker and random-walk noise of the static reference run "
              f"{ref_log.source} (Allan variance over {tau[0]:.3g}–{tau[-1]:.3g} s), "

@@ -20,13 +20,14 @@ that the model under judgment cannot move:
    p_adj = p × trials × candidates.
 4. **A candidate is a missing effect** when either
    * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 % (5 % for the nuisance
-     terms ramp, warm-up, sinusoid and hysteresis, whose flexibility a HAC test undercounts);
+     terms ramp, warm-up, sinusoid and hysteresis, whose flexibility a HAC test undercounts;
+     hysteresis must also help consistently across the folds, gain/(scatter/√folds) ≥ 2);
      or
    * *clear gain*: the base model's held-out RMS is above 1.2 × the floor (or the candidate
      cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
      ≥ 5 %, and either the HAC test gives p × trials < 0.01 (0.001 for nuisance terms) or
      the gain is ≥ 20 % and consistent across the folds -- gain / (fold scatter/√folds) ≥ 4
-     (6 for nuisance terms) -- with p × trials < 0.05, or ≥ 10 (15) whatever the test.
+     (6 for nuisance terms) -- with p × trials < 0.05, or ≥ 10 (15) with p × trials < 0.5.
      Another missing effect inflates the HAC error of every candidate, and a short log
      leaves the test few degrees of freedom, so strong cross-validated evidence may carry a
      weaker test. An effect the base model lacks inflates the HAC error of
@@ -85,6 +86,10 @@ WEAK_P = 0.05
 #: cross-validated evidence that stands on its own (a short log gives a t test few degrees
 #: of freedom): gain ≥ 20 % at gain / (scatter/√folds) ≥ 10 (15 for nuisance terms)
 CV_STRONG = 10.0
+STRONG_P = 0.5
+#: a hysteresis branch (a near-step regressor with a searched width) gets HAC z values far
+#: beyond its held-out evidence: it must also help consistently across the folds
+HYST_CV_T = 2.0
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: candidates within this fraction of the best held-out RMS count as equal evidence
@@ -414,18 +419,21 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
     scatter = _gain_scatter(base, r)
     p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
-    strict = bool(math.isfinite(p_adj) and p_adj < alpha
-                  and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
-                               else min_improvement))
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
     t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
             else math.inf if impr > 0 else 0.0)
+    strict = bool(math.isfinite(p_adj) and p_adj < alpha
+                  and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
+                               else min_improvement)
+                  and (c.key != "hyst" or t_cv >= HYST_CV_T))
     above = base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN
     cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
     clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
                  and (p_tr < guard
                       or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
-                      or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T)))
+                      or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
+                          and p_tr < STRONG_P))
+                 and (c.key != "hyst" or t_cv >= HYST_CV_T))
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     if c.key == "sin" and (strict or clear):

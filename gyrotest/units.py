@@ -9,7 +9,7 @@ angular rate    deg/h         1 deg/h = 1 arcsec/s, so counts x S0[arcsec] / dt[
 angle           arcsec
 time            s
 temperature     degC
-magnetic field  uT            H0 = 100 uT normalises magnetic coefficients (seed 002)
+magnetic field  uT            H0 = 100 uT normalises magnetic coefficients (Antonova & Matveev)
 voltage         V
 =============== ============= ==========================================================
 

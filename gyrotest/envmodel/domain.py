@@ -3,7 +3,7 @@ chamber runs or a table of steady-state set-points) and the magnetic sensitiviti
 (Helmholtz-coil sequences or a continuous magnetometer log).
 
 Source: M.V. Antonova, V.A. Matveev, "Model of error of a fiber-optic gyro exposed to thermal
-and magnetic fields" (seed 002; decoded in GYRO_REFERENCE §6):
+and magnetic fields" :
 
 * thermal: Δω(t) = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt, ΔT = T − t0 (t0 = 21 °C in their lab),
   dT/dt in °C/h; w0 deg/h, w1 deg/(h·°C), w2 deg/(h·°C²), w_ΔV deg/°C = (deg/h)/(°C/h);
@@ -107,7 +107,7 @@ def thermal_fit(wd: WorkData, *, sensor: str | None = None,
 
     Returns coefficients in the paper's units with HAC 1σ, the fits, and a heating/cooling
     hysteresis check of the residual (mean residual on heating minus cooling branches).
-    Source: seed 002 eq. (3); IEEE 952 §8.3.
+    Source: Antonova & Matveev eq. (3); IEEE 952 §8.3.
     """
     temps = list(wd.frame.temperature)
     if not temps:
@@ -275,7 +275,7 @@ def thermal_fit_setpoints(temp_c, drift_dph, sigma_dph=None, dtdt=None, *, t0_c:
     Least squares (weighted by 1/σ² when ``weighted``; the paper's σ is the RMS of the output
     over the averaging interval, so by default it only labels the points); 1σ from the scatter,
     s²·(XᵀWX)⁻¹ with s² = χ²/(n − p). At steady state dT/dt = 0, so w_ΔV is not identifiable
-    without a rate column. Source: seed 002 (GYRO_REFERENCE §6 table).
+    without a rate column. Source: Antonova & Matveev (GYRO_REFERENCE §6 table).
     """
     T = np.asarray(temp_c, float)
     y = np.asarray(drift_dph, float)
@@ -405,7 +405,7 @@ def mag_fit(wd: WorkData, *, extra_terms: list[str] | None = None, settle_s: flo
     on the 1-s grid (:func:`detect_plateaus`); each plateau's mean rate, corrected for the
     non-magnetic fitted terms, gives K_i = (Δω(+max) − Δω(−max))/(2·max/H0) per axis and the
     mean up-minus-down difference at levels visited in both sweep directions.
-    Source: seed 002 eq. (2) and its Helmholtz test.
+    Source: Antonova & Matveev eq. (2) and its Helmholtz test.
     """
     fr = wd.frame
     chans = list(fr.field_uT)

@@ -1,4 +1,4 @@
-"""Library of physical effects for the gyro drift model (IEEE 952 §8.3 E-terms, seed 002).
+"""Library of physical effects for the gyro drift model (IEEE 952 §8.3 E-terms, Antonova & Matveev).
 
 The modelled gyro error is a sum of terms, each a known regressor times a coefficient in
 physical units::
@@ -33,7 +33,7 @@ from scipy import signal
 from ..errors import InputError
 from .expr import SafeExpression, parse_expression
 
-#: magnetic-field normaliser H0, uT (seed 002: close to the Earth's field; w in deg/h per 100 uT)
+#: magnetic-field normaliser H0, uT (Antonova & Matveev: close to the Earth's field; w in deg/h per 100 uT)
 H0_UT = 100.0
 SEC_PER_HOUR = 3600.0
 
@@ -228,7 +228,7 @@ def temperature_offset(temp_c: np.ndarray, t_ref_c: float, power: int = 1) -> np
 
     Formula: x = (T − T_ref)^p, p = 1, 2, 3. Units: degC^p; coefficient deg/h/degC^p
     (D_T, D_T2, D_T3; Antonova's w1, w2). Source: IEEE Std 952-1997 §8.3 E = D_T·ΔT + ...;
-    seed 002 eq. (3) Δω = Σ w_i·(t_f − t0)^i.
+    Antonova & Matveev eq. (3) Δω = Σ w_i·(t_f − t0)^i.
     """
     return (np.asarray(temp_c, float) - t_ref_c) ** power
 
@@ -279,7 +279,7 @@ def smoothed_rate(x: np.ndarray, dt: float, window_s: float,
     twice (:func:`smooth`), i.e. S_W(dx/dt): the true rate seen through a triangular kernel of
     total width 2W. White sensor noise σ (per sample at interval dt) leaves a derivative noise
     of about σ·√(2·dt/W³)·3600 per hour. Near segment ends the windows shrink (the fit leaves
-    those samples out). Units: (unit of x)/h. Source: IEEE 952 §8.3 D_Ṫ·dT/dt; seed 002
+    those samples out). Units: (unit of x)/h. Source: IEEE 952 §8.3 D_Ṫ·dT/dt; Antonova & Matveev
     ΔV_t = Δt/τ (degC/h); smoothing: gyrotest (stated window W).
     """
     x = np.asarray(x, dtype=np.float64)
@@ -299,7 +299,7 @@ def temperature_rate(temp_c: np.ndarray, dt: float, window_s: float,
 
     Formula: dT/dt ≈ d(S_W T)/dt · 3600, S_W = moving mean over W applied twice. Units: degC/h; coefficient
     (deg/h)/(degC/h) = deg/degC (IEEE D_Ṫ; Antonova–Matveev w_ΔV, 1.997 deg/degC in their
-    FOG). Source: IEEE Std 952-1997 §8.3 E-term D_Ṫ·dT/dt; seed 002 eq. (3).
+    FOG). Source: IEEE Std 952-1997 §8.3 E-term D_Ṫ·dT/dt; Antonova & Matveev eq. (3).
     """
     return smoothed_rate(temp_c, dt, window_s, bounds)
 
@@ -368,7 +368,7 @@ def magnetic_field(field_ut: np.ndarray, h0_ut: float = H0_UT) -> np.ndarray:
     """Magnetic field component in units of H0.
 
     Formula: x = H_i / H0, H0 = 100 uT. Units: dimensionless; coefficient w_i in deg/h per
-    100 uT. Source: seed 002 (Antonova & Matveev) eq. (2): Δω(H) = w0 + Σ w_i·H_i/H0;
+    100 uT. Source: Antonova & Matveev eq. (2): Δω(H) = w0 + Σ w_i·H_i/H0;
     IEEE 952 §8.3 lists magnetic field among the E-terms.
     """
     return np.asarray(field_ut, float) / h0_ut
@@ -387,7 +387,7 @@ def acceleration_power(g: np.ndarray, power: int = 1) -> np.ndarray:
     """Acceleration (load) sensitivity term.
 
     Formula: x = g^i (g in units of standard gravity), i = 1, 2. Units: g^i; coefficient
-    deg/h/g^i. Source: seed 002 eq. (1) ω = Σ w_i·g^i (mechanical gyros, usually m ≤ 2).
+    deg/h/g^i. Source: Antonova & Matveev eq. (1) ω = Σ w_i·g^i (mechanical gyros, usually m ≤ 2).
     """
     return np.asarray(g, float) ** power
 
@@ -527,13 +527,13 @@ def _reg(e: Effect) -> None:
 
 _reg(Effect("bias", "constant bias", "1", ("D_F",), "deg/h", "IEEE 952 §8.3 D_F", "none", bias))
 _reg(Effect("T", "temperature sensitivity", "T − T_ref", ("D_T",), "deg/h/degC",
-            "IEEE 952 §8.3 D_T·ΔT; seed 002 w1", "temperature", temperature_offset))
+            "IEEE 952 §8.3 D_T·ΔT; Antonova & Matveev w1", "temperature", temperature_offset))
 _reg(Effect("T2", "quadratic temperature sensitivity", "(T − T_ref)²", ("D_T2",), "deg/h/degC^2",
-            "seed 002 eq.(3) w2·t²", "temperature", temperature_offset))
+            "Antonova & Matveev eq.(3) w2·t²", "temperature", temperature_offset))
 _reg(Effect("T3", "cubic temperature sensitivity", "(T − T_ref)³", ("D_T3",), "deg/h/degC^3",
-            "seed 002 eq.(3) w3·t³; PX4 3rd-order polynomial", "temperature", temperature_offset))
+            "Antonova & Matveev eq.(3) w3·t³; PX4 3rd-order polynomial", "temperature", temperature_offset))
 _reg(Effect("dTdt", "temperature-rate sensitivity (thermal transient)", "dT/dt [degC/h]",
-            ("D_Tdot",), "(deg/h)/(degC/h)", "IEEE 952 §8.3 D_Ṫ; seed 002 w_ΔV", "temperature",
+            ("D_Tdot",), "(deg/h)/(degC/h)", "IEEE 952 §8.3 D_Ṫ; Antonova & Matveev w_ΔV", "temperature",
             temperature_rate, smooth=True, prefiltered=True))
 _reg(Effect("dGdt", "temperature-gradient rate (Shupe effect)", "d(T_a − T_b)/dt [degC/h]",
             ("D_gradTdot",), "(deg/h)/(degC/h)", "IEEE 952 §8.3 D_∇Ṫ", "temperature2",
@@ -544,13 +544,13 @@ _reg(Effect("Tlag", "temperature of a lagging core (first-order lag τ)",
             nonlinear=(NLParam("tau_s", "s", "tau"),), smooth=True))
 for _i, _ax in enumerate("xyz"):
     _reg(Effect(f"H{_ax}", f"magnetic field along {_ax.upper()}", f"H{_ax}/H0 (H0 = 100 uT)",
-                (f"w_{_ax}",), "deg/h per 100 uT", "seed 002 eq.(2); IEEE 952 §8.3", "field",
+                (f"w_{_ax}",), "deg/h per 100 uT", "Antonova & Matveev eq.(2); IEEE 952 §8.3", "field",
                 magnetic_field, default_channel=_i))
 _reg(Effect("V", "supply-voltage sensitivity", "V − V_ref", ("D_V",), "(deg/h)/V",
             "IEEE 952 §8.3 E-terms (supply voltage)", "supply", supply_voltage))
 _reg(Effect("g", "acceleration (g) sensitivity", "g", ("w_g1",), "deg/h/g",
-            "seed 002 eq.(1) w1·g", "extra", acceleration_power))
-_reg(Effect("g2", "g² sensitivity", "g²", ("w_g2",), "deg/h/g^2", "seed 002 eq.(1) w2·g²",
+            "Antonova & Matveev eq.(1) w1·g", "extra", acceleration_power))
+_reg(Effect("g2", "g² sensitivity", "g²", ("w_g2",), "deg/h/g^2", "Antonova & Matveev eq.(1) w2·g²",
             "extra", acceleration_power))
 _reg(Effect("ramp", "time ramp (ageing, rate ramp R)", "t [h]", ("R",), "deg/h/h",
             "IEEE 952 §8.3 D_R; Annex C rate ramp", "none", time_ramp, smooth=True))

@@ -32,7 +32,7 @@ totdev    OADEV of the series reflected at both ends (θ*_{−j} = 2θ_0 − θ_
           2θ_{N−1} − θ_{N−1−j}), σ² = Σ_{i=1}^{N−2} (θ*_{i−m} − 2θ_i + θ*_{i+m})²/(2τ²(N−2)) (25)
 mtotdev   MVAR of each 3m-point subsequence with its half-average slope removed and extended
           by even reflection to 9m points, averaged over the N−3m+1 subsequences          (27)
-akdev     Allan–Krobka dispersion (Krobka, seed 001 eq. 5.10):
+akdev     Allan–Krobka dispersion (Krobka eq. 5.10):
           σ²_AK = ½⟨(ω̄_{k+m} − ω̄_k)²⟩ − ½⟨ω̄_{k+m} − ω̄_k⟩² over overlapping cluster
           averages ω̄_k = (θ_{k+m} − θ_k)/τ; zero for a rate ramp Ω = Rt (OADEV = Rτ/√2)
 hkdev     the Hadamard analogue: (⟨h²⟩ − ⟨h⟩²)/(6τ²), h the third difference of ohdev
@@ -1265,7 +1265,7 @@ mtotdev = _make(
 )
 akdev = _make(
     "akdev",
-    """Allan–Krobka dispersion (Krobka, seed 001 eq. 5.10; notes-allan-topology §2.4).
+    """Allan–Krobka dispersion (Krobka eq. 5.10; notes-allan-topology §2.4).
 
     σ²_AK(τ) = ½⟨(ω̄_{k+m} − ω̄_k)²⟩ − ½⟨ω̄_{k+m} − ω̄_k⟩², with the overlapping cluster
     averages ω̄_k = (θ_{k+m} − θ_k)/τ, i.e. half the *variance* (not the mean square) of the
@@ -1276,7 +1276,7 @@ akdev = _make(
 )
 hkdev = _make(
     "hkdev",
-    """Hadamard–Krobka dispersion (Krobka, seed 001 §5: the Hadamard analogue of eq. 5.10).
+    """Hadamard–Krobka dispersion (Krobka §5: the Hadamard analogue of eq. 5.10).
 
     σ²_HK(τ) = (⟨h²⟩ − ⟨h⟩²)/(6τ²) with h_k = θ_{k+3m} − 3θ_{k+2m} + 3θ_{k+m} − θ_k: the
     overlapping Hadamard variance with the mean third difference removed, so a quadratic rate

@@ -1,6 +1,6 @@
 """Model vs measurement: where the noise model fails, and which missing term explains it.
 
-Krobka (seed 001 §6, misconception 4 / notes M6): the five-slope IEEE basis is incomplete, and
+Krobka (Allan-graph topology §6, misconception 4 / notes M6): the five-slope IEEE basis is incomplete, and
 unmodelled noises turn into parameter error. So every fit is checked against the measurement:
 
 1. **Residuals in CI units** at each τ (:func:`gyrotest.noise.fit.ci_residuals`): |r| ≤ 1 means

@@ -1,7 +1,7 @@
 """Joint noise-model fit of an Allan variance: all terms at once, in quadrature, weighted by
 the estimator's confidence.
 
-Model (IEEE Std 952-1997 Annex C, Krobka seed 001 eq. 5.9: independent noises add in
+Model (IEEE Std 952-1997 Annex C, Krobka (Allan-graph topology) eq. 5.9: independent noises add in
 quadrature)::
 
     σ²_model(τ) = Σ_j c_j · g_j(τ; θ_j)
@@ -52,7 +52,7 @@ correction), the χ² goodness of fit uses a Satterthwaite-scaled reference dist
 BIC uses n_eff = n²/Σρ_ij.
 
 Identified vs upper bound (Krobka's rule: "a coefficient the graph cannot establish is an upper
-bound", seed 001 §6): terms are tested by likelihood ratio — the increase of L when a term is
+bound", Krobka (Allan-graph topology) §6): terms are tested by likelihood ratio — the increase of L when a term is
 dropped (the others re-fitted), divided by the term's design effect, against χ²_k(0.95) (k = 1
 for Q, N, B, K, R; 2 for the two-parameter terms): its contribution must be significant
 somewhere and its confidence interval must exclude 0. Non-significant terms are removed by
@@ -205,7 +205,7 @@ def _basis(key: str, tau: np.ndarray, shape: float | None, bi_f0: float | None) 
 def _component_psd(key: str, c: float, shape: float | None, f: np.ndarray, tau0: float,
                    bi_f0: float | None) -> np.ndarray:
     """Two-sided rate PSD (deg/h)²/Hz of one fitted term (internal coefficient c); zero for the
-    deterministic ramp and sinusoid (IEEE 952 Annex C; seed 001 eqs. 5.2-5.7, Table 7.3)."""
+    deterministic ramp and sinusoid (IEEE 952 Annex C; Krobka (Allan-graph topology) eqs. 5.2-5.7, Table 7.3)."""
     if c <= 0 or key in ("R", "sine"):
         return np.zeros_like(f)
     if key == "N":
@@ -832,7 +832,7 @@ class NoiseFit:
         return out
 
     def model_sigma(self, tau=None) -> np.ndarray:
-        """σ_model(τ) = √(Σ c_j g_j(τ)) in deg/h (IEEE 952 Annex C mixture, seed 001 eq. 5.9)."""
+        """σ_model(τ) = √(Σ c_j g_j(τ)) in deg/h (IEEE 952 Annex C mixture, Krobka (Allan-graph topology) eq. 5.9)."""
         return np.sqrt(self.model_avar(tau))
 
     def component_avar(self, tau=None) -> dict[str, np.ndarray]:
@@ -1361,9 +1361,9 @@ def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, 
     * ``K_slope`` = 60·σ(τ_i)·√(3/τ_i) deg/h/√h at the slope closest to +½ (line read at τ = 3 s);
     * ``B_slope`` = σ(τ_i)/0.6643 deg/h at the slope closest to 0;
     * ``N_upper`` = min_τ σ(τ)·√τ/60 deg/√h: Krobka's bound, the −½ ray through the leftmost
-      point lowered until it touches the graph (seed 001 §5, rule 5);
+      point lowered until it touches the graph (Krobka (Allan-graph topology) §5, rule 5);
     * ``B_tangent`` = σ_min/0.6643 deg/h: the zero-slope tangent at the minimum with the
-      IEEE factor (an upper bound in a mixture; seed 001 M3/M4); ``allan_floor`` = σ_min and
+      IEEE factor (an upper bound in a mixture; Krobka (Allan-graph topology) M3/M4); ``allan_floor`` = σ_min and
       its τ (what tools that omit 0.664 report as B).
     """
     t = np.asarray(tau, float)

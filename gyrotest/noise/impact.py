@@ -1,11 +1,11 @@
 """Application impact of a fitted noise model: attitude-error growth on a platform vs strapdown.
 
-Krobka (seed 003, "35 years later", and seed 001 Part I; notes-platform-vs-strapdown §1.3–1.4,
+Krobka (platform vs strapdown noise accumulation, "35 years later", and Krobka (Allan-graph topology) Part I; notes-platform-vs-strapdown §1.3–1.4,
 GYRO_REFERENCE §4 "Platform vs strapdown"): the same three gyros give different orientation
 accuracy in an inertially stabilised platform and in a strapdown system, because in strapdown
 the gyro errors are rotated by the vehicle attitude before they are integrated.
 
-First-order model (small errors; "equations in variations", seed 001 eq. 2.31), three equal,
+First-order model (small errors; "equations in variations", Krobka (Allan-graph topology) eq. 2.31), three equal,
 uncorrelated gyros, constant vehicle rate ω about one gyro axis (z):
 
 * platform:  φ(t) = ∫ ε(s) ds                     → ⟨|φ|²⟩ = 3·V_ax(t)
@@ -22,7 +22,7 @@ term        V_ax(t) (platform, per axis)            V_tr(t, ω) (strapdown trans
 ==========  ====================================  ==========================================
 N           N²·t                                    N²·t (identical: white noise is isotropic)
 Q           2Q² (bounded)                           2Q² + ω²·τ0·Q²·t  (→ the white-angle term
-                                                    2Q²τ0∫|ω|²dt for two axes, seed 001 2.48)
+                                                    2Q²τ0∫|ω|²dt for two axes, Krobka (Allan-graph topology) 2.48)
 markov      (q_cT_c)²[t − T_c(1 − e^(−t/T_c))]      (q_cT_c)²/(1 + (ωT_c)²)·t  (strapdown better)
 B (flicker) 2∫ B²/(2πf)·sin²(πft)/(πf)² df,         B²/|ω|·t for f_ω ≤ f0 (else 0)
             f from 1/T_record to f0
@@ -206,7 +206,7 @@ def predict_attitude_variance(components: Sequence[Component], t: float, omega: 
     """⟨|φ|²⟩ (arcsec², sum over three axes) of the first-order attitude error at time t.
 
     platform = 3·ΣV_ax; strapdown (rotation ω rad/s about one gyro axis) = ΣV_ax + 2·ΣV_tr
-    (Krobka & Sviridov 1984 eq. 3.6 / seed 001 eq. 2.47 for stationary noise; exact forms for
+    (Krobka & Sviridov 1984 eq. 3.6 / Krobka (Allan-graph topology) eq. 2.47 for stationary noise; exact forms for
     RRW, ramp and sinusoid; module docstring). Returns totals and per-component values."""
     per: dict[str, dict[str, float]] = {}
     plat = sd = 0.0
@@ -276,7 +276,7 @@ class ImpactResult:
         return {
             "method": "first-order attitude error of three equal uncorrelated gyros; platform "
                       "3*S(0)*t, strapdown [S(0) + 2 S(f_w)]*t plus bounded S(0)=0 terms and "
-                      "exact forms for RRW, ramp, sinusoid (Krobka, seeds 001/003)",
+                      "exact forms for RRW, ramp, sinusoid (Krobka)",
             "horizon_s": self.horizon_s,
             "model_terms": list(self.model_terms),
             "platform": {"sigma_att_deg": self.platform_sigma_deg,
@@ -398,7 +398,7 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
 def monte_carlo_attitude(components: Sequence[Component], *, duration_s: float, dt: float,
                          omega: float | Sequence[float], runs: int = 300, seed: int = 0,
                          chunk: int = 16) -> dict[str, Any]:
-    """Monte-Carlo ⟨|φ|²⟩ − |⟨φ⟩|² (arcsec², three axes: Krobka's dispersion, seed 001 eq.
+    """Monte-Carlo ⟨|φ|²⟩ − |⟨φ⟩|² (arcsec², three axes: Krobka's dispersion, Krobka (Allan-graph topology) eq.
     2.33) of the first-order attitude error at ``duration_s``, for the validation of
     :func:`predict_attitude_variance` (notes-platform-vs-strapdown §3.1, Appendix A script 1).
 

@@ -1,19 +1,19 @@
 """Frequency-domain and correlation views of a gyro rate record.
 
 The Allan deviation is one projection of the rate PSD; a few things are easier to see in the
-spectrum or in the correlation function (Krobka, seed 001 §4 and §7 feature 9: "autocorrelation
+spectrum or in the correlation function (Krobka §4 and §7 feature 9: "autocorrelation
 and PSD views"; notes-allan-topology M8 "noise is white"):
 
 * a sinusoid (dither residue, mechanical resonance) is a *line* in the PSD at f0, while in
   σ(τ) it is a lobe at τ ≈ 0.371/f0 with nulls at k/f0 that a 10-per-decade τ grid may miss;
 * a Markov hump is a Lorentzian knee at f_c = 1/(2π T_c) and an exponential ACF e^(−|τ|/T_c);
 * the cross-correlation of the axes of a multi-axis unit is Krobka's "minimum necessary
-  information" for strapdown use (seed 001 conclusions; noise correlation matrix eq. 2.36).
+  information" for strapdown use (Krobka (Allan-graph topology) conclusions; noise correlation matrix eq. 2.36).
 
 Conventions (as :mod:`gyrotest.noise.terms`): rate in deg/h, time in s, frequency in Hz, and
 the PSD is the **two-sided** rate PSD S(f) in (deg/h)²/Hz evaluated on f > 0, normalised so that
 the variance of the samples is ∫_{−fs/2}^{fs/2} S df and white noise S = N² has σ²(τ) = N²/τ
-(IEEE 952 Annex C; seed 001 eq. 5.1). scipy's one-sided Welch density P is therefore halved.
+(IEEE 952 Annex C; Krobka (Allan-graph topology) eq. 5.1). scipy's one-sided Welch density P is therefore halved.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ def _segment_length(n: int, tau0: float, f_min: float | None) -> int:
 
 def welch_psd(rate: np.ndarray, tau0: float, *, segments: Sequence[tuple[int, int]] | None = None,
               nperseg: int | None = None, f_min: float | None = None) -> PsdEstimate:
-    """Welch estimate of the two-sided rate PSD S(f), (deg/h)²/Hz (seed 001 eq. 5.1 convention).
+    """Welch estimate of the two-sided rate PSD S(f), (deg/h)²/Hz (Krobka (Allan-graph topology) eq. 5.1 convention).
 
     ``S(f) = P_welch(f)/2`` with scipy's one-sided density (Hann window, 50 % overlap, each
     segment's mean removed). Gap-aware: segments of the record (``segments``, sample index
@@ -241,7 +241,7 @@ def autocorrelation(rate: np.ndarray, tau0: float, *, max_lag: int | None = None
                     max_samples: int = 1 << 22) -> Autocorrelation:
     """ρ(k) = Σ (x_i − x̄)(x_{i+k} − x̄) / Σ (x_i − x̄)² (biased estimator; Box & Jenkins), by FFT
     on at most ``max_samples`` samples, lags 0 … ``max_lag`` (default n/10, ≤ 10⁵). Lags in s.
-    White noise: |ρ(k≥1)| < 1.96/√n at 95 % (Bartlett). Krobka (seed 001 Fig. 4.1) used such
+    White noise: |ρ(k≥1)| < 1.96/√n at 95 % (Bartlett). Krobka (Allan-graph topology Fig. 4.1) used such
     ACFs to show FOG noise is not white."""
     x = np.asarray(rate[:max_samples], dtype=float)
     x = x - x.mean()
@@ -292,7 +292,7 @@ class CrossCorrelation:
 def cross_correlation(rates: dict[str, np.ndarray], tau0: float, *,
                       taus: Sequence[float] | None = None,
                       segments: Sequence[tuple[int, int]] | None = None) -> CrossCorrelation:
-    """Correlation matrix of the axes at several averaging times (seed 001 eq. 2.36: the
+    """Correlation matrix of the axes at several averaging times (Krobka (Allan-graph topology) eq. 2.36: the
     noise correlation matrix K(t1, t2) is the minimum information for three gyros).
 
     For each τ = m·τ0 the rates are averaged over non-overlapping blocks of m samples within

@@ -1,7 +1,7 @@
 """Registry of gyro noise terms: closed-form Allan variances, rate PSDs and units.
 
 Every entry of :data:`TERMS` describes one noise term of the IEEE Std 952-1997 catalogue
-(Annex C) or one of Krobka's "zero PSD at zero frequency" (blue) families (seed 001, §7,
+(Annex C) or one of Krobka's "zero PSD at zero frequency" (blue) families (Krobka (Allan-graph topology), §7,
 Tables 7.1-7.3, with the errata of ``notes-allan-topology.md`` §2.7/§8 applied).
 
 Conventions (the same everywhere in gyrotest)
@@ -78,7 +78,7 @@ def arw_from_sigma(sigma_dph: ArrayLike, tau_s: ArrayLike) -> ArrayLike:
 
     ``N = sigma(tau) * sqrt(tau) / 60`` with sigma in deg/h and tau in s (N equals sigma(1 s)
     in deg/h divided by 60, i.e. sigma at tau = 1 h). Applied to the leftmost point of an Allan
-    graph this is Krobka's upper bound N_upper (seed 001, §6; GYRO_REFERENCE §4 warning 1).
+    graph this is Krobka's upper bound N_upper (Krobka (Allan-graph topology), §6; GYRO_REFERENCE §4 warning 1).
     Example (Optolink): sigma(1/2000 s) = 1 deg/h gives N_upper = 3.727e-4 deg/sqrt(h).
     """
     return np.asarray(sigma_dph) * np.sqrt(np.asarray(tau_s, dtype=float)) / SQRT_SEC_PER_HOUR
@@ -114,7 +114,7 @@ def quantization_avar(tau: ArrayLike, Q: float) -> np.ndarray:
     """Quantization / white angle noise: ``sigma^2 = 3 Q^2 / tau^2``.
 
     Q in arcsec, tau in s, sigma in deg/h (= arcsec/s). IEEE 952 Annex C (quantization
-    noise), seed 001 eq. (5.6). Exact at tau = m*tau0 for white angle noise of variance Q^2.
+    noise), Krobka (Allan-graph topology) eq. (5.6). Exact at tau = m*tau0 for white angle noise of variance Q^2.
     """
     t = _tau(tau)
     return 3.0 * Q**2 / t**2
@@ -123,7 +123,7 @@ def quantization_avar(tau: ArrayLike, Q: float) -> np.ndarray:
 def quantization_psd(f: ArrayLike, Q: float, tau0: float) -> np.ndarray:
     """Quantization rate PSD ``(2 pi f)^2 tau0 Q^2`` for f < 1/(2 tau0), 0 above.
 
-    (deg/h)^2/Hz with Q in arcsec, tau0 (sample interval) in s. IEEE 952 Annex C, seed 001
+    (deg/h)^2/Hz with Q in arcsec, tau0 (sample interval) in s. IEEE 952 Annex C, Krobka (Allan-graph topology)
     eq. (5.6) (the approximation of (4Q^2/tau0) sin^2(pi f tau0)); with this band-limited form
     eq. (5.1) gives exactly 3Q^2/tau^2 at tau = 2k*tau0.
     """
@@ -135,7 +135,7 @@ def arw_avar(tau: ArrayLike, N: float) -> np.ndarray:
     """Angle random walk: ``sigma^2 = N^2 / tau``.
 
     Internal units: N in (deg/h)*sqrt(s) (= 60 x N in deg/sqrt(h)), tau in s.
-    IEEE 952 Annex C, seed 001 eq. (5.2).
+    IEEE 952 Annex C, Krobka (Allan-graph topology) eq. (5.2).
     """
     return N**2 / _tau(tau)
 
@@ -181,7 +181,7 @@ def bias_instability_avar(tau: ArrayLike, B: float, f0: float) -> np.ndarray:
     """Bias instability (flicker rate noise with cut-off f0), the full IEEE form.
 
     ``sigma^2 = (2 B^2/pi) [ln2 - sin^3 x (sin x + 4x cos x)/(2x^2) + Ci(2x) - Ci(4x)]``,
-    ``x = pi f0 tau`` (seed 001 eq. (5.3), printed "x = pi f tau": erratum, it is f0). B in deg/h,
+    ``x = pi f0 tau`` (Krobka (Allan-graph topology) eq. (5.3), printed "x = pi f tau": erratum, it is f0). B in deg/h,
     f0 in Hz, tau in s. Equivalently (2B^2/pi) int_0^x sin^4 u/u^3 du. Limits: x -> 0:
     sigma ~ (x/sqrt(pi)) B (slope +1); x -> inf: sigma -> sqrt(2 ln2/pi) B = 0.6643 B, reached to
     99 % at x ~ 4.2 (tau ~ 1.34/f0). IEEE 952 Annex C.
@@ -194,7 +194,7 @@ def bias_instability_avar(tau: ArrayLike, B: float, f0: float) -> np.ndarray:
 def bias_instability_psd(f: ArrayLike, B: float, f0: float) -> np.ndarray:
     """Bias-instability rate PSD ``B^2/(2 pi f)`` for 0 < f <= f0, 0 above (deg/h)^2/Hz.
 
-    IEEE 952 Annex C; seed 001 eq. (5.3).
+    IEEE 952 Annex C; Krobka (Allan-graph topology) eq. (5.3).
     """
     f = np.asarray(f, dtype=float)
     with np.errstate(divide="ignore"):
@@ -218,7 +218,7 @@ def rrw_psd(f: ArrayLike, K: float) -> np.ndarray:
 def rate_ramp_avar(tau: ArrayLike, R: float) -> np.ndarray:
     """Rate ramp (deterministic Omega = R t): ``sigma^2 = R^2 tau^2 / 2``.
 
-    Internal units: R in (deg/h)/s (= R[deg/h/h]/3600). IEEE 952 Annex C, seed 001 eq. (5.5).
+    Internal units: R in (deg/h)/s (= R[deg/h/h]/3600). IEEE 952 Annex C, Krobka (Allan-graph topology) eq. (5.5).
     Not obtainable from eq. (5.1): the formal PSD R^2/(2 pi f)^3 makes the integral diverge.
     """
     return R**2 * _tau(tau) ** 2 / 2.0
@@ -254,7 +254,7 @@ def markov_avar(tau: ArrayLike, q_c: float, T_c: float) -> np.ndarray:
     Internal units: q_c in (deg/h)/sqrt(s) (= q_c[deg/h/sqrt(h)]/60), T_c and tau in s.
     Process variance q_c^2 T_c/2 (deg/h)^2; S(0) = (q_c T_c)^2. tau << T_c: q_c^2 tau/3
     (slope +1/2); tau >> T_c: (q_c T_c)^2/tau (ARW with N_eq = q_c T_c). Peak
-    sigma = 0.436542 q_c sqrt(T_c) at tau = 1.89262 T_c. IEEE 952 Annex C; seed 001 eq. (5.7).
+    sigma = 0.436542 q_c sqrt(T_c) at tau = 1.89262 T_c. IEEE 952 Annex C; Krobka (Allan-graph topology) eq. (5.7).
     """
     t = _tau(tau)
     u = np.atleast_1d(t / T_c)
@@ -262,7 +262,7 @@ def markov_avar(tau: ArrayLike, q_c: float, T_c: float) -> np.ndarray:
 
 
 def markov_psd(f: ArrayLike, q_c: float, T_c: float) -> np.ndarray:
-    """Markov rate PSD ``(q_c T_c)^2 / (1 + (2 pi f T_c)^2)``; seed 001 eq. (5.7)."""
+    """Markov rate PSD ``(q_c T_c)^2 / (1 + (2 pi f T_c)^2)``; Krobka (Allan-graph topology) eq. (5.7)."""
     f = np.asarray(f, dtype=float)
     return (q_c * T_c) ** 2 / (1.0 + (2 * np.pi * f * T_c) ** 2)
 
@@ -271,7 +271,7 @@ def sinusoid_avar(tau: ArrayLike, Omega0: float, f0: float) -> np.ndarray:
     """Sinusoidal rate Omega0 sin(2 pi f0 t + phi): ``sigma^2 = Omega0^2 (sin^2(pi f0 tau)/(pi f0 tau))^2``.
 
     Omega0 (amplitude) in deg/h, f0 in Hz. Zeros at tau = k/f0; first lobe 0.724611 Omega0 at
-    tau = 0.37101/f0. IEEE 952 Annex C; seed 001 eq. (5.8).
+    tau = 0.37101/f0. IEEE 952 Annex C; Krobka (Allan-graph topology) eq. (5.8).
     """
     x = np.pi * f0 * _tau(tau)
     return Omega0**2 * (np.sin(x) ** 2 / x) ** 2
@@ -288,14 +288,14 @@ def sinusoid_lines(Omega0: float, f0: float) -> list[tuple[float, float]]:
     With the normalisation of eq. (5.1) (white S = N^2 -> N^2/tau; total variance =
     integral of the two-sided S over all f = Omega0^2/2), the line weight that reproduces
     eq. (5.8) is Omega0^2/4 at each of +f0 and -f0. The table form "1/2 Omega0^2 [delta(f-f0) +
-    delta(f+f0)]" (IEEE 952 Annex C as quoted in seed 001) is a factor 2 larger in this
+    delta(f+f0)]" (IEEE 952 Annex C as quoted in Krobka (Allan-graph topology)) is a factor 2 larger in this
     normalisation; the Allan variance (5.8) itself is the checked quantity.
     """
     return [(float(f0), 0.25 * Omega0**2)]
 
 
 def blue_markov_derivative_avar(tau: ArrayLike, alpha: float, beta: float) -> np.ndarray:
-    """Blue family ``S = alpha f^2/(beta^2 + f^2)`` (seed 001 Table 7.3).
+    """Blue family ``S = alpha f^2/(beta^2 + f^2)`` (Krobka (Allan-graph topology) Table 7.3).
 
     ``sigma^2 = (alpha/(4 beta pi tau^2)) (3 - 4 e^(-2 beta pi tau) + e^(-4 beta pi tau))``.
     alpha in (deg/h)^2/Hz, beta in Hz. It is the derivative of a Markov process, T_c = 1/(2 pi beta):
@@ -308,13 +308,13 @@ def blue_markov_derivative_avar(tau: ArrayLike, alpha: float, beta: float) -> np
 
 
 def blue_markov_derivative_psd(f: ArrayLike, alpha: float, beta: float) -> np.ndarray:
-    """``S = alpha f^2/(beta^2 + f^2)`` (deg/h)^2/Hz; seed 001 Table 7.3."""
+    """``S = alpha f^2/(beta^2 + f^2)`` (deg/h)^2/Hz; Krobka (Allan-graph topology) Table 7.3."""
     f = np.asarray(f, dtype=float)
     return alpha * f**2 / (beta**2 + f**2)
 
 
 def blue_exp_avar(tau: ArrayLike, alpha: float, beta: float, n: float) -> np.ndarray:
-    """Blue family ``S = alpha f^n e^(-beta f)`` (seed 001 Table 7.1(a), Table 7.2).
+    """Blue family ``S = alpha f^n e^(-beta f)`` (Krobka (Allan-graph topology) Table 7.1(a), Table 7.2).
 
     n > 1: ``sigma^2 = alpha Gamma(n-1)/(4 pi^2 tau^2) [6 beta^(1-n) - 8 Re(beta + 2i pi tau)^(1-n)
     + 2 Re(beta + 4i pi tau)^(1-n)]``; n = 1: ``-(alpha/(4 pi^2 tau^2)) [ln(beta^2 + 16 pi^2 tau^2)
@@ -339,13 +339,13 @@ def blue_exp_avar(tau: ArrayLike, alpha: float, beta: float, n: float) -> np.nda
 
 
 def blue_exp_psd(f: ArrayLike, alpha: float, beta: float, n: float) -> np.ndarray:
-    """``S = alpha f^n e^(-beta f)`` (deg/h)^2/Hz; seed 001 Table 7.1(a)."""
+    """``S = alpha f^n e^(-beta f)`` (deg/h)^2/Hz; Krobka (Allan-graph topology) Table 7.1(a)."""
     f = np.asarray(f, dtype=float)
     return alpha * f**n * np.exp(-beta * f)
 
 
 def blue_gauss_avar(tau: ArrayLike, alpha: float, beta: float, n: float) -> np.ndarray:
-    """Blue family ``S = alpha f^n e^(-beta f^2)`` (seed 001 Table 7.1(b), Table 7.2).
+    """Blue family ``S = alpha f^n e^(-beta f^2)`` (Krobka (Allan-graph topology) Table 7.1(b), Table 7.2).
 
     ``sigma^2 = alpha/(4 pi^2 tau^2) beta^((1-n)/2) Gamma((n-1)/2) [3 + 1F1((n-1)/2; 1/2;
     -4 pi^2 tau^2/beta) - 4 1F1((n-1)/2; 1/2; -pi^2 tau^2/beta)]``, n > 1 (1F1: Kummer).
@@ -375,7 +375,7 @@ def blue_gauss_avar(tau: ArrayLike, alpha: float, beta: float, n: float) -> np.n
 
 
 def blue_gauss_psd(f: ArrayLike, alpha: float, beta: float, n: float) -> np.ndarray:
-    """``S = alpha f^n e^(-beta f^2)`` (deg/h)^2/Hz; seed 001 Table 7.1(b)."""
+    """``S = alpha f^n e^(-beta f^2)`` (deg/h)^2/Hz; Krobka (Allan-graph topology) Table 7.1(b)."""
     f = np.asarray(f, dtype=float)
     return alpha * f**n * np.exp(-beta * f**2)
 
@@ -602,7 +602,7 @@ _TERMS_LIST = [
         zero_dc_psd=True,
         slope_short=-1.0,
         slope_long=-1.0,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.6)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.6)",
         psd_formula="(2 pi f)^2 tau0 Q^2, f < 1/(2 tau0)",
         avar_formula="3 Q^2 / tau^2",
         band_edge=lambda tau0=None, **_: None if tau0 is None else 0.5 / tau0,
@@ -626,7 +626,7 @@ _TERMS_LIST = [
         zero_dc_psd=False,
         slope_short=-0.5,
         slope_long=-0.5,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.2)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.2)",
         psd_formula="N^2",
         avar_formula="N^2 / tau",
         notes="N[deg/sqrt(h)] = sigma(1 s)[deg/h] / 60",
@@ -644,7 +644,7 @@ _TERMS_LIST = [
         zero_dc_psd=False,
         slope_short=1.0,
         slope_long=0.0,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.3) (x = pi f0 tau)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.3) (x = pi f0 tau)",
         psd_formula="B^2/(2 pi f), 0 < f <= f0",
         avar_formula=(
             "(2B^2/pi)[ln2 - sin^3x(sin x + 4x cos x)/(2x^2) + Ci(2x) - Ci(4x)], x = pi f0 tau"
@@ -666,7 +666,7 @@ _TERMS_LIST = [
         zero_dc_psd=False,
         slope_short=0.5,
         slope_long=0.5,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.4)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.4)",
         psd_formula="(K/2pi)^2 / f^2",
         avar_formula="K^2 tau / 3",
     ),
@@ -681,7 +681,7 @@ _TERMS_LIST = [
         slope_short=1.0,
         slope_long=1.0,
         deterministic=True,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.5)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.5)",
         psd_formula="R^2/(2 pi f)^3 (formal; eq. 5.1 diverges)",
         avar_formula="R^2 tau^2 / 2",
         notes="sigma(sqrt(2) h) = R; deterministic, not from eq. (5.1)",
@@ -705,7 +705,7 @@ _TERMS_LIST = [
         zero_dc_psd=False,
         slope_short=0.5,
         slope_long=-0.5,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.7)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.7)",
         psd_formula="(q_c T_c)^2 / (1 + (2 pi f T_c)^2)",
         avar_formula="((q_c T_c)^2/tau)[1 - (T_c/2tau)(3 - 4e^(-tau/T_c) + e^(-2tau/T_c))]",
         notes="peak 0.436542 q_c sqrt(T_c) at tau = 1.89262 T_c; long-tau ARW N_eq = q_c T_c",
@@ -724,7 +724,7 @@ _TERMS_LIST = [
         zero_dc_psd=True,
         slope_short=1.0,
         slope_long=-1.0,
-        source="IEEE 952-1997 Annex C; seed 001 eq. (5.8)",
+        source="IEEE 952-1997 Annex C; Krobka (Allan-graph topology) eq. (5.8)",
         psd_formula="lines Omega0^2/4 at +-f0 (total variance Omega0^2/2)",
         avar_formula="Omega0^2 (sin^2(pi f0 tau)/(pi f0 tau))^2",
         notes="first lobe 0.724611 Omega0 at tau = 0.37101/f0; nulls at k/f0",
@@ -742,7 +742,7 @@ _TERMS_LIST = [
         zero_dc_psd=True,
         slope_short=-0.5,
         slope_long=-1.0,
-        source="seed 001 Table 7.3",
+        source="Krobka (Allan-graph topology) Table 7.3",
         psd_formula="alpha f^2 / (beta^2 + f^2)",
         avar_formula="(alpha/(4 beta pi tau^2))(3 - 4 e^(-2 beta pi tau) + e^(-4 beta pi tau))",
     ),
@@ -760,7 +760,7 @@ _TERMS_LIST = [
         zero_dc_psd=True,
         slope_short=1.0,
         slope_long=-1.0,
-        source="seed 001 Table 7.1(a), Table 7.2 (row n=3: 64 pi^4 tau^4, row n=2: 96 alpha)",
+        source="Krobka (Allan-graph topology) Table 7.1(a), Table 7.2 (row n=3: 64 pi^4 tau^4, row n=2: 96 alpha)",
         psd_formula="alpha f^n exp(-beta f)",
         avar_formula=(
             "alpha Gamma(n-1)/(4 pi^2 tau^2)[6 beta^(1-n) - 8 Re(beta+2i pi tau)^(1-n)"
@@ -781,7 +781,7 @@ _TERMS_LIST = [
         zero_dc_psd=True,
         slope_short=1.0,
         slope_long=-1.0,
-        source="seed 001 Table 7.1(b), Table 7.2",
+        source="Krobka (Allan-graph topology) Table 7.1(b), Table 7.2",
         psd_formula="alpha f^n exp(-beta f^2)",
         avar_formula=(
             "alpha/(4 pi^2 tau^2) beta^((1-n)/2) Gamma((n-1)/2)[3 + 1F1((n-1)/2;1/2;-4pi^2tau^2/beta)"
@@ -803,7 +803,7 @@ def get_term(key: str) -> NoiseTerm:
 
 
 def mixture_avar(tau: ArrayLike, components: Iterable[tuple[str, Mapping[str, float]]]) -> np.ndarray:
-    """Allan variance of independent noises: ``sigma^2 = sum sigma_i^2`` (seed 001 eq. (5.9)).
+    """Allan variance of independent noises: ``sigma^2 = sum sigma_i^2`` (Krobka (Allan-graph topology) eq. (5.9)).
 
     ``components`` = [(key, params in reported units), ...].
     """

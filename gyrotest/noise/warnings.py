@@ -1,7 +1,7 @@
 """Krobka's checks: the ways Allan graphs get misread, each turned into a warning with a reason.
 
 Source: N. I. Krobka, "On the topology of the Allan variance graphs and typical misconceptions
-in the interpretations of the gyro noise structure" (ICINS 2015; seed 001), GYRO_REFERENCE §4
+in the interpretations of the gyro noise structure" (ICINS 2015; Krobka (Allan-graph topology)), GYRO_REFERENCE §4
 list 1–8 and notes-allan-topology §2.9 rules 1–16 / §3 M1–M13. Every check has a stable code
 (used in ``--json``), fires on a purpose-built case and stays silent on a clean ARW + bias
 instability + RRW log:
@@ -35,7 +35,7 @@ KROBKA-M6      the model misfits (χ² test or runs beyond 3 CI): the five-slope
                incomplete and unmodelled noise becomes parameter error; the diagnosis names
                the missing term.
 KROBKA-R16     a fitted component exceeds the measured curve beyond its CI (every partial
-               deviation is bounded by the total, seed 001 eq. 5.9).
+               deviation is bounded by the total, Krobka (Allan-graph topology) eq. 5.9).
 =============  ===========================================================================
 """
 
@@ -115,7 +115,7 @@ def local_slopes(tau, sigma, sigma_lo, sigma_hi, *, min_ratio: float = 1.5) -> l
 def _arw_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) -> None:
     N = fit.term("N")
     reason = ("white rate noise is a −½ ray over the whole τ axis through or below the leftmost "
-              "point; a −½ segment elsewhere is usually a Markov tail (Krobka, seed 001 §5–6, "
+              "point; a −½ segment elsewhere is usually a Markov tail (Krobka §5–6, "
               "AIST-100 example: N over-read by one to two orders)")
     N_up = ro.get("N_upper")
     if N is not None and N.coef > 0 and N_up is not None:
@@ -159,7 +159,7 @@ def _bias_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) ->
         return
     reason = ("partial deviations add in quadrature, so the minimum of the graph is shared by "
               "several noises; even with the 1/0.664 factor the zero-slope tangent over-estimates "
-              "B in a mixture (×4 and ×20 in Krobka's simulated mixtures, seed 001 §6 M3/M4)")
+              "B in a mixture (×4 and ×20 in Krobka's simulated mixtures, Krobka (Allan-graph topology) §6 M3/M4)")
     Bv = B.value if B.identified else (B.upper if B.upper is not None else B.value)
     ratio = Bv / Bt
     tmin = ro["allan_floor_tau_s"]
@@ -265,7 +265,7 @@ def _hump_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning],
         "humps at the left of FOG graphs are Markov processes with short correlation time; "
         "they hide the white noise (Optolink OIUS 1000: bound lowered from 3.7e-4 to <1e-6 "
         "deg/√h by moving the hump), while a Markov tail at long τ is indistinguishable from "
-        "ARW (seed 001 §6 M5; notes §8 caveat)",
+        "ARW (Krobka (Allan-graph topology) §6 M5; notes §8 caveat)",
         {"N_leftmost": n_left, "N_fit": n_white, "N_eq": n_eq,
          "hump_tau_s": None if hump is None else [float(fit.tau[i]) for i in hump]}))
 
@@ -318,7 +318,7 @@ def _minus_one_checks(fit: NoiseFit, out: list[KrobkaWarning], quantum_arcsec: f
             "stationary angle error. For strapdown use the spectral shape matters (see the PSD "
             "and the impact section)." + extra,
             "σ(τ) → √3·σ_θ/τ for any noise with S(0) = 0 and ∫S/f² < ∞ (notes-allan-topology §2.9 "
-            "rule 12; seed 001 Table 7.2/7.3)", ev, severity=sev))
+            "rule 12; Krobka (Allan-graph topology) Table 7.2/7.3)", ev, severity=sev))
 
 
 def _cluster_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
@@ -334,7 +334,7 @@ def _cluster_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
         "confidence intervals blow up) and are plotted but not fitted. Conclusions about slopes "
         "there (K, R, B plateau) need a longer record",
         "the reliability of σ(τ) falls with the number of clusters; do not fit where the CI "
-        "blows up (seed 001 footnote on σ(ΔT)-graphs; notes M12)",
+        "blows up (Krobka (Allan-graph topology) footnote on σ(ΔT)-graphs; notes M12)",
         {"fit_range_s": [lo, hi], "excluded_tau_s": t.tolist(),
          "excluded_edf": fit.edf[dropped].tolist()}))
 
@@ -378,7 +378,7 @@ def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=Non
         "model) and compare",
         "the Allan variance is a mean square, not a variance: deterministic signals contribute; "
         "the Allan–Krobka dispersion subtracts the squared mean difference and the Hadamard "
-        "variance is blind to a ramp (seed 001 §5, eq. 5.10; notes M7)",
+        "variance is blind to a ramp (Krobka (Allan-graph topology) §5, eq. 5.10; notes M7)",
         {"rows": rows, "ramp_estimate_deg_h_per_h": R_est,
          "rrw_trend_3sigma_deg_h_per_h": R_rrw}))
 
@@ -398,7 +398,7 @@ def _misfit_checks(fit: NoiseFit, out: list[KrobkaWarning], diagnosis=None) -> N
         "model that misfits absorb the missing noise: do not quote them without the "
         "residuals." + sug,
         "the five-slope IEEE basis is incomplete; unmodelled noises turn into parameter error "
-        "(seed 001 §6 example 3; notes M6)",
+        "(Krobka (Allan-graph topology) §6 example 3; notes M6)",
         {"chi2_per_dof": fit.chi2_dof, "p_value": fit.p_value}))
 
 
@@ -420,7 +420,7 @@ def _component_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
                 f"{t.text()} alone is above the measured σ at τ = {_g(fit.tau[k])} s by "
                 f"{ex[k]:.1f} CI: the fit traded it against another term; treat it as an upper "
                 "bound", "every partial deviation is bounded by the total, σ_i(τ) ≤ σ_Σ(τ) "
-                "(seed 001 eq. 5.9; notes §2.9 rule 16)",
+                "(Krobka (Allan-graph topology) eq. 5.9; notes §2.9 rule 16)",
                 {"term": t.label, "tau_s": float(fit.tau[k]), "excess_ci": float(ex[k])}))
 
 

@@ -666,7 +666,7 @@ class Builder:
         ]
         if "N_upper" in ro:
             lines.append(
-                "Graph read-offs for comparison (Krobka, seed 001): "
+                "Graph read-offs for comparison (Krobka): "
                 f"N_upper = min σ√τ/60 = {s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
                 f" (ray through the leftmost point); B_tangent = σ_min/0.664 = "
                 f"{s.t(base + ['slope_readoffs', 'B_tangent'], U_DPH)} (an upper bound "

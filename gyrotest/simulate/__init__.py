@@ -63,7 +63,7 @@ in the key names or listed here; durations accept seconds or strings like ``"40m
     amplitude_dph = 0.05
     freq_hz = 0.2
     phase_deg = 0.0               # default random
-    [[gyro.noise.blue]]           # Krobka's S(0) = 0 families (seed 001 Tables 7.1-7.3)
+    [[gyro.noise.blue]]           # Krobka's S(0) = 0 families (Krobka (Allan-graph topology) Tables 7.1-7.3)
     family = "blue_markov_derivative"   # alpha f^2/(beta^2+f^2); or blue_exp (alpha f^n e^-beta f),
     alpha = 1e-4                        # blue_gauss (alpha f^n e^-beta f^2) with n = ...
     beta = 0.5
@@ -105,7 +105,7 @@ in the key names or listed here; durations accept seconds or strings like ``"40m
     sine_period_s = 3600
     columns = ["Hx_uT", "Hy_uT", "Hz_uT"]   # [] = not recorded
     [environment.field.helmholtz] # 0 -> +300 -> -300 -> 0 uT per axis, one axis at a time
-    axes = ["x", "y", "z"]        # (seed 002 defaults: step 50 uT, max 300 uT, 180 s per level)
+    axes = ["x", "y", "z"]        # (Antonova & Matveev defaults: step 50 uT, max 300 uT, 180 s per level)
     step_uT = 50
     max_uT = 300
     dwell_s = 180

@@ -687,7 +687,8 @@ def _truth(sc, seed, run, n, tau0, tm, t_end, sf_off, bias_off, ntruth, pos, tab
                      w_dV=term.D_Tdot,
                      units={"w0": "deg/h", "w1": "deg/(h degC)", "w2": "deg/(h degC^2)",
                             "w_dV": "deg/degC = (deg/h)/(degC/h)"},
-                     source="Antonova & Matveev (seed 002), GYRO_REFERENCE §6")
+                     source="Antonova & Matveev, 'Model of error of a fiber-optic gyro "
+                            "exposed to thermal and magnetic fields'")
         therm.append(d)
     truth["thermal"] = therm
     if sc.field is not None:

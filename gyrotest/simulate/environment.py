@@ -275,7 +275,7 @@ def table_schedule(spec: RateTableSpec, tm: np.ndarray) -> TableSchedule:
 
 
 def helmholtz_levels(h: HelmholtzSpec) -> list[float]:
-    """0 -> +max -> -max -> 0 in steps (Antonova & Matveev, seed 002): 0, 50, ..., 300, 250,
+    """0 -> +max -> -max -> 0 in steps (Antonova & Matveev, Antonova & Matveev): 0, 50, ..., 300, 250,
     ..., -300, -250, ..., 0 uT for step 50, max 300 (25 levels)."""
     k = int(round(h.max_uT / h.step_uT))
     up = [i * h.step_uT for i in range(0, k + 1)]

@@ -24,7 +24,7 @@ from scipy import signal
 def white_rate(rng: np.random.Generator, n: int, tau0: float, N: float) -> np.ndarray:
     """ARW: white rate, PSD S = N^2 -> interval averages are iid N(0, N^2/tau0).
 
-    sigma^2(tau) = N^2/tau exactly (IEEE 952 Annex C, seed 001 eq. 5.2).
+    sigma^2(tau) = N^2/tau exactly (IEEE 952 Annex C, Krobka (Allan-graph topology) eq. 5.2).
     """
     return rng.standard_normal(n) * (N / math.sqrt(tau0))
 
@@ -98,7 +98,7 @@ def markov_rate(rng: np.random.Generator, n: int, tau0: float, q_c: float, T_c: 
 
 def markov_derivative_rate(rng: np.random.Generator, n: int, tau0: float, alpha: float,
                            beta: float) -> np.ndarray:
-    """Blue noise S = alpha f^2/(beta^2 + f^2) (seed 001 Table 7.3), exactly.
+    """Blue noise S = alpha f^2/(beta^2 + f^2) (Krobka (Allan-graph topology) Table 7.3), exactly.
 
     It is white noise w (PSD alpha) minus its first-order low-pass y (T_c = 1/(2 pi beta)),
     i.e. Omega = T_c dy/dt; interval average = T_c (y_k - y_(k-1))/tau0 with y the exact

@@ -24,10 +24,11 @@ BLUE_FAMILIES = ("blue_markov_derivative", "blue_exp", "blue_gauss")
 THERMAL_KINDS = ("poly", "rate", "gradient_rate", "hysteresis", "antonova-matveev")
 SEGMENT_KINDS = ("hold", "ramp", "step", "staircase", "sine")
 
-#: Antonova & Matveev (seed 002, GYRO_REFERENCE §6): FOG drift vs ambient temperature,
+#: Antonova & Matveev, "Model of error of a fiber-optic gyro exposed to thermal and magnetic
+#: fields": FOG drift vs ambient temperature,
 #: Delta-omega = w0 + w1 dT + w2 dT^2 + w_dV dT/dt, dT from t0 = 21 degC, dT/dt in degC/h.
 ANTONOVA_MATVEEV = {"w0": 1.197, "w1": 0.108, "w2": 0.004, "w_dV": 1.997, "t0_c": 21.0}
-#: Antonova & Matveev Helmholtz-coil test (seed 002): 0 -> +300 -> -300 -> 0 uT in 50 uT
+#: Antonova & Matveev Helmholtz-coil test (Antonova & Matveev): 0 -> +300 -> -300 -> 0 uT in 50 uT
 #: steps, 180 s per level, one axis at a time.
 HELMHOLTZ_DEFAULT = {"step_uT": 50.0, "max_uT": 300.0, "dwell_s": 180.0}
 

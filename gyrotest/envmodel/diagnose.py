@@ -62,6 +62,7 @@ import numpy as np
 
 from ..errors import AnalysisError, InputError
 from . import stats as st
+from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .prepare import prepare_log
@@ -385,13 +386,11 @@ def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
         except (InputError, ValueError, KeyError):
             out.append(c)
             continue
-        xc = x - x.mean(axis=0)
-        tot = float(np.sum(xc * xc))
-        if tot <= 0:
-            continue
-        b, rss = st.lstsq(X, x[:, 0]) if x.shape[1] == 1 else (None, tot)
-        if x.shape[1] == 1 and rss < 1e-6 * tot:
-            continue
+        if x.shape[1] == 1:
+            xc = x[:, 0] - x[:, 0].mean()
+            tot = float(xc @ xc)
+            if tot <= 0 or st.lstsq(X, x[:, 0])[1] < 1e-6 * tot:
+                continue
         out.append(c)
     return out
 
@@ -445,8 +444,6 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     sig = (strict or clear) and rejected is None
     route = ("strict" if strict else "clear gain") if sig else None
     coefs = [c2.to_dict() for c2 in r.coefficients if c2.term == c.label]
-    from .channel_terms import custom_text
-
     try:
         custom = custom_text(c, theta, wd.frame)
     except InputError:

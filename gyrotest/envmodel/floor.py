@@ -62,10 +62,8 @@ def _fit_allan(tau: np.ndarray, sig: np.ndarray, duration_s: float, cols: list[s
     """Non-negative LS of σ²(τ) on the named columns (``quant`` 1/τ², ``white`` 1/τ,
     ``flicker`` 1, ``rw`` τ/3, ``drift`` τ²), each point weighted by its relative precision
     (σ²(τ)·√(2/ν), ν ≈ T/τ degrees of freedom)."""
-    funcs = {"quant": 1.0 / tau ** 2, "white": 1.0 / tau, "flicker": np.ones_like(tau),
-             "rw": tau / 3.0, "step": tau, "drift": tau ** 2}
     w = 1.0 / _se(tau, sig, duration_s)
-    A = np.column_stack([funcs[c] for c in cols]) * w[:, None]
+    A = _columns(tau, cols) * w[:, None]
     scale = np.sqrt(np.sum(A * A, axis=0))
     scale[scale == 0] = 1.0
     coef, _ = optimize.nnls(A / scale, sig ** 2 * w)
@@ -80,10 +78,23 @@ def _se(tau: np.ndarray, sig: np.ndarray, duration_s: float) -> np.ndarray:
     return sig ** 2 * np.sqrt(2.0 / nu)
 
 
+def _columns(tau: np.ndarray, cols) -> np.ndarray:
+    """The σ²(τ) shapes of the noise and nuisance terms, one column each."""
+    shape = {"quant": lambda t: 1.0 / t ** 2, "white": lambda t: 1.0 / t,
+             "flicker": np.ones_like, "rw": lambda t: t / 3.0, "step": lambda t: t,
+             "drift": lambda t: t ** 2}
+    return np.column_stack([shape[c](tau) for c in cols])
+
+
+def _cov(tau: np.ndarray, sig: np.ndarray, duration_s: float, cols, se_factor: float = 1.0
+         ) -> np.ndarray:
+    """Covariance of the weighted least-squares coefficients of :func:`_fit_allan`."""
+    A = _columns(tau, cols) / (se_factor * _se(tau, sig, duration_s))[:, None]
+    return np.linalg.pinv(A.T @ A)
+
+
 def _model(c: dict[str, float], tau: np.ndarray) -> np.ndarray:
-    funcs = {"quant": 1.0 / tau ** 2, "white": 1.0 / tau, "flicker": np.ones_like(tau),
-             "rw": tau / 3.0, "step": tau, "drift": tau ** 2}
-    return sum(v * funcs[k] for k, v in c.items())
+    return _columns(tau, list(c)) @ np.array(list(c.values()))
 
 
 def fit_noise_range(tau: np.ndarray, sig: np.ndarray, duration_s: float,
@@ -107,7 +118,7 @@ def fit_noise_range(tau: np.ndarray, sig: np.ndarray, duration_s: float,
     return best, k
 
 
-def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: float,
+def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float,
                   se_factor: float = 1.0) -> tuple[float, float, tuple[float, float]]:
     """White N and flicker B of a rate from its Allan curve without being misled by slow
     environmental stimuli.
@@ -120,9 +131,9 @@ def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: 
     over white noise seen at any τ, min_τ [σ²(τ) − N²/τ + SE(τ)/2]₊ (anything environmental
     only adds to it). Flicker whose plateau is reached only where the environment already
     dominates cannot be told from it in one record: give a static reference run
-    (:func:`reference_floor`). ``se_factor`` scales the
-    standard errors (1.2 for the trimmed deviation of :func:`robust_avar`). Returns (N (deg/h)·√s, B deg/h, (last τ of the fit, last τ
-    searched))."""
+    (:func:`reference_floor`). ``se_factor`` scales the standard errors (1.2 for the
+    trimmed deviation of :func:`robust_avar`). Returns (N (deg/h)·√s, B deg/h, (last τ of
+    the fit, last τ searched))."""
     keep = tau <= duration_s / 8.0
     if keep.sum() < 3:
         keep = np.arange(len(tau)) < 3
@@ -132,20 +143,13 @@ def white_flicker(tau: np.ndarray, sig: np.ndarray, duration_s: float, t_eff_s: 
     N = math.sqrt(cw["white"])
     B2 = 0.0
     t_lo = t_hi = float(tau[kw - 1])
-    for cols in (("white", "flicker", "step"),):
-        c, k = fit_noise_range(tau, sig, duration_s, cols=cols, z_max=3.0,
-                               se_factor=se_factor)
-        if not (c["flicker"] > 0 and k >= 4):
-            continue
-        A = np.column_stack([{"white": 1.0 / tau[:k], "flicker": np.ones(k),
-                              "step": tau[:k]}[col] for col in cols])
-        w = 1.0 / (se_factor * _se(tau[:k], sig[:k], duration_s))
-        cov = np.linalg.pinv((A * w[:, None]).T @ (A * w[:, None]))
-        if not c["flicker"] > 2.0 * math.sqrt(max(cov[1, 1], 0.0)):
-            continue
-        N, B2 = math.sqrt(c["white"]), c["flicker"]
-        t_lo = t_hi = float(tau[k - 1])
-        break
+    cols = ("white", "flicker", "step")
+    c, k = fit_noise_range(tau, sig, duration_s, cols=cols, z_max=3.0, se_factor=se_factor)
+    if c["flicker"] > 0 and k >= 4:
+        cov = _cov(tau[:k], sig[:k], duration_s, cols, se_factor)
+        if c["flicker"] > 2.0 * math.sqrt(max(cov[1, 1], 0.0)):
+            N, B2 = math.sqrt(c["white"]), c["flicker"]
+            t_lo = t_hi = float(tau[k - 1])
     sel = tau >= 2.0 * tau[0]
     if sel.any() and B2 > 0:
         ex = (sig[sel] ** 2 - N * N / tau[sel]
@@ -230,7 +234,7 @@ def model_free_floor(wd) -> st.NoiseFloor:
     if len(tau) < 3:
         return st.NoiseFloor(float("nan"), float("nan"), float("nan"), (0.0, 0.0),
                              "record too short for an Allan estimate of the noise")
-    N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, t_eff, se_factor=1.2)
+    N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, se_factor=1.2)
     B = B_h / math.sqrt(HADAMARD_FLICKER)
     rms = floor_rms(N, B, 0.0, t_eff, wd.duration_s)
     basis = (f"white and flicker noise of the raw rate (robust Hadamard deviation over τ = "
@@ -260,9 +264,7 @@ def reference_floor(ref_log, wd, axis: str | None = None) -> st.NoiseFloor:
     cols = ["white", "flicker", "rw"]
     while True:  # keep only the noise terms the reference detects (> 2 standard errors)
         c = _fit_allan(tau, sig, dur, cols)
-        funcs = {"white": 1.0 / tau, "flicker": np.ones_like(tau), "rw": tau / 3.0}
-        A = np.column_stack([funcs[k] for k in cols]) / _se(tau, sig, dur)[:, None]
-        cov = np.linalg.pinv(A.T @ A)
+        cov = _cov(tau, sig, dur, cols)
         weak = [k for i, k in enumerate(cols) if k != "white"
                 and not c[k] > 2.0 * math.sqrt(max(cov[i, i], 0.0))]
         if not weak:

@@ -193,3 +193,9 @@ def test_diagnose_reference_floor_and_bad_reference(logs, tmp_path):
         "--reference", "static_dps.csv", "rate unit")
     run_cli(common + ["--reference", str(tmp_path / "nope.csv")]).assert_clean_error(
         "--reference", "nope.csv")
+
+
+def test_generic_channel_term_naming_a_missing_column(logs):
+    log, prof = logs["rate1"]
+    run_cli(["model", "diagnose", log, "--profile", prof, "--terms", "chan(nope)"]
+            ).assert_clean_error("chan(nope)", "no channel 'nope'")

@@ -803,7 +803,10 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
             if len(chans) != n_need:
                 raise InputError(f"term {label!r}: name {'two channels' if n_need == 2 else 'the channel'}"
                                  f", e.g. {sp.key}({'a,b' if n_need == 2 else 'RH_pct'})")
-            vals = [find_channel(frame, c)[1] for c in chans]
+            try:
+                vals = [find_channel(frame, c)[1] for c in chans]
+            except InputError as err:
+                raise InputError(f"term {label!r}: {err}") from None
             for c, v in zip(chans, vals):
                 _check_channel(v, f"term {label!r}", c, src,
                                constant_ok=sp.key in ("dchan", "dchanlag"))

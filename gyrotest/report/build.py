@@ -927,9 +927,20 @@ class Builder:
                       title=f"Successive 'gyrotest model fit' steps on "
                             f"{Path(steps[0].argv[2]).name}", unit_in_header=True,
                       widths=[3.0, 1.7, 1.0, 1.2, 1.4, 1.3, 1.2], key="history"))
+        last = steps[-1].result
+        ho = last.get("rms_holdout_dph")
+        fl = (last.get("noise_floor") or {}).get("rms_dph")
+        end = ""
+        if isinstance(ho, (int, float)) and isinstance(fl, (int, float)) and fl > 0:
+            r = ho / fl
+            end = (f" The last step's held-out RMS is {r:.2g}× the noise floor (fixed for the "
+                   "log, from its short-τ noise): "
+                   + ("the model has reached the floor." if r <= 1.1 else
+                      "drift remains that these terms do not explain; 'gyrotest model "
+                      "diagnose' tries every candidate term on it."))
         sec.add(P("Each step adds a physical term; the held-out RMS (blocked cross-"
                      "validation) falls while the term explains real drift and stops falling "
-                     "at the noise floor."))
+                     "at the noise floor." + end))
         fig = self.draw("history", lambda: _fig("history_figure",
                                                 ad.history_steps(steps)))
         self.figure(sec, fig, "Model history of the thermal run: residual RMS (fit, held-out, "

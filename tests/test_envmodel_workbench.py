@@ -183,3 +183,12 @@ def test_reference_floor_and_bad_reference(prepared):
     coarse = make_log(0.3 * rng.normal(size=400), 10.0, source="slow.csv")
     with pytest.raises(InputError, match="slow.csv: sampled every 10 s"):
         check_reference(coarse, c.log, wd, reference_floor(coarse, wd))
+
+
+def test_acceleration_names_do_not_catch_gyro_axes():
+    from gyrotest.envmodel.terms import _G_PATTERN
+
+    for name in ("gx", "g_y", "acc_x", "accel_z", "acc_ia_g", "ax_g", "g"):
+        assert _G_PATTERN.search(name), name
+    for name in ("gyro_y_dps", "gyro_x", "tilt_x", "T_amb"):
+        assert not _G_PATTERN.search(name), name

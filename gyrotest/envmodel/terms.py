@@ -711,7 +711,7 @@ def parse_terms(texts: list[str] | str | None) -> list[TermSpec]:
     return out
 
 
-_G_PATTERN = re.compile(r"^(acc|accel|g|a)([_xyz]|$)|_g$", re.I)
+_G_PATTERN = re.compile(r"^(acc|accel|a|g)(_?[xyz])?(_.*)?$|_g$", re.I)  # not gyro_y_dps
 
 
 def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:

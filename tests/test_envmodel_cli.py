@@ -199,3 +199,27 @@ def test_generic_channel_term_naming_a_missing_column(logs):
     log, prof = logs["rate1"]
     run_cli(["model", "diagnose", log, "--profile", prof, "--terms", "chan(nope)"]
             ).assert_clean_error("chan(nope)", "no channel 'nope'")
+
+
+def test_thermal_and_mag_fit_reference_floor(logs, tmp_path):
+    """thermal-fit and mag-fit take --reference like model fit/diagnose: the static run's noise
+    is the floor stated in the JSON; a reference without a chamber log is a one-line exit 2."""
+    rng = np.random.default_rng(9)
+    good = tmp_path / "static.csv"
+    with open(good, "w") as fh:
+        fh.write("t_s,omega_dph\n")
+        for i in range(20000):
+            fh.write(f"{i * 0.5:.1f},{0.42 * rng.standard_normal():.6f}\n")
+    log, prof = logs["rate1"]
+    r = run_cli(["thermal-fit", log, "--profile", prof, "--reference", str(good), "--json"])
+    assert r.code == 0, r.err
+    am = json.loads(r.out)["chamber"]["am_fit"]
+    assert "static.csv" in json.dumps(am["noise_floor"])
+    log, prof = logs["mag"]
+    r = run_cli(["mag-fit", log, "--profile", prof, "--reference", str(good), "--json"])
+    assert r.code == 0, r.err
+    assert "static.csv" in json.dumps(json.loads(r.out)["fit"]["noise_floor"])
+    sp = tmp_path / "sp.csv"
+    sp.write_text("temperature,dw\n31,0.49\n40,0.50\n55,1.56\n")
+    run_cli(["thermal-fit", "--setpoints", sp, "--reference", str(good)]).assert_clean_error(
+        "--reference", "chamber log")

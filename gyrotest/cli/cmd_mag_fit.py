@@ -5,7 +5,13 @@ from __future__ import annotations
 import click
 
 from ..units import parse_duration
-from .cmd_model import check_output, domain_fit_options, render_fit, write_plot
+from .cmd_model import (
+    check_output,
+    domain_fit_options,
+    load_reference,
+    render_fit,
+    write_plot,
+)
 from .common import (
     console,
     emit_json,
@@ -31,8 +37,8 @@ from .common import (
 @ingest_options
 @json_option
 @with_ingest
-def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, folds, output,
-            plot_path, as_json, ingest_opts):
+def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, folds, reference,
+            output, plot_path, as_json, ingest_opts):
     """Magnetic model dw = w0 + wx·Hx/H0 + wy·Hy/H0 + wz·Hz/H0 (H0 = 100 µT).
 
     From a Helmholtz-coil sequence (levels stepped one axis at a time; plateaus and axes are
@@ -56,8 +62,10 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
     settle_s = parse_duration(settle, what="--settle")
     dwell_s = parse_duration(min_dwell, what="--min-dwell")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
+    ref = load_reference(reference, ingest_opts, as_json)
     mg = analyse_mag(g, path=log, with_terms=with_terms, settle_s=settle_s, min_dwell_s=dwell_s,
-                     axis=axis, skip=skip, resolution=resolution, smooth=smooth, folds=folds)
+                     axis=axis, skip=skip, resolution=resolution, smooth=smooth, folds=folds,
+                     reference=ref)
     if out_path:
         mg.fit.model.save(out_path)
     if plot_path:

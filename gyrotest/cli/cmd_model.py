@@ -62,7 +62,7 @@ def prep_options(f):
 
 def domain_fit_options(*, smooth_help: str, plot_help: str):
     """The log-preparation, model-file and plot options of ``thermal-fit`` and ``mag-fit``
-    (``--axis --skip --resolution --smooth --folds -o --plot``)."""
+    (``--axis --skip --resolution --smooth --folds --reference -o --plot``)."""
     opts = [
         click.option("--axis", default=None, help="Gyro axis (rate column); default the first."),
         click.option("--skip", default="0", show_default=True, help="Drop the start of the log."),
@@ -71,6 +71,10 @@ def domain_fit_options(*, smooth_help: str, plot_help: str):
         click.option("--smooth", default="auto", show_default=True, help=smooth_help),
         click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
                      help="Folds of the blocked cross-validation."),
+        click.option("--reference", default=None, metavar="LOG",
+                     help="Static reference run of the same gyro: its noise gives the floor the "
+                          "held-out RMS is judged against. Default: the log's own short-tau "
+                          "noise."),
         click.option("-o", "--output", default=None,
                      help="Write the fitted model (.json/.toml) for 'gyrotest compensate'."),
         plot_option(plot_help),

@@ -7,7 +7,13 @@ import math
 import click
 
 from ..errors import InputError
-from .cmd_model import check_output, domain_fit_options, render_fit, write_plot
+from .cmd_model import (
+    check_output,
+    domain_fit_options,
+    load_reference,
+    render_fit,
+    write_plot,
+)
 from .common import (
     console,
     emit_json,
@@ -52,7 +58,7 @@ def _coef_table(title, coefs):
 @json_option
 @with_ingest
 def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resolution, smooth,
-            folds, output, plot_path, as_json, ingest_opts):
+            folds, reference, output, plot_path, as_json, ingest_opts):
     """Thermal drift model of Antonova & Matveev: dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt.
 
     From a continuous chamber run LOG (ΔT = T − t0, dT/dt in degC/h; w0 deg/h, w1 deg/(h·degC),
@@ -82,12 +88,16 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
 
         check_plot_path(plot_path)
     parse_gradient(gradient)  # a bad --gradient fails before the log is read
-    g = None
+    g = ref = None
     if log is not None:
         g = load_for_terms(log, ingest_opts, thermal_terms(), announce=not as_json)
+        ref = load_reference(reference, ingest_opts, as_json)
+    elif reference:
+        raise InputError("--reference needs a chamber log (it sets the noise floor of the "
+                         "chamber-run fit)")
     ta = analyse_thermal(g, path=log, setpoints=setpoints, t0_c=t0, sensor=sensor,
                          gradient=gradient, weighted=weighted, axis=axis, skip=skip,
-                         resolution=resolution, smooth=smooth, folds=folds)
+                         resolution=resolution, smooth=smooth, folds=folds, reference=ref)
     th, sp = ta.chamber, ta.setpoints
     if th and out_path:
         th.am.model.save(out_path)

@@ -552,12 +552,13 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
                     gradient: str | list[str] | tuple[str, ...] | None = None,
                     weighted: bool = False, axis: str | None = None, skip: str | float = "0",
                     resolution: str | None = "auto", smooth: str | None = "auto",
-                    folds: int = 5) -> ThermalAnalysis:
+                    folds: int = 5, reference=None) -> ThermalAnalysis:
     """The analysis of ``gyrotest thermal-fit``: the set-point table ``setpoints``
     (:func:`read_setpoints`, :func:`thermal_fit_setpoints`) and/or the chamber run ``log``
     (a :class:`~gyrotest.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
     (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
-    ``smooth`` options as typed), then :func:`thermal_fit`."""
+    ``smooth`` options as typed), then :func:`thermal_fit`. ``reference``: a static reference
+    log of the same gyro whose noise gives the floor (:func:`gyrotest.envmodel.floor.reference_floor`)."""
     check_thermal_input(log is not None, setpoints)
     grad = parse_gradient(gradient)
     sp = th = None
@@ -570,7 +571,7 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
             raise InputError(f"{log.source}: thermal-fit needs a temperature channel; name it "
                              "with --temp-col")
         wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t0_c, resolution=resolution,
-                         smooth=smooth)
+                         smooth=smooth, reference=reference)
         th = thermal_fit(wd, sensor=sensor, gradient=grad, folds=folds)
     return ThermalAnalysis(th, sp)
 
@@ -591,14 +592,16 @@ def mag_document(result: MagResult, *, model_file: str | None = None) -> dict:
 def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,
                 settle_s: float = 10.0, min_dwell_s: float = 30.0, axis: str | None = None,
                 skip: str | float = "0", resolution: str | None = "auto",
-                smooth: str | None = "auto", folds: int = 5) -> MagResult:
+                smooth: str | None = "auto", folds: int = 5, reference=None) -> MagResult:
     """The analysis of ``gyrotest mag-fit``: ``log`` (read from ``path``) needs three field
     channels; prepared (:func:`gyrotest.envmodel.prepare.prepare_log`), then :func:`mag_fit`
-    with the ``--with`` terms ``with_terms`` (comma-separated)."""
+    with the ``--with`` terms ``with_terms`` (comma-separated); ``reference`` as in
+    :func:`analyse_thermal`."""
     extra, _ = mag_terms(with_terms)
     if len(log.field_uT) < 3:
         raise InputError(f"terms Hx, Hy, Hz: {log.source} has {len(log.field_uT)} magnetic-field "
                          "channel(s); name X, Y, Z with --field-cols")
-    wd = prepare_log(log, path, axis=axis, skip=skip, resolution=resolution, smooth=smooth)
+    wd = prepare_log(log, path, axis=axis, skip=skip, resolution=resolution, smooth=smooth,
+                     reference=reference)
     return mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=min_dwell_s,
                    folds=folds)

@@ -55,11 +55,54 @@ from .sheet import (
     Equation,
     Figure,
     Num,
+    Para,
     Section,
     Sheet,
+    Table,
     fmt_number,
+    verdict_rule,
 )
 
+VARIANTS = ("customer", "engineering")
+#: sheet names of the f(I) terms: named by their power of u = I/FS in f(I) and by the order
+#: of the nonlinearity they make in the output I·f(I)
+F_OF_I_NAMES = {"quadratic": "u¹ (quadratic in the output)",
+                "cubic": "u² (cubic in the output)",
+                "quartic": "u³ (quartic in the output)",
+                "quintic": "u⁴ (quintic in the output)",
+                "asymmetry": "A (asymmetry step)", "periodic": "periodic",
+                "lockin": "lock-in"}
+
+
+def asymmetry_explanation(r: dict) -> str:
+    """One explanation for the two asymmetry numbers: the IEEE straight-line asymmetry and the
+    model's A. The u¹ term of f(I) also makes |SF+| ≠ |SF−| (by 2·c1·|I|/FS at rate I), so at
+    full scale the straight-line asymmetry approaches A − 2·c1."""
+    asy = r.get("asymmetry", {})
+    coefs = {c["term"]: c for c in r.get("nonlinearity_model", {}).get("coefficients", [])}
+    if asy.get("status") != "ok" or "asymmetry" not in coefs:
+        return ""
+    A = coefs["asymmetry"]["coefficient_ppm"]
+    c1 = coefs.get("quadratic", {}).get("coefficient_ppm", 0.0) or 0.0
+    ieee = asy["asymmetry_ppm"]
+    txt = (f"Two asymmetry numbers, one explanation: the IEEE 952 asymmetry "
+           f"({fmt_number(ieee, 4)} ppm, §5.3.2.1 b) compares straight lines fitted to the "
+           f"positive and the negative rates; A ({fmt_number(A, 4)} ppm) is only the "
+           "rate-independent step of the model. The u¹ term of f(I) (quadratic in the "
+           f"output, c1 = {fmt_number(c1, 4)} ppm) also makes |SF+| differ from |SF−|, by "
+           "2·c1·|I|/FS at rate I")
+    per = asy.get("per_rate") or []
+    if per and c1:
+        top = max(per, key=lambda x: x["rate_dps"])
+        fs = r.get("full_scale_dps") or top["rate_dps"]
+        pred = A - 2 * c1 * top["rate_dps"] / fs
+        txt += (f": at {fmt_number(top['rate_dps'])} °/s the model gives A − 2·c1·|I|/FS = "
+                f"{fmt_number(pred, 4)} ppm and the data {fmt_number(top['asymmetry_ppm'], 4)}"
+                " ppm. The straight-line fits are dominated by the highest rates, so the IEEE "
+                "number lies near the full-scale value.")
+    else:
+        txt += "."
+    return txt
 SF_UNIT_TEXT = {"arcsec/pulse": "arcsec/pulse", "(deg/h)/V": "(°/h)/V", "1": ""}
 
 
@@ -114,10 +157,15 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
 class Builder(DriftSections, EnvironmentSections, LabSections):
     """Builds the sections of one sheet."""
 
-    def __init__(self, campaign: Campaign, analyses: dict[str, ad.Analysis], figures: bool):
+    def __init__(self, campaign: Campaign, analyses: dict[str, ad.Analysis], figures: bool,
+                 variant: str = "customer"):
         self.c = campaign
         self.an = analyses
         self.figures_on = figures
+        self.variant = variant
+        self.eng = variant == "engineering"  # diagnostics, algorithm notes, warnings
+        self.rule = campaign.decision.get("rule", "guard-band")
+        self.k = float(campaign.decision.get("coverage_factor", 2.0))
         self.checks: list[Check] = []
         self.figures: list[Figure] = []
         self.warnings: list[dict[str, str]] = []
@@ -131,9 +179,14 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         t = self.c.tests.get(test)
         lim = t.limits.get(key) if t else None
         u = unit if unit is not None else LIMITS.get(test, {}).get(key, ("", ""))[1]
-        ch = Check(f"{test}.{key}", label, ieee, measured, lim, u, section)
+        ch = Check(f"{test}.{key}", label, ieee, measured, lim, u, section, self.rule, self.k)
         self.checks.append(ch)
         return ch
+
+    def eng_only(self, sec: Section, *blocks) -> None:
+        """Add blocks (algorithm notes, diagnostics) to the engineering sheet only."""
+        if self.eng:
+            sec.add(*blocks)
 
     def figure(self, section: Section, fig: Figure | None, caption: str) -> None:
         """Number, caption and attach a figure."""
@@ -174,7 +227,7 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
 
     # ---------------------------------------------------------------- sections
     def build(self) -> Sheet:
-        """The whole sheet."""
+        """The whole sheet (customer or engineering variant)."""
         sec_model = Section("1", "Model equation", "§8.3")
         sec_sf = self.scale_factor(Section("2", "Scale factor", "§5.3.2"))
         sec_drift = self.drift(Section("3", "Drift rate: bias and random drift", "§5.3.3.1"))
@@ -182,13 +235,50 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                                            "§5.3.3.2, §8.3"))
         sec_ia = self.alignment(Section("5", "IA alignment", "§5.3.4"))
         self.model_equation(sec_model)  # after the others: it substitutes their numbers
-        sec_cond = self.conditions(Section("6", "Test conditions and reproducibility"))
+        sec_cond = self.conditions(Section("6", "Test conditions, equipment and traceability"))
         self.identity_checks()
-        sec_warn = self.warnings_section(Section("7", "Warnings raised by the analyses"))
-        sec_comp = self.compliance(Section("8", "Compliance with the spec limits"))
-        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, sec_cond, sec_warn, sec_comp]
+        self.equipment_checks()
+        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, sec_cond]
+        n = len(sections)
+        if self.eng:
+            n += 1
+            sections.append(self.warnings_section(Section(str(n), "Warnings raised by the "
+                                                                  "analyses")))
+        sections.append(self.compliance(Section(str(n + 1), "Compliance with the spec limits")))
+        sections.append(self.references(Section(str(n + 2), "References")))
+        sections.append(self.revision_history(Section(str(n + 3), "Revision history")))
+        sections.append(self.approval(Section(str(n + 4), "Approval")))
         g = self.c.gyro
         title = f"{g['model']} s/n {g['serial']}: gyro specification sheet"
+        if self.eng:
+            title += " (engineering report)"
+        ident = self.identity()
+        prov = {
+            "gyrotest_version": __version__,
+            "variant": self.variant,
+            "campaign": {"file": str(self.c.path), "name": self.c.path.name,
+                         "sha256": self.c.sha256},
+            "inputs": self.input_files(),
+            "commands": [a.to_dict() for a in self.an.values()],
+            "working_directory": "paths in the commands are relative to the campaign file's "
+                                 "directory; run them there",
+            "options": self.c.to_dict()["tests"],
+            "timing_s": self.timing,
+        }
+        logo = self.c.lab.get("logo")
+        sheet = Sheet(title=title, identity=ident, sections=sections, checks=self.checks,
+                      figures=self.figures, warnings=self.warnings, provenance=prov,
+                      header=f"{g['model']} s/n {g['serial']}", notes=self.c.meta.get("notes", ""),
+                      variant=self.variant, rule_text=verdict_rule(self.rule, self.k),
+                      logo=logo.read_bytes() if logo else None,
+                      lab={k: v for k, v in self.c.lab.items() if k != "logo"})
+        ident.append(("Compliance", self.summary_line(sheet)))
+        expand_uncertainties(sheet, self.k)
+        return sheet
+
+    def identity(self) -> list[tuple[str, str]]:
+        """Title-block rows: gyro, report, lab, operator, date, site, tests, software."""
+        g = self.c.gyro
         m = self.c.meta
         s0 = g.get("nominal_scale_factor")
         ident = [("Gyro", f"{g['model']}, serial {g['serial']}"
@@ -199,7 +289,15 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         if m.get("title"):
             ident.insert(0, ("Test", m["title"]))
         if m.get("report_id"):
-            ident.append(("Report", m["report_id"]))
+            rev = self.c.revisions[-1]["revision"] if self.c.revisions else m.get("revision")
+            ident.append(("Report", m["report_id"] + (f", revision {rev}" if rev else "")))
+        if m.get("customer"):
+            ident.append(("Customer", m["customer"]))
+        lab = self.c.lab
+        if lab.get("name"):
+            ident.append(("Laboratory", ", ".join(x for x in (lab["name"], lab.get("address"))
+                                                  if x)
+                          + (f" ({lab['accreditation']})" if lab.get("accreditation") else "")))
         ident += [("Operator", m["operator"]), ("Date of test", m["date"])]
         if m.get("organisation"):
             ident.append(("Organisation", m["organisation"]))
@@ -215,24 +313,13 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         missing = [v for k, v in names.items() if k not in self.c.tests]
         ident.append(("Tests", (", ".join(tested) or "none")
                       + (f"; not tested: {', '.join(missing)}" if missing else "")))
+        ident.append(("Uncertainty", f"expanded uncertainty U = k·u, k = {self.k:g} "
+                                     f"(± values in this sheet)"))
+        ident.append(("Decision rule", "guarded acceptance, guard band w = U (ILAC-G8)"
+                      if self.rule == "guard-band" else "simple acceptance (ILAC-G8)"))
         ident.append(("Software", f"gyrotest {__version__}"))
         ident.append(("Campaign file", f"{self.c.path.name} (SHA-256 {self.c.sha256[:16]}…)"))
-        prov = {
-            "gyrotest_version": __version__,
-            "campaign": {"file": str(self.c.path), "name": self.c.path.name,
-                         "sha256": self.c.sha256},
-            "inputs": self.input_files(),
-            "commands": [a.to_dict() for a in self.an.values()],
-            "working_directory": "paths in the commands are relative to the campaign file's "
-                                 "directory; run them there",
-            "options": self.c.to_dict()["tests"],
-            "timing_s": self.timing,
-        }
-        sheet = Sheet(title=title, identity=ident, sections=sections, checks=self.checks,
-                      figures=self.figures, warnings=self.warnings, provenance=prov,
-                      header=f"{g['model']} s/n {g['serial']}", notes=m.get("notes", ""))
-        ident.append(("Compliance", self.summary_line(sheet)))
-        return sheet
+        return ident
 
     def summary_line(self, sheet: Sheet) -> str:
         """One line: overall verdict and counts."""
@@ -241,7 +328,7 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         if not n_lim:
             return "no limits given in the campaign"
         parts = [f"{sheet.overall()}: {v.count('PASS')} of {n_lim} limited items pass"]
-        for k in ("FAIL", "INCONCLUSIVE"):
+        for k in ("FAIL", "CONDITIONAL FAIL", "INCONCLUSIVE", "CONDITIONAL PASS"):
             if v.count(k):
                 parts.append(f"{v.count(k)} {k}")
         nt = sum(1 for c in self.checks if c.verdict == NOT_TESTED and c.limit is not None)
@@ -385,17 +472,22 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                 extra = f" (period {fmt_number(cf['period_dps'])} °/s)"
             if cf.get("lock_in_rate_dps") is not None:
                 extra = f" (Ω_L {fmt_number(cf['lock_in_rate_dps'])} °/s)"
-            rows.append([cf["term"], cf["f_of_I"] + extra,
+            rows.append([F_OF_I_NAMES.get(cf["term"], cf["term"]), cf["f_of_I"] + extra,
                          s.num(["nonlinearity_model", "coefficients", i, "coefficient_ppm"],
                                "ppm", ["nonlinearity_model", "coefficients", i, "sigma_ppm"]),
                          "yes" if cf.get("supported_by_data") else "no (shown for scale)"])
         if rows:
-            sec.add(T(["term", "f(I), u = I/FS", "coefficient ± 1σ, ppm",
-                           "supported by the data"], rows,
-                          title="Rate-dependent scale-factor error f(I) of ε_K (§8.3)",
-                          unit_in_header=True, widths=[1.5, 3.2, 2.2, 1.8], key="sf_model"))
+            sec.add(T(["term of f(I) (its effect on the output)", "f(I), u = I/FS",
+                       "coefficient ± 1σ, ppm", "supported by the data"], rows,
+                      title="Rate-dependent scale-factor error f(I) of ε_K (§8.3)",
+                      unit_in_header=True, widths=[2.6, 2.4, 2.2, 1.8], key="sf_model"))
+            sec.add(P("The output error is I·f(I): a term in uⁿ of f(I) is a nonlinearity of "
+                      "order n + 1 in the output."))
+            asym_text = asymmetry_explanation(r)
+            if asym_text:
+                sec.add(P(asym_text))
         if nl.get("statement"):
-            sec.add(P(f"Nonlinearity model: {nl['statement']} Selection: "
+            self.eng_only(sec, P(f"Nonlinearity model: {nl['statement']} Selection: "
                          f"{nl.get('selection', '')}."))
         per = r.get("periodic", {})
         if per.get("supported_by_data"):
@@ -574,11 +666,50 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                      "error in ppm. A term that was not measured reads \"not tested\"."))
 
 
-def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures: bool = True
-                ) -> Sheet:
-    """Lay out the sheet from the analyses (figures drawn when ``figures``)."""
+def expand_uncertainties(sheet: Sheet, k: float) -> None:
+    """Show every ± as the expanded uncertainty U = k·σ and say so in the headings (the JSON
+    keeps σ and adds ``expanded_uncertainty``)."""
+    lab = f"± U (k = {k:g})"
+
+    def fix(t: str) -> str:
+        return (t.replace("± 1σ HAC", f"{lab}, HAC standard errors").replace("± 1σ", lab)
+                .replace("±: 1σ", f"±: U, k = {k:g}"))
+
+    def nums(block):
+        if isinstance(block, Table):
+            for r in block.rows:
+                for c in r:
+                    if isinstance(c, Num):
+                        yield c
+        yield from getattr(block, "nums", [])
+
+    for sec in sheet.walk():
+        for b in sec.blocks:
+            for n in nums(b):
+                n.k = k
+            if isinstance(b, Table):
+                b.title = fix(b.title)
+                b.columns = [fix(c) for c in b.columns]
+                b.rows = [[fix(c) if isinstance(c, str) else c for c in r] for r in b.rows]
+            elif isinstance(b, Para):
+                b.text = fix(b.text)
+    for c in sheet.checks:
+        c.label = fix(c.label)
+        if c.measured is not None:
+            c.measured.k = k
+
+
+def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures: bool = True,
+                variant: str = "customer") -> Sheet:
+    """Lay out the sheet from the analyses (figures drawn when ``figures``); ``variant`` is
+    "customer" (results, uncertainties, limits, decision rule, conditions, equipment,
+    references, sign-off) or "engineering" (adds the diagnostics, algorithm notes and
+    warnings)."""
+    if variant not in VARIANTS:
+        raise InputError(f"unknown report variant {variant!r}: use {' or '.join(VARIANTS)}")
     Src.sink.clear()
-    b = Builder(campaign, analyses, figures)
+    Src.k = float(campaign.decision.get("coverage_factor", 2.0))
+    b = Builder(campaign, analyses, figures, variant)
     sheet = b.build()
     sheet.provenance["timing_s"] = {**{a.key: a.seconds for a in analyses.values()},
                                     **b.timing}
@@ -586,12 +717,13 @@ def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures
 
 
 def make_report(campaign: Campaign, *, figures: bool = True,
-                progress: Callable[[str], None] | None = None) -> Sheet:
-    """Run the campaign and build its sheet."""
+                progress: Callable[[str], None] | None = None,
+                variant: str = "customer") -> Sheet:
+    """Run the campaign and build its sheet (``variant``: customer or engineering)."""
     t0 = time.perf_counter()
     an = run_campaign(campaign, progress=progress)
     t1 = time.perf_counter()
-    sheet = build_sheet(campaign, an, figures=figures)
+    sheet = build_sheet(campaign, an, figures=figures, variant=variant)
     sheet.provenance["timing_s"]["analyses_total"] = t1 - t0
     sheet.provenance["timing_s"]["layout_and_figures"] = time.perf_counter() - t1
     return sheet

@@ -35,6 +35,7 @@ class Src:
     ``sink`` (attached to the next paragraph or table, so it stays checkable)."""
 
     sink: list[Num] = []
+    k: float = 1.0  # coverage factor of the ± shown (set per sheet by build_sheet)
 
     def __init__(self, a: ad.Analysis):
         self.a = a
@@ -57,7 +58,7 @@ class Src:
         return Num(float(v) if _isnum(v) else None, unit, float(s) if _isnum(s) else None,
                    bound, {"analysis": self.a.key, "path": list(path)},
                    {"analysis": self.a.key, "path": list(sigma)} if sigma and _isnum(s)
-                   else None, digits, prefix)
+                   else None, digits, prefix, Src.k)
 
 
 def P(text: str, style: str = "normal") -> Para:

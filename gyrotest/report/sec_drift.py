@@ -50,7 +50,7 @@ class DriftSections:
             df = s.num(["repeatability", "mean_bias_dph"], U_DPH,
                        ["repeatability", "repeatability_1sigma_dph"])
             items.append(self.check("bias", "bias_dph", f"bias D_F, mean of {len(runs)} runs "
-                                    "± 1σ run to run", "§5.3.3.1.1", df, sec.number))
+                                    "(± from the run-to-run spread)", "§5.3.3.1.1", df, sec.number))
             items.append(self.check("bias", "repeatability_1sigma_dph", "repeatability, 1σ",
                                     "§5.3.3.1.1", s.num(["repeatability",
                                                          "repeatability_1sigma_dph"], U_DPH),
@@ -99,7 +99,10 @@ class DriftSections:
                       widths=[2.3, 1.0, 1.4, 1.5, 1.8, 1.6, 1.5], key="bias_runs"))
         t = self.c.tests["bias"]
         skip = t.opt("skip", "0")
-        sec.add(P("D_F = mean rate − earth-rate component along the IA after a "
+        if not self.eng:
+            sec.add(P(f"D_F = mean rate − earth-rate component along the IA after a {skip} "
+                      "warm-up trim; the uncertainty of each run allows for correlated noise."))
+        self.eng_only(sec, P("D_F = mean rate − earth-rate component along the IA after a "
                      f"{skip} warm-up trim; the 1σ of each run is the Allan deviation at the "
                      "record length from a fitted noise model (honest for correlated noise; "
                      "σ/√n shown only for comparison)."))
@@ -160,10 +163,10 @@ class DriftSections:
                f"{s.t(['logs', 0, 'duration_s'], 's', digits=6)} after the "
                f"{self.c.tests['allan'].opt('skip', '0')} warm-up trim, τ0 = "
                f"{s.t(['logs', 0, 'tau0_s'], 's')}.")
-        sec.add(P(txt))
+        self.eng_only(sec, P(txt))
         dg = ax.get("diagnosis")
         if dg and dg.get("verdict"):
-            sec.add(P(f"Diagnosis of missing terms: {dg['verdict']}", "note"))
+            self.eng_only(sec, P(f"Diagnosis of missing terms: {dg['verdict']}", "note"))
         self.noise_structure(parent.sub("Noise structure", "Annex C"), a, s, base, ax)
         self.application(parent.sub("Application note: platform vs strapdown"), a, s, base, ax)
         for w in ax.get("warnings", []):
@@ -221,8 +224,11 @@ class DriftSections:
         lines.append("A coefficient the graph cannot establish is given as an upper bound (≤). "
                      "Noises with zero PSD at zero frequency stay bounded on a platform but "
                      "grow in strapdown: a single drift number does not describe the gyro.")
-        for ln in lines:
-            sec.add(P(ln))
+        for i, ln in enumerate(lines):
+            if i == len(lines) - 1:
+                sec.add(P(ln))
+            else:  # input, PSD convention and graph read-offs: algorithm notes
+                self.eng_only(sec, P(ln))
 
     def application(self, sec: Section, a, s: Src, base: list, ax: dict) -> None:
         """Subsection 3.4: platform vs strapdown attitude error at the vehicle rates."""
@@ -275,6 +281,6 @@ class DriftSections:
                       "above add differently.", "note"))
         for fl in imp.get("flags", []):
             sec.add(P(fl.get("text", ""), "note"))
-        sec.add(P("Assumptions: " + "; ".join(imp.get("assumptions", [])) + ". Method: "
+        self.eng_only(sec, P("Assumptions: " + "; ".join(imp.get("assumptions", [])) + ". Method: "
                      + imp.get("method", "") + "."))
 

@@ -29,7 +29,8 @@ class EnvironmentSections:
         self.thermal(sec.sub("Thermal: D_T, D_Ṫ, D_∇Ṫ and the Antonova–Matveev model"))
         self.magnetic(sec.sub("Magnetic field: w_x, w_y, w_z"))
         self.supply(sec.sub("Supply voltage"))
-        self.history(sec.sub("Model history: the error falling as terms are added"))
+        if self.eng:
+            self.history(sec.sub("Model history: the error falling as terms are added"))
         st = [s.status for s in sec.subsections]
         if all(x == NOT_TESTED for x in st):
             sec.status = NOT_TESTED
@@ -79,8 +80,9 @@ class EnvironmentSections:
                           title="Antonova–Matveev model Δω = w0 + w1·ΔT + w2·ΔT² + "
                                 "w_ΔV·dT/dt (ΔT in °C, dT/dt in °C/h)",
                           widths=[3.0, 4.0], key="am"))
+            self.reconcile_dt(sec, a, ch)
             f = ch.get("fit", {})
-            sec.add(P(
+            self.eng_only(sec, P(
                 "Fit quality: residual RMS "
                 f"{s.t(['chamber', 'fit', 'rms_fit_dph'], U_DPH)}, held-out "
                 f"{s.t(['chamber', 'fit', 'rms_holdout_dph'], U_DPH)}, noise "
@@ -88,13 +90,20 @@ class EnvironmentSections:
                 f"working resolution: {f.get('resolution_note', '')}."))
             h = ch.get("hysteresis", {})
             if "heating_minus_cooling_dph" in h:
-                sec.add(P("Heating − cooling residual: "
+                self.eng_only(sec, P("Heating − cooling residual: "
                              f"{s.t(['chamber', 'hysteresis', 'heating_minus_cooling_dph'], U_DPH, ['chamber', 'hysteresis', 'stderr_dph'])}"
                              f" ({h.get('verdict', '')})."))
             for n in ch.get("notes", []):
-                sec.add(P(n, "note"))
+                self.eng_only(sec, P(n, "note"))
+            sensor = ch.get("sensor", "")
             for w in dig(ch, ["am_fit", "warnings"]) or []:
-                self.warn("thermal-fit", w)
+                # the warnings name the model-fit terms; on the sheet they are w1 and w2
+                w = (w.replace(f"T2({sensor})", "w2 (ΔT²)").replace(f"T({sensor})", "w1 (ΔT)")
+                     .replace(f"dTdt({sensor})", "w_ΔV (dT/dt)"))
+                self.warn("thermal-fit", "Antonova–Matveev model: " + w
+                          + ("" if "not significant" not in w else
+                             " (this concerns the quadratic model's w1/w2 only; the IEEE D_T "
+                             "above is a single slope and is determined)"))
         sp = a.result.get("setpoints")
         if sp:
             rows = []
@@ -117,6 +126,42 @@ class EnvironmentSections:
                     "over time, the residual, and the temperatures."}
             for f in figs:
                 self.figure(sec, f, caps.get(f.key, ""))
+
+    def reconcile_dt(self, sec: Section, a, ch: dict) -> None:
+        """One explanation for D_T (IEEE) next to w1 (Antonova–Matveev): different models of
+        the same run; their mean slopes over the tested range are compared."""
+        co = {c["name"]: c for c in ch.get("coefficients", [])}
+        ie = {c["name"]: c for c in ch.get("ieee_E_terms", [])}
+        if "w1" not in co or "D_T" not in ie:
+            return
+        info = self.an.get(f"info:{self.c.rel(self.c.tests['thermal'].logs[0])}")
+        chans = info.result.get("channels", {}) if info else {}
+        tch = chans.get(f"temperature:{ch.get('sensor')}") or next(
+            (v for k, v in chans.items() if k.startswith("temperature:")), None)
+        t0 = float(ch.get("t0_degC", 21.0))
+        w1, w2 = co["w1"]["value"], co.get("w2", {}).get("value", 0.0) or 0.0
+        txt = ("D_T and w1 are not two measurements of one quantity: D_T is the slope of the "
+               "IEEE 952 linear E-term model, fitted together with D_Ṫ and D_∇Ṫ; w1 is the "
+               "slope at t0 of the Antonova–Matveev quadratic, which has no gradient term and "
+               "whose w1 and w2 trade off against each other over a one-sided temperature "
+               "range (hence the large uncertainty of w1 alone).")
+        if tch and "min" in tch and "max" in tch:
+            lo, hi = tch["min"] - t0, tch["max"] - t0
+            mean_slope = w1 + w2 * (lo + hi)
+            txt += (f" Over the tested range ΔT = {fmt_number(lo, 3)} … {fmt_number(hi, 3)} °C "
+                    f"the quadratic's mean slope w1 + w2·(ΔT_min + ΔT_max) = "
+                    f"{fmt_number(mean_slope, 3)} (°/h)/°C, against D_T = "
+                    f"{fmt_number(ie['D_T']['value'], 3)} (°/h)/°C: ")
+            sw1 = co["w1"].get("stderr")
+            diff = abs(mean_slope - ie["D_T"]["value"])
+            if isinstance(sw1, (int, float)) and diff <= self.k * sw1:
+                txt += (f"they agree within the expanded uncertainty of w1 "
+                        f"({fmt_number(self.k * sw1, 2)} (°/h)/°C).")
+            else:
+                txt += ("the difference is taken up by the terms one model has and the other "
+                        "lacks (gradient rate, curvature).")
+        txt += " The temperature sensitivity of this gyro is D_T."
+        sec.add(P(txt))
 
     def magnetic(self, sec: Section) -> None:
         """Subsection 4.2: w_x, w_y, w_z with the reversal and hysteresis cross-checks."""
@@ -158,7 +203,7 @@ class EnvironmentSections:
                           title="Cross-checks (Antonova & Matveev's reversal estimate; sweep "
                                 "hysteresis)", widths=[0.8, 2.6, 2.2, 3.6], key="mag_checks"))
         for n in r.get("notes", []):
-            sec.add(P(n, "note"))
+            self.eng_only(sec, P(n, "note"))
         for w in dig(r, ["fit", "warnings"]) or []:
             self.warn("mag-fit", w)
         t = self.c.tests["magnetic"]

@@ -234,11 +234,12 @@ class LabSections:
         lines left blank for the pen)."""
         a = self.c.approval
         date = a.get("approval_date", "")
+        line = "_" * 24
         rows = [["Prepared by (test engineer)", a.get("prepared_by", self.c.meta["operator"]),
-                 "", ""],
-                ["Reviewed by", a.get("reviewed_by", ""), "", ""],
+                 line, line[:12]],
+                ["Reviewed by", a.get("reviewed_by", ""), line, line[:12]],
                 ["Approved by" + (f" ({a['approved_title']})" if a.get("approved_title")
-                                  else ""), a.get("approved_by", ""), "", date]]
+                                  else ""), a.get("approved_by", ""), line, date or line[:12]]]
         sec.add(T(["role", "name", "signature", "date"], rows, widths=[2.6, 2.4, 2.6, 1.4],
                   key="approval"))
         sec.add(P("This report shall not be reproduced except in full without the written "

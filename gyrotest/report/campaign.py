@@ -1,5 +1,8 @@
 """The campaign file: which logs make up a gyro test campaign, how to read them, which options
-each analysis gets, and the spec limits (IEEE 952's "shall not exceed ___" blanks).
+each analysis gets, the spec limits (IEEE 952's "shall not exceed ___" blanks) and the
+laboratory parts of the report (``[lab]``, ``[approval]``, ``[decision]``, ``[[equipment]]``,
+``[[revisions]]``, per-test ``environment``). User reference: docs/campaign.md and
+``gyrotest report --template``.
 
 A campaign is TOML; paths are relative to the campaign file; unknown sections and keys are
 errors. The whole file is validated -- every path exists, every bench profile parses, every

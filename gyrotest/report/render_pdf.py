@@ -249,6 +249,12 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
 
     pages: list[int] = []
     story: list = [Paragraph(escape(sheet.title), st["title"])]
+    if sheet.logo:  # the lab's logo, top right of the first page
+        from reportlab.platypus import Image
+
+        logo = Image(io.BytesIO(sheet.logo), width=40 * mm, height=16 * mm, kind="proportional",
+                     hAlign="RIGHT")
+        story.insert(0, logo)
     rows = []
     for k, v in sheet.identity:
         if k == "Compliance":

@@ -44,7 +44,7 @@ def dig(d, path):
 
 @pytest.fixture(scope="module")
 def sample_sheet():
-    r = run_cli(["-q", "report", CAMPAIGN, "--json"])
+    r = run_cli(["-q", "report", CAMPAIGN, "--json", "--variant", "engineering"])
     assert r.code == 0, r.err
     return json.loads(r.out)
 
@@ -92,7 +92,9 @@ def test_sample_sheet_content(sample_sheet):
     assert d["format"] == "gyrotest-spec-sheet"
     titles = [s["title"] for s in d["sections"]]
     assert titles[0] == "Model equation" and titles[1] == "Scale factor"
-    assert "IA alignment" in titles and titles[-1] == "Compliance with the spec limits"
+    assert "IA alignment" in titles and "Compliance with the spec limits" in titles
+    assert titles[-3:] == ["References", "Revision history", "Approval"]
+    assert d["variant"] == "engineering"
     checks = {c["key"]: c for c in d["checks"]}
     # bounds are printed with ≤ and carry the upper_bound flag
     for k in ("allan.K", "allan.R"):
@@ -103,7 +105,8 @@ def test_sample_sheet_content(sample_sheet):
     env = next(s for s in d["sections"] if s["title"].startswith("Environmental"))
     supply = next(s for s in env["subsections"] if s["title"] == "Supply voltage")
     assert supply["status"] == "not tested"
-    assert d["overall_verdict"] in ("PASS", "FAIL", "INCONCLUSIVE")
+    assert d["overall_verdict"] in ("PASS", "CONDITIONAL PASS", "CONDITIONAL FAIL", "FAIL",
+                                    "INCONCLUSIVE")
     # reproducibility: version, campaign and every input with its SHA-256
     prov = d["provenance"]
     assert prov["gyrotest_version"]
@@ -146,7 +149,7 @@ def test_missing_tests_read_not_tested_and_outputs(tmp_path):
         part = text.split(heading, 1)[1].split("\n#", 1)[0]
         assert "Not tested" in part, heading
     # the one test that ran: D_F with its 1σ and a FAIL against the (too tight) limit
-    assert "| bias D_F ± 1σ |" in text and "FAIL" in text
+    assert "| bias D_F ± U (k = 2) |" in text and "FAIL" in text
     assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 5000
     h = html.read_text(encoding="utf-8")
     assert h.startswith("<!DOCTYPE html>") and "not tested" in h.lower()
@@ -154,6 +157,7 @@ def test_missing_tests_read_not_tested_and_outputs(tmp_path):
     # no stray temporary files
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
         ["bias_run1.parquet", "bias_run1.profile.toml", "camp.toml", "s.pdf", "s.html", "s.md"])
+    assert "not listed in the campaign" in text  # no [[equipment]]: the sheet says so
 
 
 def test_markdown_to_stdout_by_default(tmp_path):
@@ -161,7 +165,8 @@ def test_markdown_to_stdout_by_default(tmp_path):
     r = run_cli(["-q", "report", camp])
     assert r.code == 0, r.err
     assert r.out.startswith("# GT-FOG-100 s/n 0427: gyro specification sheet")
-    assert "## 8 Compliance with the spec limits" in r.out
+    assert "## 7 Compliance with the spec limits" in r.out
+    assert "## 10 Approval" in r.out and "Warnings raised" not in r.out
 
 
 @pytest.mark.parametrize(("body", "fragments"), [
@@ -247,6 +252,18 @@ def test_number_formatting_and_verdicts():
 
     assert v(0.8, 1.0) == PASS and v(-0.8, 1.0) == PASS and v(1.2, 1.0) == FAIL
     assert v(1.2, 1.0, bound=True) == INCONCLUSIVE and v(0.5, 1.0, bound=True) == PASS
+    # ILAC-G8 guarded acceptance with U = 2σ, and simple acceptance
+    from gyrotest.report.sheet import COND_FAIL, COND_PASS
+
+    def g(value, sigma, limit, rule="guard-band"):
+        return Check("k", "x", "", Num(value, "u", sigma), limit, "u", rule=rule).verdict
+
+    assert g(0.7, 0.1, 1.0) == PASS            # 0.7 + 0.2 <= 1
+    assert g(0.9, 0.1, 1.0) == COND_PASS       # 0.9 <= 1 < 1.1
+    assert g(-1.1, 0.1, 1.0) == COND_FAIL      # 0.9 <= 1 < 1.1
+    assert g(1.3, 0.1, 1.0) == FAIL            # 1.1 > 1
+    assert g(0.9, 0.1, 1.0, "simple") == PASS and g(1.05, 0.1, 1.0, "simple") == FAIL
+    assert Num(1.0, "u", 0.1, k=2).text() == "1.00 ± 0.20 u"
     assert v(0.5, None) == NO_LIMIT
     assert Check("k", "x", "", None, 1.0, "u").verdict == "not tested"
 
@@ -254,7 +271,8 @@ def test_number_formatting_and_verdicts():
 def test_sample_pdf_and_html_with_figures(tmp_path):
     """The README's first command on the bundled campaign: PDF and HTML with every figure."""
     pdf, html = tmp_path / "spec.pdf", tmp_path / "spec.html"
-    r = run_cli(["-q", "report", CAMPAIGN, "--pdf", pdf, "--html", html, "--json"])
+    r = run_cli(["-q", "report", CAMPAIGN, "--pdf", pdf, "--html", html, "--json",
+                 "--variant", "engineering"])
     assert r.code == 0, r.err
     d = json.loads(r.out)
     figs = d["figures"]
@@ -295,3 +313,111 @@ def test_supply_test_and_equality(tmp_path):
     assert abs(ch["measured"]["value"] - 0.08) < 5 * ch["measured"]["sigma"]
     checked = check_against_commands(d, tmp_path)
     assert {"bias", "supply", "info:supply.csv"} <= checked
+
+
+def test_customer_sheet_is_sendable(tmp_path):
+    """The default (customer) sheet of the sample campaign: expanded uncertainties with k
+    stated, the ILAC-G8 rule, environment per test, equipment with calibration dates,
+    references by author and title, revision history and approval; no internal notes."""
+    md = tmp_path / "spec.md"
+    r = run_cli(["-q", "report", CAMPAIGN, "--md", md, "--json"])
+    assert r.code == 0, r.err
+    d = json.loads(r.out)
+    text = md.read_text(encoding="utf-8")
+    assert d["variant"] == "customer"
+    titles = [s["title"] for s in d["sections"]]
+    assert titles[-4:] == ["Compliance with the spec limits", "References", "Revision history",
+                           "Approval"]
+    assert "Warnings raised by the analyses" not in titles
+    for frag in ("U (k = 2)", "ILAC-G8", "Environmental conditions per test", "Test equipment",
+                 "calibration due", "2024-11-02", "Antonova, V. A. Matveev",
+                 "Herald of the Bauman", "Krobka", "C. Head", "first issue"):
+        assert frag in text, frag
+    # no internal language, algorithm notes or diagnostics in the customer sheet
+    low = text.lower()
+    for frag in ("seed", "tau_min/4", "1/0.664", "gyrotest model diagnose", "error falling as terms are added",
+                 "equivalent command", "χ²/dof = "):
+        assert frag.lower() not in low, frag
+    # the contradictions of issue 14 are explained, not left side by side
+    assert "D_T and w1 are not two measurements" in text
+    assert "Two asymmetry numbers, one explanation" in text
+    assert "u² (cubic in the output)" in text
+    # expanded uncertainty: U = 2σ in the check JSON, and in the number text
+    ch = {c["key"]: c for c in d["checks"]}["thermal.D_T"]
+    m = ch["measured"]
+    assert ch["coverage_factor"] == 2.0
+    assert math.isclose(ch["expanded_uncertainty"], 2 * m["sigma"])
+    assert math.isclose(m["expanded_uncertainty"], 2 * m["sigma"])
+    # the Markdown has its figures, written beside it
+    figs = sorted((tmp_path / "spec_figures").glob("*.png"))
+    assert len(figs) == 5 and all(f.read_bytes().startswith(b"\x89PNG") for f in figs)
+    assert text.count("](spec_figures/") == 5
+
+
+def test_engineering_sheet_adds_diagnostics(sample_sheet):
+    titles = [s["title"] for s in sample_sheet["sections"]]
+    assert "Warnings raised by the analyses" in titles
+    blob = json.dumps(sample_sheet, ensure_ascii=False)
+    assert "Model history" in blob and "Graph read-offs" in blob and "seed" not in blob.lower()
+    w = [x["text"] for x in sample_sheet["warnings"] if "not significant" in x["text"]]
+    assert w and all("Antonova–Matveev model" in x and "IEEE D_T" in x for x in w)
+
+
+def test_template_is_a_valid_campaign(tmp_path):
+    r = run_cli(["report", "--template"])
+    assert r.code == 0 and "[[equipment]]" in r.out and "[decision]" in r.out
+    p = SAMPLE / "_template_check.toml"
+    try:
+        p.write_text(r.out, encoding="utf-8")
+        from gyrotest.report.campaign import load_campaign
+
+        c = load_campaign(p)
+        assert c.decision == {"rule": "guard-band", "coverage_factor": 2.0}
+        assert len(c.equipment) == 2 and c.revisions[0]["revision"] == "1"
+    finally:
+        p.unlink(missing_ok=True)
+    run_cli(["report"]).assert_clean_error("CAMPAIGN", "--template")
+
+
+@pytest.mark.parametrize(("body", "fragments"), [
+    ('[decision]\nrule = "strict"\n', ["[decision] rule", "guard-band"]),
+    ('[decision]\ncoverage_factor = 7.0\n', ["[decision] coverage_factor"]),
+    ('[[equipment]]\nname = "table"\n', ["[[equipment]] #1 calibration_due", "missing"]),
+    ('[[equipment]]\nname = "t"\ncalibration_due = "soon"\n', ["calibration_due", "date"]),
+    ('[[equipment]]\nname = "t"\ncalibration_due = 2025-01-01\ntests = ["biass"]\n',
+     ["[[equipment]] #1 tests", "biass"]),
+    ('[lab]\nlogo = "nope.png"\n', ["[lab] logo", "not found"]),
+    ('[equipment]\nname = "t"\n', ["[[equipment]]", "array of tables"]),
+])
+def test_bad_lab_keys(tmp_path, body, fragments):
+    camp = _mini_campaign(tmp_path, BIAS)
+    camp.write_text(camp.read_text().replace("[site]", body + "[site]"), encoding="utf-8")
+    run_cli(["report", camp]).assert_clean_error("camp.toml", *fragments)
+
+
+def test_expired_calibration_is_flagged(tmp_path):
+    camp = _mini_campaign(tmp_path, BIAS.replace("[tests.bias]\n", "[tests.bias]\nenvironment"
+                                                 " = { temperature = \"22 ± 1 °C\" }\n"))
+    camp.write_text(camp.read_text().replace(
+        "[site]", '[[equipment]]\nname = "Logger"\ncalibration_due = 2023-12-31\n[site]'),
+        encoding="utf-8")
+    r = run_cli(["-q", "report", camp, "--variant", "engineering"])
+    assert r.code == 0, r.err
+    assert "| Logger |" in r.out and "EXPIRED" in r.out and "temperature 22 ± 1 °C" in r.out
+    assert "Logger: calibration EXPIRED" in r.out
+
+
+def test_pdf_creation_date(tmp_path, monkeypatch):
+    from gyrotest.report import build_sheet, load_campaign
+    from gyrotest.report.render_pdf import render_pdf
+
+    camp = _mini_campaign(tmp_path, BIAS)
+    sheet = build_sheet(load_campaign(camp), {}, figures=False)
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    data, _ = render_pdf(sheet)
+    assert b"D:20231114221320" in data
+    monkeypatch.delenv("SOURCE_DATE_EPOCH")
+    import time
+
+    data, _ = render_pdf(sheet)
+    assert f"D:{time.strftime('%Y%m%d')}".encode() in data

@@ -24,7 +24,14 @@ def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path |
 
 
 @click.command("report")
-@click.argument("campaign", type=str)
+@click.argument("campaign", type=str, required=False)
+@click.option("--variant", type=click.Choice(["customer", "engineering"]), default="customer",
+              show_default=True,
+              help="customer: results with expanded uncertainties (k = 2), limits, decision "
+                   "rule, conditions, equipment, references and sign-off; engineering: adds "
+                   "the diagnostics, algorithm notes, model history, commands and warnings.")
+@click.option("--template", is_flag=True,
+              help="Print a commented campaign file with every key (docs/campaign.md) and exit.")
 @click.option("--pdf", "pdf_path", default=None, metavar="FILE",
               help="Write the sheet as PDF to this file.")
 @click.option("--html", "html_path", default=None, metavar="FILE",
@@ -36,7 +43,7 @@ def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path |
 @click.option("--json", "as_json", is_flag=True,
               help="Print the whole sheet as one JSON document (items with units, sources, "
                    "limits and verdicts; provenance) instead of Markdown.")
-def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
+def command(campaign, variant, template, pdf_path, html_path, md_path, no_figures, as_json):
     """Spec sheet (IEEE 952 style) of the test campaign CAMPAIGN (a TOML file).
 
     Runs every test of the campaign through the same analyses as the individual commands
@@ -47,18 +54,35 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     with every file's SHA-256, warnings, and PASS/FAIL against the campaign's limits. A test
     the campaign does not list reads "not tested".
 
+    The customer sheet (default) states expanded uncertainties (k = 2), the decision rule
+    (guarded acceptance per ILAC-G8: PASS / CONDITIONAL PASS / CONDITIONAL FAIL / FAIL),
+    environmental conditions per test, test equipment with calibration dates, references,
+    revision history and an approval block; --variant engineering adds the algorithm notes,
+    diagnostics, model history, equivalent commands and warnings.
+
     The campaign file is checked completely (keys, paths, profiles, options) before any
-    analysis. Markdown goes to stdout unless --md, --html, --pdf or --json is given. The
-    campaign format is documented in gyrotest/report/campaign.py and sample_data/README.md.
+    analysis. Markdown (with the figures as PNG files beside it when --md is given) goes to
+    stdout unless --md, --html, --pdf or --json is given. The campaign format: docs/campaign.md,
+    or 'gyrotest report --template'.
 
     \b
     Examples:
+      gyrotest report --template > campaign.toml
       gyrotest report sample_data/campaign.toml --pdf spec.pdf
+      gyrotest report sample_data/campaign.toml --variant engineering --pdf eng.pdf
       gyrotest report campaign.toml --html spec.html --md spec.md
       gyrotest report campaign.toml --json > spec.json
     """
     from ..output import atomic_path, write_text
     from ..report.campaign import load_campaign
+
+    if template:
+        from ..report.template import TEMPLATE
+
+        click.echo(TEMPLATE, nl=False)
+        return
+    if campaign is None:
+        raise InputError("report: give a CAMPAIGN file (or --template to print one)")
 
     t0 = time.perf_counter()
     pdf = _check_out(pdf_path, (".pdf",), "PDF file")
@@ -67,7 +91,7 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     camp = load_campaign(campaign)  # validates everything before any analysis
     from ..report.build import make_report
 
-    figures = bool(pdf or htm) and not no_figures
+    figures = bool(pdf or htm or md) and not no_figures
     quiet = settings().quiet
 
     import contextlib
@@ -84,7 +108,7 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
             elif not quiet and not as_json:
                 note(f"report: {name} …")
 
-        sheet = make_report(camp, figures=figures, progress=progress)
+        sheet = make_report(camp, figures=figures, progress=progress, variant=variant)
     t1 = time.perf_counter()
     outputs = []
     pdf_bytes = None
@@ -103,7 +127,17 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     if md or not (pdf or htm or as_json):
         from ..report.render_md import render_markdown
 
-        md_text = render_markdown(sheet)
+        links = None
+        fig_files = {}
+        if md is not None:
+            figdir = f"{md.stem}_figures"
+            for f in sheet.figures:
+                if f.png is not None:
+                    name = f"{figdir}/fig{f.number}_{f.key}.png"
+                    fig_files[md.parent / name] = f.png
+            links = {f.key: f"{figdir}/fig{f.number}_{f.key}.png" for f in sheet.figures
+                     if f.png is not None}
+        md_text = render_markdown(sheet, links)
     # every output is rendered before the first file is written
     if pdf_bytes is not None:
         with atomic_path(pdf) as tmp:
@@ -111,8 +145,13 @@ def command(campaign, pdf_path, html_path, md_path, no_figures, as_json):
     if html_text is not None:
         write_text(htm, html_text)
     if md is not None:
+        for path, png in fig_files.items():
+            path.parent.mkdir(exist_ok=True)
+            with atomic_path(path) as tmp:
+                tmp.write_bytes(png)
         write_text(md, md_text)
-        outputs.append(str(md))
+        outputs.append(str(md) + (f" (+ {len(fig_files)} figures in {md.stem}_figures/)"
+                                  if fig_files else ""))
     sheet.provenance["timing_s"]["render"] = time.perf_counter() - t1
     if as_json:
         emit_json(sheet.to_dict())

@@ -398,7 +398,7 @@ def avar_from_psd(
 ) -> np.ndarray:
     """sigma^2(tau) = 4 int_0^f_max S(f) sin^4(pi f tau)/(pi f tau)^2 df, numerically.
 
-    Seed 001 eq. (5.1); IEEE 952 Annex C. ``S`` is the two-sided rate PSD in (deg/h)^2/Hz
+    Krobka, Allan-graph topology, eq. (5.1); IEEE 952 Annex C. ``S`` is the two-sided rate PSD in (deg/h)^2/Hz
     (vectorised over f > 0), tau in s, result in (deg/h)^2. ``f_max`` is the band edge of a
     band-limited PSD (the integral stops there); without it the integral runs to infinity.
 

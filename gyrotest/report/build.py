@@ -22,19 +22,35 @@ Every number is taken from the analysis result exactly as the command prints it 
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 from .. import __version__
 from ..errors import GyrotestError, InputError
 from . import adapters as ad
 from .campaign import LIMITS, Campaign
+from .layout import (  # noqa: F401 - re-exported for the section modules and callers
+    U_ARW,
+    U_DPH,
+    U_RR,
+    U_RRW,
+    P,
+    Src,
+    T,
+    _check_table,
+    _fig,
+    _isnum,
+    _not_tested,
+    _quote,
+    _unit,
+    dig,
+)
+from .sec_drift import DriftSections
+from .sec_environment import EnvironmentSections
+from .sec_lab import LabSections
 from .sheet import (
     NOT_TESTED,
-    VERDICT_RULE,
     Check,
     Equation,
     Figure,
@@ -44,12 +60,49 @@ from .sheet import (
     Sheet,
     Table,
     fmt_number,
+    verdict_rule,
 )
 
-U_DPH = "°/h"
-U_ARW = "°/√h"
-U_RRW = "(°/h)/√h"
-U_RR = "(°/h)/h"
+VARIANTS = ("customer", "engineering")
+#: sheet names of the f(I) terms: named by their power of u = I/FS in f(I) and by the order
+#: of the nonlinearity they make in the output I·f(I)
+F_OF_I_NAMES = {"quadratic": "u¹ (quadratic in the output)",
+                "cubic": "u² (cubic in the output)",
+                "quartic": "u³ (quartic in the output)",
+                "quintic": "u⁴ (quintic in the output)",
+                "asymmetry": "A (asymmetry step)", "periodic": "periodic",
+                "lockin": "lock-in"}
+
+
+def asymmetry_explanation(r: dict) -> str:
+    """One explanation for the two asymmetry numbers: the IEEE straight-line asymmetry and the
+    model's A. The u¹ term of f(I) also makes |SF+| ≠ |SF−| (by 2·c1·|I|/FS at rate I), so at
+    full scale the straight-line asymmetry approaches A − 2·c1."""
+    asy = r.get("asymmetry", {})
+    coefs = {c["term"]: c for c in r.get("nonlinearity_model", {}).get("coefficients", [])}
+    if asy.get("status") != "ok" or "asymmetry" not in coefs:
+        return ""
+    A = coefs["asymmetry"]["coefficient_ppm"]
+    c1 = coefs.get("quadratic", {}).get("coefficient_ppm", 0.0) or 0.0
+    ieee = asy["asymmetry_ppm"]
+    txt = (f"Two asymmetry numbers, one explanation: the IEEE 952 asymmetry "
+           f"({fmt_number(ieee, 4)} ppm, §5.3.2.1 b) compares straight lines fitted to the "
+           f"positive and the negative rates; A ({fmt_number(A, 4)} ppm) is only the "
+           "rate-independent step of the model. The u¹ term of f(I) (quadratic in the "
+           f"output, c1 = {fmt_number(c1, 4)} ppm) also makes |SF+| differ from |SF−|, by "
+           "2·c1·|I|/FS at rate I")
+    per = asy.get("per_rate") or []
+    if per and c1:
+        top = max(per, key=lambda x: x["rate_dps"])
+        fs = r.get("full_scale_dps") or top["rate_dps"]
+        pred = A - 2 * c1 * top["rate_dps"] / fs
+        txt += (f": at {fmt_number(top['rate_dps'])} °/s the model gives A − 2·c1·|I|/FS = "
+                f"{fmt_number(pred, 4)} ppm and the data {fmt_number(top['asymmetry_ppm'], 4)}"
+                " ppm. The straight-line fits are dominated by the highest rates, so the IEEE "
+                "number lies near the full-scale value.")
+    else:
+        txt += "."
+    return txt
 SF_UNIT_TEXT = {"arcsec/pulse": "arcsec/pulse", "(deg/h)/V": "(°/h)/V", "1": ""}
 
 
@@ -101,90 +154,18 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
     return out
 
 
-# ============================================================================ helpers
-_MISSING = object()
-
-
-def dig(d: Any, path: list) -> Any:
-    """Walk ``path`` (keys and indices) into a JSON document; None when absent."""
-    for k in path:
-        try:
-            d = d[k]
-        except (KeyError, IndexError, TypeError):
-            return None
-    return d
-
-
-class Src:
-    """Makes :class:`Num` values out of one analysis result, recording their paths.
-    :meth:`t` returns a number's text for running prose and keeps the :class:`Num` in
-    ``sink`` (attached to the next paragraph or table, so it stays checkable)."""
-
-    sink: list[Num] = []
-
-    def __init__(self, a: ad.Analysis):
-        self.a = a
-
-    def t(self, path: list, unit: str = "", sigma: list | None = None, **kw) -> str:
-        """Text of :meth:`num` (with unit) for use inside prose; the Num goes to ``sink``."""
-        n = self.num(path, unit, sigma, **kw)
-        Src.sink.append(n)
-        return n.text()
-
-    def get(self, path: list) -> Any:
-        """Raw value at ``path``."""
-        return dig(self.a.result, path)
-
-    def num(self, path: list, unit: str = "", sigma: list | None = None, *,
-            bound: bool = False, digits: int = 4, prefix: str = "") -> Num:
-        """A :class:`Num` from the value at ``path`` (and 1σ at ``sigma``)."""
-        v = dig(self.a.result, path)
-        s = dig(self.a.result, sigma) if sigma else None
-        return Num(float(v) if _isnum(v) else None, unit, float(s) if _isnum(s) else None,
-                   bound, {"analysis": self.a.key, "path": list(path)},
-                   {"analysis": self.a.key, "path": list(sigma)} if sigma and _isnum(s)
-                   else None, digits, prefix)
-
-
-def P(text: str, style: str = "normal") -> Para:
-    """A paragraph carrying the numbers quoted in it (from :meth:`Src.t`)."""
-    nums, Src.sink[:] = list(Src.sink), []
-    return Para(text, style, nums)
-
-
-def T(columns: list[str], rows: list, **kw) -> Table:
-    """A table carrying the numbers quoted inside its text cells (from :meth:`Src.t`)."""
-    nums, Src.sink[:] = list(Src.sink), []
-    return Table(columns, rows, nums=nums, **kw)
-
-
-def _isnum(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def _not_tested(section: Section, what: str) -> Section:
-    section.status = NOT_TESTED
-    section.add(P(f"Not tested: {what}", "note"))
-    return section
-
-
-def _check_table(checks: list[Check], title: str = "") -> Table:
-    rows = []
-    for c in checks:
-        lim = "—" if c.limit is None else f"≤ {fmt_number(c.limit)} {c.unit}".strip()
-        rows.append([c.label, c.ieee, c.measured if c.measured else "not tested", lim,
-                     c.verdict])
-    return T(["item", "IEEE 952", "measured", "limit (|value| shall not exceed)",
-                  "verdict"], rows, title=title, widths=[3.2, 1.2, 2.6, 2.0, 1.3], key="checks")
-
-
-class Builder:
+class Builder(DriftSections, EnvironmentSections, LabSections):
     """Builds the sections of one sheet."""
 
-    def __init__(self, campaign: Campaign, analyses: dict[str, ad.Analysis], figures: bool):
+    def __init__(self, campaign: Campaign, analyses: dict[str, ad.Analysis], figures: bool,
+                 variant: str = "customer"):
         self.c = campaign
         self.an = analyses
         self.figures_on = figures
+        self.variant = variant
+        self.eng = variant == "engineering"  # diagnostics, algorithm notes, warnings
+        self.rule = campaign.decision.get("rule", "guard-band")
+        self.k = float(campaign.decision.get("coverage_factor", 2.0))
         self.checks: list[Check] = []
         self.figures: list[Figure] = []
         self.warnings: list[dict[str, str]] = []
@@ -198,9 +179,14 @@ class Builder:
         t = self.c.tests.get(test)
         lim = t.limits.get(key) if t else None
         u = unit if unit is not None else LIMITS.get(test, {}).get(key, ("", ""))[1]
-        ch = Check(f"{test}.{key}", label, ieee, measured, lim, u, section)
+        ch = Check(f"{test}.{key}", label, ieee, measured, lim, u, section, self.rule, self.k)
         self.checks.append(ch)
         return ch
+
+    def eng_only(self, sec: Section, *blocks) -> None:
+        """Add blocks (algorithm notes, diagnostics) to the engineering sheet only."""
+        if self.eng:
+            sec.add(*blocks)
 
     def figure(self, section: Section, fig: Figure | None, caption: str) -> None:
         """Number, caption and attach a figure."""
@@ -241,7 +227,7 @@ class Builder:
 
     # ---------------------------------------------------------------- sections
     def build(self) -> Sheet:
-        """The whole sheet."""
+        """The whole sheet (customer or engineering variant)."""
         sec_model = Section("1", "Model equation", "§8.3")
         sec_sf = self.scale_factor(Section("2", "Scale factor", "§5.3.2"))
         sec_drift = self.drift(Section("3", "Drift rate: bias and random drift", "§5.3.3.1"))
@@ -249,13 +235,50 @@ class Builder:
                                            "§5.3.3.2, §8.3"))
         sec_ia = self.alignment(Section("5", "IA alignment", "§5.3.4"))
         self.model_equation(sec_model)  # after the others: it substitutes their numbers
-        sec_cond = self.conditions(Section("6", "Test conditions and reproducibility"))
+        sec_cond = self.conditions(Section("6", "Test conditions, equipment and traceability"))
         self.identity_checks()
-        sec_warn = self.warnings_section(Section("7", "Warnings raised by the analyses"))
-        sec_comp = self.compliance(Section("8", "Compliance with the spec limits"))
-        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, sec_cond, sec_warn, sec_comp]
+        self.equipment_checks()
+        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, sec_cond]
+        n = len(sections)
+        if self.eng:
+            n += 1
+            sections.append(self.warnings_section(Section(str(n), "Warnings raised by the "
+                                                                  "analyses")))
+        sections.append(self.compliance(Section(str(n + 1), "Compliance with the spec limits")))
+        sections.append(self.references(Section(str(n + 2), "References")))
+        sections.append(self.revision_history(Section(str(n + 3), "Revision history")))
+        sections.append(self.approval(Section(str(n + 4), "Approval")))
         g = self.c.gyro
         title = f"{g['model']} s/n {g['serial']}: gyro specification sheet"
+        if self.eng:
+            title += " (engineering report)"
+        ident = self.identity()
+        prov = {
+            "gyrotest_version": __version__,
+            "variant": self.variant,
+            "campaign": {"file": str(self.c.path), "name": self.c.path.name,
+                         "sha256": self.c.sha256},
+            "inputs": self.input_files(),
+            "commands": [a.to_dict() for a in self.an.values()],
+            "working_directory": "paths in the commands are relative to the campaign file's "
+                                 "directory; run them there",
+            "options": self.c.to_dict()["tests"],
+            "timing_s": self.timing,
+        }
+        logo = self.c.lab.get("logo")
+        sheet = Sheet(title=title, identity=ident, sections=sections, checks=self.checks,
+                      figures=self.figures, warnings=self.warnings, provenance=prov,
+                      header=f"{g['model']} s/n {g['serial']}", notes=self.c.meta.get("notes", ""),
+                      variant=self.variant, rule_text=verdict_rule(self.rule, self.k),
+                      logo=logo.read_bytes() if logo else None,
+                      lab={k: v for k, v in self.c.lab.items() if k != "logo"})
+        ident.append(("Compliance", self.summary_line(sheet)))
+        expand_uncertainties(sheet, self.k)
+        return sheet
+
+    def identity(self) -> list[tuple[str, str]]:
+        """Title-block rows: gyro, report, lab, operator, date, site, tests, software."""
+        g = self.c.gyro
         m = self.c.meta
         s0 = g.get("nominal_scale_factor")
         ident = [("Gyro", f"{g['model']}, serial {g['serial']}"
@@ -266,7 +289,15 @@ class Builder:
         if m.get("title"):
             ident.insert(0, ("Test", m["title"]))
         if m.get("report_id"):
-            ident.append(("Report", m["report_id"]))
+            rev = self.c.revisions[-1]["revision"] if self.c.revisions else m.get("revision")
+            ident.append(("Report", m["report_id"] + (f", revision {rev}" if rev else "")))
+        if m.get("customer"):
+            ident.append(("Customer", m["customer"]))
+        lab = self.c.lab
+        if lab.get("name"):
+            ident.append(("Laboratory", ", ".join(x for x in (lab["name"], lab.get("address"))
+                                                  if x)
+                          + (f" ({lab['accreditation']})" if lab.get("accreditation") else "")))
         ident += [("Operator", m["operator"]), ("Date of test", m["date"])]
         if m.get("organisation"):
             ident.append(("Organisation", m["organisation"]))
@@ -282,24 +313,13 @@ class Builder:
         missing = [v for k, v in names.items() if k not in self.c.tests]
         ident.append(("Tests", (", ".join(tested) or "none")
                       + (f"; not tested: {', '.join(missing)}" if missing else "")))
+        ident.append(("Uncertainty", f"expanded uncertainty U = k·u, k = {self.k:g} "
+                                     f"(± values in this sheet)"))
+        ident.append(("Decision rule", "guarded acceptance, guard band w = U (ILAC-G8)"
+                      if self.rule == "guard-band" else "simple acceptance (ILAC-G8)"))
         ident.append(("Software", f"gyrotest {__version__}"))
         ident.append(("Campaign file", f"{self.c.path.name} (SHA-256 {self.c.sha256[:16]}…)"))
-        prov = {
-            "gyrotest_version": __version__,
-            "campaign": {"file": str(self.c.path), "name": self.c.path.name,
-                         "sha256": self.c.sha256},
-            "inputs": self.input_files(),
-            "commands": [a.to_dict() for a in self.an.values()],
-            "working_directory": "paths in the commands are relative to the campaign file's "
-                                 "directory; run them there",
-            "options": self.c.to_dict()["tests"],
-            "timing_s": self.timing,
-        }
-        sheet = Sheet(title=title, identity=ident, sections=sections, checks=self.checks,
-                      figures=self.figures, warnings=self.warnings, provenance=prov,
-                      header=f"{g['model']} s/n {g['serial']}", notes=m.get("notes", ""))
-        ident.append(("Compliance", self.summary_line(sheet)))
-        return sheet
+        return ident
 
     def summary_line(self, sheet: Sheet) -> str:
         """One line: overall verdict and counts."""
@@ -308,7 +328,7 @@ class Builder:
         if not n_lim:
             return "no limits given in the campaign"
         parts = [f"{sheet.overall()}: {v.count('PASS')} of {n_lim} limited items pass"]
-        for k in ("FAIL", "INCONCLUSIVE"):
+        for k in ("FAIL", "CONDITIONAL FAIL", "INCONCLUSIVE", "CONDITIONAL PASS"):
             if v.count(k):
                 parts.append(f"{v.count(k)} {k}")
         nt = sum(1 for c in self.checks if c.verdict == NOT_TESTED and c.limit is not None)
@@ -452,17 +472,22 @@ class Builder:
                 extra = f" (period {fmt_number(cf['period_dps'])} °/s)"
             if cf.get("lock_in_rate_dps") is not None:
                 extra = f" (Ω_L {fmt_number(cf['lock_in_rate_dps'])} °/s)"
-            rows.append([cf["term"], cf["f_of_I"] + extra,
+            rows.append([F_OF_I_NAMES.get(cf["term"], cf["term"]), cf["f_of_I"] + extra,
                          s.num(["nonlinearity_model", "coefficients", i, "coefficient_ppm"],
                                "ppm", ["nonlinearity_model", "coefficients", i, "sigma_ppm"]),
                          "yes" if cf.get("supported_by_data") else "no (shown for scale)"])
         if rows:
-            sec.add(T(["term", "f(I), u = I/FS", "coefficient ± 1σ, ppm",
-                           "supported by the data"], rows,
-                          title="Rate-dependent scale-factor error f(I) of ε_K (§8.3)",
-                          unit_in_header=True, widths=[1.5, 3.2, 2.2, 1.8], key="sf_model"))
+            sec.add(T(["term of f(I) (its effect on the output)", "f(I), u = I/FS",
+                       "coefficient ± 1σ, ppm", "supported by the data"], rows,
+                      title="Rate-dependent scale-factor error f(I) of ε_K (§8.3)",
+                      unit_in_header=True, widths=[2.6, 2.4, 2.2, 1.8], key="sf_model"))
+            sec.add(P("The output error is I·f(I): a term in uⁿ of f(I) is a nonlinearity of "
+                      "order n + 1 in the output."))
+            asym_text = asymmetry_explanation(r)
+            if asym_text:
+                sec.add(P(asym_text))
         if nl.get("statement"):
-            sec.add(P(f"Nonlinearity model: {nl['statement']} Selection: "
+            self.eng_only(sec, P(f"Nonlinearity model: {nl['statement']} Selection: "
                          f"{nl.get('selection', '')}."))
         per = r.get("periodic", {})
         if per.get("supported_by_data"):
@@ -479,472 +504,6 @@ class Builder:
                     "least-squares line (ppm of full scale, ±1σ) with the selected nonlinearity "
                     "model, and the model history.")
         return sec
-
-    # ---------------------------------------------------------------- 3 drift
-    def drift(self, sec: Section) -> Section:
-        """Section 3: bias (3.1), random drift (3.2), noise structure (3.3), application (3.4)."""
-        self.bias(sec.sub("Bias D_F", "§5.3.3.1.1"))
-        self.random_drift(sec)
-        return sec
-
-    def bias(self, sec: Section) -> None:
-        """Subsection 3.1: D_F ± 1σ, repeatability, per-run table, multi-position cross-check."""
-        a = self.an.get("bias")
-        if a is None:
-            self.check("bias", "bias_dph", "bias D_F", "§5.3.3.1.1", None, sec.number)
-            self.check("bias", "repeatability_1sigma_dph", "bias repeatability (1σ)",
-                       "§5.3.3.1.1", None, sec.number)
-            self.coef["D_F"] = None
-            _not_tested(sec, "no static runs in the campaign ([tests.bias]).")
-            return
-        s = Src(a)
-        r = a.result
-        runs = r.get("runs", [])
-        items = []
-        if r.get("repeatability"):
-            df = s.num(["repeatability", "mean_bias_dph"], U_DPH,
-                       ["repeatability", "repeatability_1sigma_dph"])
-            items.append(self.check("bias", "bias_dph", f"bias D_F, mean of {len(runs)} runs "
-                                    "± 1σ run to run", "§5.3.3.1.1", df, sec.number))
-            items.append(self.check("bias", "repeatability_1sigma_dph", "repeatability, 1σ",
-                                    "§5.3.3.1.1", s.num(["repeatability",
-                                                         "repeatability_1sigma_dph"], U_DPH),
-                                    sec.number))
-            items.append(self.check("bias", "repeatability_max_spread_dph",
-                                    "repeatability, max spread", "§5.3.3.1.1",
-                                    s.num(["repeatability", "repeatability_max_spread_dph"],
-                                          U_DPH), sec.number))
-            ch = Check("bias.within_run", "within-run 1σ of D_F (RMS over runs)", "§12.11.4.1.1",
-                       s.num(["repeatability", "within_run_sigma_rms_dph"], U_DPH), None, U_DPH,
-                       sec.number)
-            self.checks.append(ch)
-            items.append(ch)
-            for n in r["repeatability"].get("notes", []):
-                self.warn("bias", n)
-        else:
-            df = s.num(["runs", 0, "bias_D_F_dph"], U_DPH, ["runs", 0, "bias_sigma_dph"])
-            items.append(self.check("bias", "bias_dph", "bias D_F ± 1σ", "§5.3.3.1.1", df,
-                                    sec.number))
-            items.append(self.check("bias", "repeatability_1sigma_dph", "repeatability (1σ)",
-                                    "§5.3.3.1.1", None, sec.number))
-        self.coef["D_F"] = df
-        mp = self.an.get("multiposition")
-        if mp is not None and mp.result.get("multi_position"):
-            ch = Check("bias.multiposition", "bias D_F from the multi-position fit ± 1σ "
-                       "(cross-check)", "§12.11.4.1.1",
-                       Src(mp).num(["multi_position", "bias_D_F_dph"], U_DPH,
-                                   ["multi_position", "bias_sigma_dph"]), None, U_DPH,
-                       sec.number)
-            self.checks.append(ch)
-            items.append(ch)
-        sec.add(_check_table(items, "Bias items"))
-        rows = []
-        for i, run in enumerate(runs):
-            rows.append([Path(run["source"]).name,
-                         s.num(["runs", i, "duration_s"], "s", digits=5),
-                         s.num(["runs", i, "mean_output_dph"], U_DPH, digits=6),
-                         s.num(["runs", i, "earth_rate_ia_dph"], U_DPH, digits=6),
-                         s.num(["runs", i, "bias_D_F_dph"], U_DPH, ["runs", i, "bias_sigma_dph"]),
-                         s.num(["runs", i, "uncertainty", "naive_sigma_over_sqrt_n_dph"], U_DPH,
-                               digits=2),
-                         s.num(["runs", i, "mean_temperature_c"], "°C", digits=3)])
-        sec.add(T(["run", "used, s", "mean output, °/h", "earth rate along IA, °/h",
-                       "D_F ± 1σ, °/h", "σ/√n, °/h (for comparison)", "temperature, °C"],
-                      rows, title="Per run (after the warm-up trim)", unit_in_header=True,
-                      widths=[2.3, 1.0, 1.4, 1.5, 1.8, 1.6, 1.5], key="bias_runs"))
-        t = self.c.tests["bias"]
-        skip = t.opt("skip", "0")
-        sec.add(P("D_F = mean rate − earth-rate component along the IA after a "
-                     f"{skip} warm-up trim; the 1σ of each run is the Allan deviation at the "
-                     "record length from a fitted noise model (honest for correlated noise; "
-                     "σ/√n shown only for comparison)."))
-        if t.conditions:
-            sec.add(P(f"Conditions between runs: {t.conditions}.", "note"))
-        for run in runs:
-            for n in run.get("notes", []):
-                self.warn("bias", f"{Path(run['source']).name}: {n}")
-
-    def random_drift(self, parent: Section) -> None:
-        """Subsections 3.2-3.4 from the Allan analysis: N, B, K, R, Q with ≤ for bounds."""
-        a = self.an.get("allan")
-        sec = parent.sub("Random drift D_R and quantization D_Q", "§5.3.3.1.2, §5.3.3.1.3")
-        labels = {"N": ("angle random walk N", "§5.3.3.1.2 a", U_ARW),
-                  "B": ("bias instability B", "§5.3.3.1.2 b", U_DPH),
-                  "K": ("rate random walk K", "§5.3.3.1.2 c", U_RRW),
-                  "R": ("rate ramp R", "§5.3.3.1.2 d", U_RR),
-                  "Q": ("quantization noise Q", "§5.3.3.1.3", "arcsec")}
-        if a is None:
-            for k, (lab, ieee, u) in labels.items():
-                self.check("allan", k, lab, ieee, None, sec.number, u)
-                self.coef[k] = None
-            _not_tested(sec, "no Allan run in the campaign ([tests.allan]).")
-            _not_tested(parent.sub("Noise structure"), "needs the Allan analysis.")
-            _not_tested(parent.sub("Application note: platform vs strapdown"),
-                        "needs the Allan analysis.")
-            return
-        s = Src(a)
-        base = ["logs", 0, "axes", 0]
-        ax = dig(a.result, base)
-        fit = ax["fit"]
-        terms = fit["terms"]
-        idx = {t["key"]: i for i, t in enumerate(terms)}
-        items = []
-        for k, (lab, ieee, u) in labels.items():
-            if k not in idx:
-                self.coef[k] = None
-                items.append(self.check("allan", k, lab + " (not fitted)", ieee, None,
-                                        sec.number, u))
-                continue
-            i = idx[k]
-            tp = base + ["fit", "terms", i]
-            if terms[i]["status"] == "identified":
-                n = s.num(tp + ["params", k], u, tp + ["sigma", k])
-            else:
-                n = s.num(tp + ["upper_95"], u, bound=True)
-            self.coef[k] = n
-            items.append(self.check("allan", k, lab, ieee, n, sec.number, u))
-        sec.add(_check_table(items, "Allan-variance coefficients (joint fit; ≤: upper bound "
-                                    "only, 95 % profile likelihood; ±: 1σ)"))
-        rr = dig(a.result, ["logs", 0])
-        fp = base + ["fit"]
-        txt = (f"Joint fit of {','.join(fit['terms_requested'])} to the overlapping Allan "
-               f"deviation over τ = {s.t(fp + ['fit_range_s', 0], 's')} … "
-               f"{s.t(fp + ['fit_range_s', 1], 's')}: χ²/dof = "
-               f"{s.t(fp + ['chi2_per_dof'], digits=3)}, p = {s.t(fp + ['p_value'], digits=2)}"
-               f" ({'consistent' if fit.get('consistent') else 'the model misfits'}). Record: "
-               f"{s.t(['logs', 0, 'duration_s'], 's', digits=6)} after the "
-               f"{self.c.tests['allan'].opt('skip', '0')} warm-up trim, τ0 = "
-               f"{s.t(['logs', 0, 'tau0_s'], 's')}.")
-        sec.add(P(txt))
-        dg = ax.get("diagnosis")
-        if dg and dg.get("verdict"):
-            sec.add(P(f"Diagnosis of missing terms: {dg['verdict']}", "note"))
-        self.noise_structure(parent.sub("Noise structure", "Annex C"), a, s, base, ax)
-        self.application(parent.sub("Application note: platform vs strapdown"), a, s, base, ax)
-        for w in ax.get("warnings", []):
-            self.warn("allan", f"{w['title']}: {w['message']}", w.get("code", ""),
-                      "warning" if w.get("severity", "warning") == "warning" else "note")
-        for n in ax.get("notes", []) + rr.get("notes", []):
-            self.warn("allan", n, kind="note")
-        fig = self.draw("allan", lambda: _fig("allan_figure", rr["source"], a.obj.axes[0]))
-        self.figure(sec, fig, "Overlapping Allan deviation of the static run with χ² "
-                    "confidence intervals, the fitted noise model and its components; below, "
-                    "the residual per τ in units of the confidence interval.")
-
-    def noise_structure(self, sec: Section, a, s: Src, base: list, ax: dict) -> None:
-        """Subsection 3.3: Krobka's noise-structure table (value, status, τ range, S(0))."""
-        terms = ax["fit"]["terms"]
-        rows = []
-        for i, t in enumerate(terms):
-            tp = base + ["fit", "terms", i]
-            main = next(iter(t["params"]))
-            unit = _unit(t["units"].get(main, ""))
-            if t["status"] == "identified":
-                val = s.num(tp + ["params", main], unit, tp + ["sigma", main])
-            else:
-                val = s.num(tp + ["upper_95"], unit, bound=True)
-            dom = t.get("dominant_tau_s")
-            domt = (f"{fmt_number(dom[0], 3)} … {fmt_number(dom[1], 3)}" if dom else
-                    "nowhere dominant")
-            extra = [f"{k} = {fmt_number(v)} {_unit(t['units'].get(k, ''))}".strip()
-                     for k, v in t["params"].items() if k != main]
-            rows.append([f"{t['label']} ({t['title']})" + (f"; {', '.join(extra)}" if extra
-                                                          else ""),
-                         val, t["status"], domt,
-                         "0: " + t["label_impact"] if t.get("zero_dc_psd") else "> 0"])
-        sec.add(T(["component", "value", "status", "dominates at τ, s",
-                       "PSD at f = 0 (strapdown note)"], rows,
-                      title="Noise components (what drives the error, and where)",
-                      widths=[3.0, 2.2, 1.4, 1.6, 2.6], key="noise_structure"))
-        ro = ax.get("slope_readoffs", {})
-        lines = [
-            f"Input: {ax.get('input', '')}. Output rate {s.t(['logs', 0, 'sample_rate_hz'], 'Hz')} "
-            f"(τ0 = {s.t(['logs', 0, 'tau0_s'], 's')}); no filter applied by gyrotest (each sample is "
-            "the average rate over τ0, as a pulse integrator delivers it).",
-            "PSD normalisation: two-sided rate PSD in the IEEE 952 convention (white rate noise "
-            "S = N²); the Allan variance is σ²(τ) = 4∫S(f)·sin⁴(πfτ)/(πfτ)² df.",
-        ]
-        if "N_upper" in ro:
-            lines.append(
-                "Graph read-offs for comparison (Krobka): "
-                f"N_upper = min σ√τ/60 = {s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
-                f" (ray through the leftmost point); B_tangent = σ_min/0.664 = "
-                f"{s.t(base + ['slope_readoffs', 'B_tangent'], U_DPH)} (an upper bound "
-                "in a mixture); Allan floor σ_min = "
-                f"{s.t(base + ['slope_readoffs', 'allan_floor_dph'], U_DPH)} at τ = "
-                f"{s.t(base + ['slope_readoffs', 'allan_floor_tau_s'], 's')}.")
-        lines.append("A coefficient the graph cannot establish is given as an upper bound (≤). "
-                     "Noises with zero PSD at zero frequency stay bounded on a platform but "
-                     "grow in strapdown: a single drift number does not describe the gyro.")
-        for ln in lines:
-            sec.add(P(ln))
-
-    def application(self, sec: Section, a, s: Src, base: list, ax: dict) -> None:
-        """Subsection 3.4: platform vs strapdown attitude error at the vehicle rates."""
-        imp = ax.get("impact")
-        if not imp:
-            _not_tested(sec, "the analysis gave no impact prediction.")
-            return
-        ip = base + ["impact"]
-        hz = imp["horizon_s"]
-        rows = [["inertially stabilised platform", "—",
-                 s.num(ip + ["platform", "sigma_att_deg"], "°", digits=3),
-                 "1", s.num(ip + ["platform", "conservative_sigma_att_deg"], "°", digits=3)]]
-        for i in range(len(imp.get("strapdown", []))):
-            rows.append(["strapdown, constant rate about one gyro axis",
-                         s.num(ip + ["strapdown", i, "vehicle_rate_deg_s"], "°/s", digits=3),
-                         s.num(ip + ["strapdown", i, "sigma_att_deg"], "°", digits=3),
-                         s.num(ip + ["strapdown", i, "sins_to_ins_ratio"], "", digits=3),
-                         s.num(ip + ["strapdown", i, "conservative_sigma_att_deg"], "°",
-                               digits=3)])
-        if not imp.get("strapdown"):
-            sec.add(P("No vehicle rates given ([tests.allan] vehicle_rates): only the "
-                      "platform case is predicted.", "note"))
-        sec.add(T(["system", "vehicle rate", f"attitude error σ after {fmt_number(hz)} s",
-                       "σ ratio strapdown/platform", "σ with the bounds at their limit"], rows,
-                      title="Predicted attitude error of three such gyros (first order)",
-                      widths=[3.2, 1.3, 2.0, 1.5, 1.8], key="impact"))
-        comps = imp.get("components", [])
-        if comps:
-            rates = imp.get("strapdown", [])
-            crow = []
-            for i, c in enumerate(comps):
-                cp = ip + ["components", i]
-                crow.append([c["term"] + ("  (S(0) = 0)" if c.get("zero_dc_psd") else ""),
-                             s.num(cp + ["platform_sigma_deg"], "", digits=3)]
-                            + [s.num(cp + ["strapdown_sigma_deg", j], "", digits=3)
-                               for j in range(len(rates))])
-            sec.add(T(["component", "platform σ, °"]
-                      + [f"strapdown at {fmt_number(r['vehicle_rate_deg_s'], 3)} °/s, σ, °"
-                         for r in rates], crow,
-                      title=f"Contribution of each noise component after {fmt_number(hz)} s",
-                      unit_in_header=True, key="impact_components"))
-        tab = ax.get("table", [])
-        k100 = next((i for i, row in enumerate(tab) if abs(row["tau"] / 100.0 - 1) < 0.01
-                     and row.get("sigma") is not None), None)
-        if k100 is not None:
-            sec.add(P("For comparison, the drift in the old integral sense, σ(τ = "
-                      f"{s.t(base + ['table', k100, 'tau'], 's')}) = "
-                      f"{s.t(base + ['table', k100, 'sigma'], U_DPH)}, is one number: it cannot "
-                      "tell how the error grows in a strapdown system, where the components "
-                      "above add differently.", "note"))
-        for fl in imp.get("flags", []):
-            sec.add(P(fl.get("text", ""), "note"))
-        sec.add(P("Assumptions: " + "; ".join(imp.get("assumptions", [])) + ". Method: "
-                     + imp.get("method", "") + "."))
-
-    # ---------------------------------------------------------------- 4 environment
-    def environment(self, sec: Section) -> Section:
-        """Section 4: thermal, magnetic, supply and model-history subsections."""
-        self.thermal(sec.sub("Thermal: D_T, D_Ṫ, D_∇Ṫ and the Antonova–Matveev model"))
-        self.magnetic(sec.sub("Magnetic field: w_x, w_y, w_z"))
-        self.supply(sec.sub("Supply voltage"))
-        self.history(sec.sub("Model history: the error falling as terms are added"))
-        st = [s.status for s in sec.subsections]
-        if all(x == NOT_TESTED for x in st):
-            sec.status = NOT_TESTED
-        elif NOT_TESTED in st:
-            sec.status = "partly tested"
-        return sec
-
-    def thermal(self, sec: Section) -> None:
-        """Subsection 4.1: IEEE E terms and the Antonova–Matveev coefficients."""
-        a = self.an.get("thermal")
-        ieee_lab = {"D_T": ("drift temperature sensitivity D_T", "(°/h)/°C"),
-                    "D_Tdot": ("temperature-ramp sensitivity D_Ṫ", "(°/h)/(°C/h)"),
-                    "D_gradTdot": ("gradient-rate sensitivity D_∇Ṫ", "(°/h)/(°C/h)")}
-        ch = (a.result.get("chamber") if a else None) or None
-        if ch is None:
-            for k, (lab, u) in ieee_lab.items():
-                self.check("thermal", k, lab, "§8.3 E", None, sec.number, u)
-                self.coef[k] = None
-            if a is None or not a.result.get("setpoints"):
-                _not_tested(sec, "no thermal-chamber run in the campaign ([tests.thermal]).")
-                return
-        s = Src(a)
-        if ch is not None:
-            items = []
-            for i, c in enumerate(ch.get("ieee_E_terms", [])):
-                lab, u = ieee_lab.get(c["name"], (c["name"], _unit(c["unit"])))
-                n = s.num(["chamber", "ieee_E_terms", i, "value"], u,
-                          ["chamber", "ieee_E_terms", i, "stderr"])
-                self.coef[c["name"]] = n
-                items.append(self.check("thermal", c["name"], lab, "§8.3 E", n, sec.number, u))
-            for k, (lab, u) in ieee_lab.items():
-                if k not in self.coef:
-                    self.coef[k] = None
-                    items.append(self.check("thermal", k, lab + " (not fitted)", "§8.3 E", None,
-                                            sec.number, u))
-            sec.add(_check_table(items, f"IEEE 952 E terms (ΔT from t0 = "
-                                        f"{fmt_number(ch['t0_degC'])} °C, sensor "
-                                        f"{ch['sensor']}; ± 1σ HAC)"))
-            rows = []
-            am_lab = {"w0": "offset w0", "w1": "linear w1", "w2": "quadratic w2",
-                      "w_dV": "temperature-rate w_ΔV"}
-            for i, c in enumerate(ch.get("coefficients", [])):
-                rows.append([am_lab.get(c["name"], c["name"]),
-                             s.num(["chamber", "coefficients", i, "value"], _unit(c["unit"]),
-                                   ["chamber", "coefficients", i, "stderr"])])
-            sec.add(T(["coefficient", "value ± 1σ"], rows,
-                          title="Antonova–Matveev model Δω = w0 + w1·ΔT + w2·ΔT² + "
-                                "w_ΔV·dT/dt (ΔT in °C, dT/dt in °C/h)",
-                          widths=[3.0, 4.0], key="am"))
-            f = ch.get("fit", {})
-            sec.add(P(
-                "Fit quality: residual RMS "
-                f"{s.t(['chamber', 'fit', 'rms_fit_dph'], U_DPH)}, held-out "
-                f"{s.t(['chamber', 'fit', 'rms_holdout_dph'], U_DPH)}, noise "
-                f"floor (fixed for the log) {s.t(['chamber', 'fit', 'noise_floor_dph'], U_DPH)}; "
-                f"working resolution: {f.get('resolution_note', '')}."))
-            h = ch.get("hysteresis", {})
-            if "heating_minus_cooling_dph" in h:
-                sec.add(P("Heating − cooling residual: "
-                             f"{s.t(['chamber', 'hysteresis', 'heating_minus_cooling_dph'], U_DPH, ['chamber', 'hysteresis', 'stderr_dph'])}"
-                             f" ({h.get('verdict', '')})."))
-            for n in ch.get("notes", []):
-                sec.add(P(n, "note"))
-            for w in dig(ch, ["am_fit", "warnings"]) or []:
-                self.warn("thermal-fit", w)
-        sp = a.result.get("setpoints")
-        if sp:
-            rows = []
-            for i, c in enumerate(sp.get("coefficients", [])):
-                rows.append([c["name"], s.num(["setpoints", "coefficients", i, "value"],
-                                              _unit(c["unit"]),
-                                              ["setpoints", "coefficients", i, "stderr"])])
-            sec.add(T(["coefficient", "value ± 1σ"], rows,
-                          title="Steady-state set-points: Δω = w0 + w1·ΔT + w2·ΔT²",
-                          key="setpoints"))
-        t = self.c.tests["thermal"]
-        if t.conditions:
-            sec.add(P(f"Conditions: {t.conditions}.", "note"))
-        if ch is not None:
-            figs = self.draw("thermal", lambda: _fig("thermal_figures", a.obj.chamber)) or []
-            caps = {"thermal_thermal": "Thermal run: drift against temperature (heating and "
-                    "cooling coloured) with the static Antonova–Matveev curve, and the "
-                    "temperature-rate term.",
-                    "thermal_time": "Thermal run: measured drift and the Antonova–Matveev model "
-                    "over time, the residual, and the temperatures."}
-            for f in figs:
-                self.figure(sec, f, caps.get(f.key, ""))
-
-    def magnetic(self, sec: Section) -> None:
-        """Subsection 4.2: w_x, w_y, w_z with the reversal and hysteresis cross-checks."""
-        a = self.an.get("magnetic")
-        if a is None:
-            for k in ("wx", "wy", "wz"):
-                self.check("magnetic", k, f"magnetic sensitivity w_{k[1]}", "§5.3.3.2", None,
-                           sec.number, "°/h per 100 µT")
-                self.coef[k] = None
-            _not_tested(sec, "no Helmholtz-coil run in the campaign ([tests.magnetic]).")
-            return
-        s = Src(a)
-        r = a.result
-        items = []
-        for i, c in enumerate(r.get("coefficients", [])):
-            n = s.num(["coefficients", i, "value"], "°/h per 100 µT", ["coefficients", i, "stderr"])
-            self.coef[c["name"]] = n
-            items.append(self.check("magnetic", c["name"], f"magnetic sensitivity w_{c['name'][1]}",
-                                    "§5.3.3.2", n, sec.number, "°/h per 100 µT"))
-        for k in ("wx", "wy", "wz"):
-            self.coef.setdefault(k, None)
-        sec.add(_check_table(items, "Δω(H) = w0 + w_x·H_x/H0 + w_y·H_y/H0 + w_z·H_z/H0, H0 = "
-                                    "100 µT (± 1σ HAC)"))
-        rows = []
-        for ax_ in "xyz":
-            rv = r.get("reversal_K", {}).get(ax_)
-            hy = r.get("sweep_hysteresis", {}).get(ax_)
-            if not rv and not hy:
-                continue
-            rows.append([ax_.upper(),
-                         s.num(["reversal_K", ax_, "signed_dph_per_100uT"], "°/h per 100 µT")
-                         if rv else "—",
-                         s.num(["sweep_hysteresis", ax_, "up_minus_down_dph"], U_DPH,
-                               ["sweep_hysteresis", ax_, "stderr_dph"]) if hy else "—",
-                         hy.get("verdict", "") if hy else ""])
-        if rows:
-            sec.add(T(["axis", "reversal estimate K = Δω/(2·max/H0)",
-                           "up − down sweep", "hysteresis"], rows,
-                          title="Cross-checks (Antonova & Matveev's reversal estimate; sweep "
-                                "hysteresis)", widths=[0.8, 2.6, 2.2, 3.6], key="mag_checks"))
-        for n in r.get("notes", []):
-            sec.add(P(n, "note"))
-        for w in dig(r, ["fit", "warnings"]) or []:
-            self.warn("mag-fit", w)
-        t = self.c.tests["magnetic"]
-        if t.conditions:
-            sec.add(P(f"Conditions: {t.conditions}.", "note"))
-        fig = self.draw("magnetic", lambda: _fig("magnetic_figure", a.obj))
-        self.figure(sec, fig, "Helmholtz-coil run: mean drift of each field level against the "
-                    "applied field, per axis, with the fitted sensitivity.")
-
-    def supply(self, sec: Section) -> None:
-        """Subsection 4.3: supply-voltage sensitivity ('model fit --terms V')."""
-        a = self.an.get("supply")
-        if a is None:
-            self.check("supply", "supply_dph_per_v", "supply-voltage sensitivity", "§8.3 E",
-                       None, sec.number, "(°/h)/V")
-            self.coef["V"] = None
-            _not_tested(sec, "no supply-voltage run in the campaign ([tests.supply]).")
-            return
-        s = Src(a)
-        coefs = a.result.get("coefficients", [])
-        i = next((j for j, c in enumerate(coefs) if c.get("term", "").startswith("V")), None)
-        n = None
-        if i is not None:
-            n = s.num(["coefficients", i, "value"], _unit(coefs[i]["unit"]),
-                      ["coefficients", i, "stderr"])
-        self.coef["V"] = n
-        sec.add(_check_table([self.check("supply", "supply_dph_per_v",
-                                         "supply-voltage sensitivity", "§8.3 E", n, sec.number,
-                                         "(°/h)/V")]))
-        for w in a.result.get("warnings", []) or []:
-            self.warn("model fit (supply)", w)
-
-    def history(self, sec: Section) -> None:
-        """Subsection 4.4: the model-fit steps of the thermal run, error falling."""
-        steps = [self.an[k] for k in sorted((k for k in self.an if k.startswith("thermal.step")),
-                                            key=lambda k: int(k[len("thermal.step"):]))]
-        if not steps:
-            _not_tested(sec, "no model steps given ([tests.thermal] model_steps).")
-            return
-        rows = []
-        prev: list[str] = []
-        for a in steps:
-            s = Src(a)
-            terms = [t for t in a.result.get("terms", []) if t != "bias"]
-            added = [t for t in terms if t not in prev]
-            prev = terms
-            rows.append([", ".join(terms) or "(bias only)",
-                         " ".join("+" + t for t in added) or "(same)",
-                         s.num(["n_params"], "", digits=3),
-                         s.num(["rms_fit_dph"], U_DPH, digits=3),
-                         s.num(["rms_holdout_dph"], U_DPH, digits=3),
-                         s.num(["noise_floor", "rms_dph"], U_DPH, digits=3),
-                         s.num(["aic"], "", digits=6)])
-        sec.add(T(["terms", "added", "params", "RMS fit, °/h", "RMS held-out, °/h",
-                       "noise floor, °/h", "AIC"], rows,
-                      title=f"Successive 'gyrotest model fit' steps on "
-                            f"{Path(steps[0].argv[2]).name}", unit_in_header=True,
-                      widths=[3.0, 1.7, 1.0, 1.2, 1.4, 1.3, 1.2], key="history"))
-        last = steps[-1].result
-        ho = last.get("rms_holdout_dph")
-        fl = (last.get("noise_floor") or {}).get("rms_dph")
-        end = ""
-        if isinstance(ho, (int, float)) and isinstance(fl, (int, float)) and fl > 0:
-            r = ho / fl
-            end = (f" The last step's held-out RMS is {r:.2g}× the noise floor (fixed for the "
-                   "log, from its short-τ noise): "
-                   + ("the model has reached the floor." if r <= 1.1 else
-                      "drift remains that these terms do not explain; 'gyrotest model "
-                      "diagnose' tries every candidate term on it."))
-        sec.add(P("Each step adds a physical term; the held-out RMS (blocked cross-"
-                     "validation) falls while the term explains real drift and stops falling "
-                     "at the noise floor." + end))
-        fig = self.draw("history", lambda: _fig("history_figure",
-                                                ad.history_steps(steps)))
-        self.figure(sec, fig, "Model history of the thermal run: residual RMS (fit, held-out, "
-                    "noise floor) and information criteria per step.")
 
     # ---------------------------------------------------------------- 5 alignment
     def alignment(self, sec: Section) -> Section:
@@ -1106,156 +665,51 @@ class Builder:
                      "D: drift (bias D_F, random drift D_R, quantization D_Q), ε_K: scale-factor "
                      "error in ppm. A term that was not measured reads \"not tested\"."))
 
-    # ---------------------------------------------------------------- 6 conditions
-    def conditions(self, sec: Section) -> Section:
-        """Section 6: logs as read, input files with SHA-256, equivalent commands."""
-        titles = {"bias": "bias runs", "allan": "Allan run", "scale_factor": "rate-table runs",
-                  "thermal": "thermal-chamber run", "magnetic": "Helmholtz-coil run",
-                  "multiposition": "multi-position run", "supply": "supply-voltage run"}
-        used: dict[str, list[str]] = {}
-        for name, t in self.c.tests.items():
-            for p in t.logs:
-                used.setdefault(self.c.rel(p), []).append(titles[name])
-        rows = []
-        for rel, tests in used.items():
-            a = self.an.get(f"info:{rel}")
-            if a is None:
-                continue
-            s = Src(a)
-            r = a.result
-            chans = r.get("channels", {})
-            temps = [k for k in chans if k.startswith("temperature:")]
-            trange = "—"
-            if temps:
-                k = temps[0]
-                trange = (f"{s.t(['channels', k, 'min'], '', digits=3)} … "
-                          f"{s.t(['channels', k, 'max'], '', digits=3)}")
-            extra = []
-            if "table_rate" in chans:
-                extra.append(f"table {s.t(['channels', 'table_rate', 'min'], '', digits=3)}"
-                             f" … {s.t(['channels', 'table_rate', 'max'], '', digits=3)}"
-                             " °/s")
-            fields = [k for k in chans if k.startswith("field:")]
-            if fields:
-                lo = min(chans[k]["min"] for k in fields)
-                extra.append(f"field ({len(fields)} axes) {fmt_number(lo, 3)} … "
-                             f"{fmt_number(max(chans[k]['max'] for k in fields), 3)} µT")
-            if r.get("positions"):
-                extra.append("positions " + ", ".join(r["positions"]))
-            if len(temps) > 1:
-                extra.append(f"{len(temps)} temperature channels")
-            gaps = dig(r, ["timing", "gaps"]) or []
-            if gaps:
-                extra.append(f"{len(gaps)} gap(s)")
-            rows.append([", ".join(tests), rel,
-                         s.num(["timing", "samples"], "", digits=7),
-                         s.num(["timing", "sample_rate_hz"], "", digits=4),
-                         s.num(["timing", "duration_s"], "", digits=6),
-                         trange, "; ".join(extra) or "—"])
-        if rows:
-            sec.add(T(["test", "file", "samples", "sample rate, Hz", "duration, s",
-                           "temperature, °C (min … max)", "other"], rows,
-                          title="Logs (as read by 'gyrotest info')", unit_in_header=True,
-                          widths=[1.6, 2.2, 1.1, 0.9, 1.1, 1.6, 2.2], key="logs"))
-        else:
-            sec.add(P("No logs.", "note"))
-        rows = [[f["file"], f["sha256"]] for f in self.input_files()]
-        rows.insert(0, [self.c.path.name + " (campaign)", self.c.sha256])
-        sec.add(T(["input file", "SHA-256"], rows, title="Input files", widths=[2.4, 6.4],
-                      key="files"))
-        rows = [[a.key.split(":")[0] if not a.key.startswith("info:") else "info",
-                 " ".join(_quote(x) for x in ["gyrotest", *a.argv])]
-                for a in self.an.values() if not a.key.startswith("info:")]
-        sec.add(T(["analysis", "equivalent command (run in the campaign directory; add "
-                       "--json for the numbers)"], rows, title="Commands", widths=[1.3, 7.5],
-                      key="commands"))
-        sec.add(P(f"Generated by gyrotest {__version__} from {self.c.path.name}; "
-                     "'gyrotest report' calls the same analysis functions as these commands, so "
-                     "each number in this sheet equals the one the command prints."))
-        return sec
 
-    def identity_checks(self) -> None:
-        """Warn when a log's profile names another model, serial or S0 than the campaign."""
-        g = self.c.gyro
-        seen = set()
-        for a in self.an.values():
-            for lg in a.logs:
-                if id(lg) in seen:
-                    continue
-                seen.add(id(lg))
-                gy = lg.gyro
-                name = Path(lg.source).name
-                if gy.model and gy.model != g["model"]:
-                    self.warn("campaign", f"{name}: gyro model {gy.model!r} in its profile, "
-                              f"{g['model']!r} in the campaign")
-                if gy.serial and gy.serial != g["serial"]:
-                    self.warn("campaign", f"{name}: serial {gy.serial!r} in its profile, "
-                              f"{g['serial']!r} in the campaign")
-                s0 = g.get("nominal_scale_factor")
-                if s0 is not None and gy.scale_factor is not None and \
-                        abs(gy.scale_factor / s0 - 1) > 1e-12:
-                    self.warn("campaign", f"{name}: S0 = {gy.scale_factor:g} in its profile, "
-                              f"{s0:g} in the campaign")
+def expand_uncertainties(sheet: Sheet, k: float) -> None:
+    """Show every ± as the expanded uncertainty U = k·σ and say so in the headings (the JSON
+    keeps σ and adds ``expanded_uncertainty``)."""
+    lab = f"± U (k = {k:g})"
 
-    # ---------------------------------------------------------------- 7, 8
-    def warnings_section(self, sec: Section) -> Section:
-        """Section 7: warnings first, then notes, with their source."""
-        if not self.warnings:
-            sec.add(P("None."))
-            return sec
-        order = sorted(self.warnings, key=lambda w: w.get("kind") != "warning")
-        rows = [[w["source"], w.get("kind", "warning") + (f" {w['code']}" if w.get("code")
-                                                           else ""), w["text"]]
-                for w in order]
-        sec.add(T(["from", "kind", "text"], rows, widths=[1.4, 1.5, 7.0], key="warnings"))
-        return sec
+    def fix(t: str) -> str:
+        return (t.replace("± 1σ HAC", f"{lab}, HAC standard errors").replace("± 1σ", lab)
+                .replace("±: 1σ", f"±: U, k = {k:g}"))
 
-    def compliance(self, sec: Section) -> Section:
-        """Section 8: every item with a limit, the verdict rule, and what was not tested."""
-        limited = [c for c in self.checks if c.limit is not None]
-        if not limited:
-            sec.add(P("No limits given in the campaign: every item reads \"no limit given\"."))
-        else:
-            sec.add(_check_table(limited, "Items with a limit"))
-        sec.add(P("Rule: " + VERDICT_RULE))
-        nolim = [c for c in self.checks if c.limit is None and c.verdict != NOT_TESTED
-                 and c.key.split(".")[1] in LIMITS.get(c.key.split(".")[0], {})]
-        if nolim:
-            sec.add(P("No limit given for: " + "; ".join(sorted({c.label for c in nolim}))
-                      + "."))
-        nt = sorted({c.label for c in self.checks if c.verdict == NOT_TESTED})
-        if nt:
-            sec.add(P("Not tested: " + "; ".join(nt) + "."))
-        return sec
+    def nums(block):
+        if isinstance(block, Table):
+            for r in block.rows:
+                for c in r:
+                    if isinstance(c, Num):
+                        yield c
+        yield from getattr(block, "nums", [])
+
+    for sec in sheet.walk():
+        for b in sec.blocks:
+            for n in nums(b):
+                n.k = k
+            if isinstance(b, Table):
+                b.title = fix(b.title)
+                b.columns = [fix(c) for c in b.columns]
+                b.rows = [[fix(c) if isinstance(c, str) else c for c in r] for r in b.rows]
+            elif isinstance(b, Para):
+                b.text = fix(b.text)
+    for c in sheet.checks:
+        c.label = fix(c.label)
+        if c.measured is not None:
+            c.measured.k = k
 
 
-def _fig(name: str, *args):
-    from . import figures
-
-    return getattr(figures, name)(*args)
-
-
-def _unit(u: str) -> str:
-    """Sheet spelling of a core unit string."""
-    rep = {"deg/sqrt(h)": U_ARW, "deg/h/sqrt(h)": U_RRW, "deg/h/h": U_RR, "deg/h": U_DPH,
-           "deg/(h·degC)": "(°/h)/°C", "deg/(h·degC^2)": "(°/h)/°C²",
-           "deg/degC = (deg/h)/(degC/h)": "(°/h)/(°C/h)", "(deg/h)/degC": "(°/h)/°C",
-           "(deg/h)/(degC/h)": "(°/h)/(°C/h)", "deg/h per 100 uT": "°/h per 100 µT",
-           "(deg/h)/V": "(°/h)/V", "deg/s": "°/s", "degC": "°C"}
-    return rep.get(u, u)
-
-
-def _quote(x: str) -> str:
-    import shlex
-
-    return shlex.quote(x)
-
-
-def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures: bool = True
-                ) -> Sheet:
-    """Lay out the sheet from the analyses (figures drawn when ``figures``)."""
+def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures: bool = True,
+                variant: str = "customer") -> Sheet:
+    """Lay out the sheet from the analyses (figures drawn when ``figures``); ``variant`` is
+    "customer" (results, uncertainties, limits, decision rule, conditions, equipment,
+    references, sign-off) or "engineering" (adds the diagnostics, algorithm notes and
+    warnings)."""
+    if variant not in VARIANTS:
+        raise InputError(f"unknown report variant {variant!r}: use {' or '.join(VARIANTS)}")
     Src.sink.clear()
-    b = Builder(campaign, analyses, figures)
+    Src.k = float(campaign.decision.get("coverage_factor", 2.0))
+    b = Builder(campaign, analyses, figures, variant)
     sheet = b.build()
     sheet.provenance["timing_s"] = {**{a.key: a.seconds for a in analyses.values()},
                                     **b.timing}
@@ -1263,12 +717,13 @@ def build_sheet(campaign: Campaign, analyses: dict[str, ad.Analysis], *, figures
 
 
 def make_report(campaign: Campaign, *, figures: bool = True,
-                progress: Callable[[str], None] | None = None) -> Sheet:
-    """Run the campaign and build its sheet."""
+                progress: Callable[[str], None] | None = None,
+                variant: str = "customer") -> Sheet:
+    """Run the campaign and build its sheet (``variant``: customer or engineering)."""
     t0 = time.perf_counter()
     an = run_campaign(campaign, progress=progress)
     t1 = time.perf_counter()
-    sheet = build_sheet(campaign, an, figures=figures)
+    sheet = build_sheet(campaign, an, figures=figures, variant=variant)
     sheet.provenance["timing_s"]["analyses_total"] = t1 - t0
     sheet.provenance["timing_s"]["layout_and_figures"] = time.perf_counter() - t1
     return sheet

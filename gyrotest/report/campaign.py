@@ -1,5 +1,8 @@
 """The campaign file: which logs make up a gyro test campaign, how to read them, which options
-each analysis gets, and the spec limits (IEEE 952's "shall not exceed ___" blanks).
+each analysis gets, the spec limits (IEEE 952's "shall not exceed ___" blanks) and the
+laboratory parts of the report (``[lab]``, ``[approval]``, ``[decision]``, ``[[equipment]]``,
+``[[revisions]]``, per-test ``environment``). User reference: docs/campaign.md and
+``gyrotest report --template``.
 
 A campaign is TOML; paths are relative to the campaign file; unknown sections and keys are
 errors. The whole file is validated -- every path exists, every bench profile parses, every
@@ -93,7 +96,16 @@ COMMON_KEYS: dict[str, tuple[str, str | None, str]] = {
     "limits": ("limits", None, "spec limits of this test's items"),
     "conditions": ("str", None, "free text: the test conditions IEEE 952 asks to state"),
     "axis": ("str", "--axis", "gyro axis (rate column) to analyse"),
+    "environment": ("environment", None, "ambient conditions during this test (temperature, "
+                    "humidity, pressure, vibration, notes)"),
 }
+
+#: keys of a test's ``environment = { ... }`` table (free text, units written out)
+ENVIRONMENT_KEYS = {"temperature": "ambient temperature, e.g. \"22 ± 1 °C\"",
+                    "humidity": "relative humidity, e.g. \"40 … 50 % RH\"",
+                    "pressure": "air pressure, e.g. \"960 hPa\"",
+                    "vibration": "seismic/vibration condition, e.g. \"isolated pier\"",
+                    "notes": "anything else a reader needs to repeat the test"}
 
 TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
     "bias": {
@@ -182,12 +194,25 @@ LIMITS: dict[str, dict[str, tuple[str, str]]] = {
 
 SECTION_KEYS = {
     "campaign": {"title": "str", "operator": "str", "date": "date", "organisation": "str",
-                 "notes": "str", "report_id": "str"},
+                 "notes": "str", "report_id": "str", "customer": "str", "revision": "str"},
+    "lab": {"name": "str", "address": "str", "accreditation": "str", "logo": "path",
+            "contact": "str"},
+    "approval": {"prepared_by": "str", "reviewed_by": "str", "approved_by": "str",
+                 "approved_title": "str", "approval_date": "date"},
+    "decision": {"rule": "str", "coverage_factor": "float"},
     "gyro": {"model": "str", "serial": "str", "type": "str", "nominal_scale_factor": "float",
              "scale_factor_unit": "str"},
     "site": {"latitude_deg": "float", "name": "str"},
 }
 REQUIRED = {"campaign": ("operator", "date"), "gyro": ("model", "serial")}
+#: decision rules (ILAC-G8:09/2019): guard-banded acceptance with w = U, or simple acceptance
+DECISION_RULES = ("guard-band", "simple")
+#: ``[[equipment]]`` entries: key -> type
+EQUIPMENT_KEYS = {"name": "str", "model": "str", "serial": "str", "asset_id": "str",
+                  "calibrated": "date", "calibration_due": "date", "certificate": "str",
+                  "tests": "strs"}
+#: ``[[revisions]]`` entries: key -> type
+REVISION_KEYS = {"revision": "str", "date": "date", "description": "str", "author": "str"}
 SF_UNITS = ("arcsec/pulse", "(deg/h)/V", "1")
 INGEST_KEYS = ("time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
                "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset",
@@ -208,6 +233,7 @@ class Test:
     limits: dict[str, float]
     conditions: str | None = None
     files: dict[str, str] = field(default_factory=dict)  # relative name -> sha256
+    environment: dict[str, str] = field(default_factory=dict)
 
     def opt(self, key: str, default: Any = None) -> Any:
         """An option value, or ``default`` when the campaign does not give it."""
@@ -225,6 +251,11 @@ class Campaign:
     site: dict[str, Any]
     tests: dict[str, Test]
     raw: dict[str, Any]
+    lab: dict[str, Any] = field(default_factory=dict)
+    approval: dict[str, Any] = field(default_factory=dict)
+    decision: dict[str, Any] = field(default_factory=dict)
+    equipment: list[dict[str, Any]] = field(default_factory=list)
+    revisions: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def root(self) -> Path:
@@ -245,8 +276,12 @@ class Campaign:
                 "tests": {k: {"logs": [self.rel(p) for p in t.logs],
                               "profile": self.rel(t.profile) if t.profile else None,
                               "options": t.options, "ingest": t.ingest, "limits": t.limits,
-                              "conditions": t.conditions}
-                          for k, t in self.tests.items()}}
+                              "conditions": t.conditions, "environment": t.environment}
+                          for k, t in self.tests.items()},
+                "lab": {k: (self.rel(v) if isinstance(v, Path) else v)
+                        for k, v in self.lab.items()},
+                "approval": self.approval, "decision": self.decision,
+                "equipment": self.equipment, "revisions": self.revisions}
 
 
 # ----------------------------------------------------------------------------- parsing
@@ -381,7 +416,7 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
     naming the campaign file and the offending key."""
     err = _Err(str(path))
     root = path.parent
-    known_top = set(SECTION_KEYS) | {"tests"}
+    known_top = set(SECTION_KEYS) | {"tests", "equipment", "revisions"}
     for k in data:
         if k not in known_top:
             raise err(f"[{k}]", f"unknown section; known sections: {_known(known_top)}")
@@ -394,7 +429,12 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
         for k, v in body.items():
             if k not in keys:
                 raise err(f"[{sec}] {k}", f"unknown key; known keys: {_known(keys)}")
-            vals[k] = _scalar(err, f"[{sec}] {k}", v, keys[k])
+            if keys[k] == "path":
+                vals[k] = _check_file(err, root, f"[{sec}] {k}", v)
+                if k == "logo" and vals[k].suffix.lower() not in (".png", ".jpg", ".jpeg"):
+                    raise err(f"[{sec}] {k}", f"{v!r}: the logo must be a PNG or JPEG image")
+            else:
+                vals[k] = _scalar(err, f"[{sec}] {k}", v, keys[k])
         for k in REQUIRED.get(sec, ()):
             if k not in vals:
                 raise err(f"[{sec}] {k}", "missing (required)")
@@ -402,6 +442,22 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
     unit = out["gyro"].get("scale_factor_unit")
     if unit is not None and unit not in SF_UNITS:
         raise err("[gyro] scale_factor_unit", f"must be one of {', '.join(SF_UNITS)}")
+    rule = out["decision"].get("rule", "guard-band")
+    if rule not in DECISION_RULES:
+        raise err("[decision] rule", f"must be one of {', '.join(DECISION_RULES)}, got {rule!r}")
+    k_cov = out["decision"].get("coverage_factor", 2.0)
+    if not 1.0 <= k_cov <= 3.0:
+        raise err("[decision] coverage_factor", f"must be within 1 … 3 (2 for about 95 %), "
+                  f"got {k_cov:g}")
+    out["decision"] = {"rule": rule, "coverage_factor": k_cov}
+    equipment = _entries(err, data, "equipment", EQUIPMENT_KEYS, ("name", "calibration_due"))
+    for i, e in enumerate(equipment):
+        for t in e.get("tests", []):
+            if t not in TESTS:
+                raise err(f"[[equipment]] #{i + 1} tests", f"unknown test {t!r}; known tests: "
+                          f"{_known(TESTS)}")
+    revisions = _entries(err, data, "revisions", REVISION_KEYS, ("revision", "date",
+                                                                 "description"))
     if "latitude_deg" in out["site"] and not -90 <= out["site"]["latitude_deg"] <= 90:
         raise err("[site] latitude_deg", "must be within -90...90")
     tests_raw = data.get("tests", {})
@@ -421,6 +477,7 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
         limits: dict[str, float] = {}
         profile = None
         conditions = None
+        env: dict[str, str] = {}
         for k, v in body.items():
             if k not in spec:
                 raise err(f"{sec} {k}", f"unknown key; known keys: {_known(spec)}")
@@ -471,6 +528,15 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
                     ingest[ik] = iv
             elif k == "conditions":
                 conditions = _scalar(err, where, v, "str")
+            elif typ == "environment":
+                if not isinstance(v, dict):
+                    raise err(where, "must be a table, e.g. environment = { temperature = "
+                                     "\"22 ± 1 °C\" }")
+                for ek, ev in v.items():
+                    if ek not in ENVIRONMENT_KEYS:
+                        raise err(f"{where}.{ek}", f"unknown key; known keys: "
+                                  f"{_known(ENVIRONMENT_KEYS)}")
+                    env[ek] = _scalar(err, f"{where}.{ek}", ev, "str")
             else:
                 opts[k] = _check_option(err, where, name, k, typ, v)
         if not logs and not (name == "thermal" and "setpoints" in opts):
@@ -487,11 +553,48 @@ def parse_campaign(data: dict[str, Any], path: Path, sha: str = "") -> Campaign:
         for p in logs + ([profile] if profile else []) + [v for v in opts.values()
                                                            if isinstance(v, Path)]:
             files[_rel(root, p)] = sha256_file(p)
-        tests[name] = Test(name, logs, profile, opts, ingest, limits, conditions, files)
+        tests[name] = Test(name, logs, profile, opts, ingest, limits, conditions, files, env)
     # keep IEEE order regardless of the file's order
     ordered = {k: tests[k] for k in TESTS if k in tests}
     return Campaign(path=path, sha256=sha, meta=out["campaign"], gyro=out["gyro"],
-                    site=out["site"], tests=ordered, raw=data)
+                    site=out["site"], tests=ordered, raw=data, lab=out["lab"],
+                    approval=out["approval"], decision=out["decision"], equipment=equipment,
+                    revisions=revisions)
+
+
+def _entries(err: _Err, data: dict[str, Any], name: str, keys: dict[str, str],
+             required: tuple[str, ...]) -> list[dict[str, Any]]:
+    """Validate an array of tables (``[[equipment]]``, ``[[revisions]]``)."""
+    body = data.get(name, [])
+    if not isinstance(body, list) or not all(isinstance(e, dict) for e in body):
+        raise err(f"[[{name}]]", f"must be an array of tables: write each entry under its own "
+                                 f"[[{name}]] line")
+    out = []
+    for i, e in enumerate(body):
+        where = f"[[{name}]] #{i + 1}"
+        vals: dict[str, Any] = {}
+        for k, v in e.items():
+            if k not in keys:
+                raise err(f"{where} {k}", f"unknown key; known keys: {_known(keys)}")
+            if keys[k] == "strs":
+                if isinstance(v, str):
+                    v = [v]
+                if not isinstance(v, list) or not all(isinstance(x, str) for x in v):
+                    raise err(f"{where} {k}", f"must be a list of strings, got {v!r}")
+                vals[k] = list(v)
+            else:
+                vals[k] = _scalar(err, f"{where} {k}", v, keys[k])
+            if keys[k] == "date":
+                try:
+                    _dt.date.fromisoformat(str(vals[k])[:10])
+                except ValueError:
+                    raise err(f"{where} {k}", f"must be a date like 2025-03-31, got {v!r}"
+                              ) from None
+        for k in required:
+            if k not in vals:
+                raise err(f"{where} {k}", "missing (required)")
+        out.append(vals)
+    return out
 
 
 def _rel(root: Path, p: Path) -> str:

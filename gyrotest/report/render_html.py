@@ -112,6 +112,15 @@ def _section(s: Section, depth: int) -> str:
     return "\n".join(out)
 
 
+def _logo(data: bytes) -> str:
+    """The lab logo as an embedded image (PNG or JPEG)."""
+    import base64
+
+    mime = "image/png" if data[:4] == b"\x89PNG" else "image/jpeg"
+    return (f'<img alt="logo" style="max-height:60px;float:right" '
+            f'src="data:{mime};base64,{base64.b64encode(data).decode()}">')
+
+
 def render_html(sheet: Sheet) -> str:
     """The sheet as one self-contained HTML document."""
     rows = []
@@ -122,7 +131,8 @@ def render_html(sheet: Sheet) -> str:
                                                                         INCONCLUSIVE) else ""
         rows.append(f"<tr><th>{_e(k)}</th><td{cls}>{_e(v)}</td></tr>")
     body = [f'<div class="runhead">{_e(sheet.header)} — gyro specification sheet</div>',
-            f"<header><h1>{_e(sheet.title)}</h1>",
+            "<header>" + (_logo(sheet.logo) if sheet.logo else "")
+            + f"<h1>{_e(sheet.title)}</h1>",
             '<table class="ident"><tbody>' + "".join(rows) + "</tbody></table>"]
     if sheet.notes:
         body.append(f'<p class="note">{_e(sheet.notes)}</p>')

@@ -249,6 +249,12 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
 
     pages: list[int] = []
     story: list = [Paragraph(escape(sheet.title), st["title"])]
+    if sheet.logo:  # the lab's logo, top right of the first page
+        from reportlab.platypus import Image
+
+        logo = Image(io.BytesIO(sheet.logo), width=40 * mm, height=16 * mm, kind="proportional",
+                     hAlign="RIGHT")
+        story.insert(0, logo)
     rows = []
     for k, v in sheet.identity:
         if k == "Compliance":
@@ -274,8 +280,11 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
     meta = {"title": sheet.title, "author": ident.get("Operator", ""),
             "subject": "gyro specification sheet (IEEE 952 style)",
             "creator": f"gyrotest {prov.get('gyrotest_version', '')}"}
+    # creation date: now, or SOURCE_DATE_EPOCH when set (reproducible builds; the document
+    # is then byte-for-byte invariant)
+    invariant = 1 if os.environ.get("SOURCE_DATE_EPOCH", "").strip() else 0
     doc = SimpleDocTemplate(buf, pagesize=A4, leftMargin=lm, rightMargin=rm, topMargin=tm,
-                            bottomMargin=bm, invariant=1, **meta)
+                            bottomMargin=bm, invariant=invariant, **meta)
     from reportlab import rl_config
 
     a85 = rl_config.useA85

@@ -7,9 +7,17 @@ its provenance -- the analysis (command) it came from and the path of the value 
 command's ``--json`` document -- so the sheet can be checked number by number against the
 individual commands. Spec limits become :class:`Check` rows with a verdict.
 
-Verdict rule (stated on the sheet): PASS when the measured value, or the upper bound when
-only a bound is established, does not exceed the limit in magnitude; FAIL when a measured
-value exceeds it; INCONCLUSIVE when only an upper bound is known and it exceeds the limit.
+Decision rule (stated on the sheet; ILAC-G8:09/2019 "Guidelines on decision rules and
+statements of conformity"): with the expanded uncertainty U = k·u (k = 2 by default, about
+95 % coverage) and the limit L on |value|,
+
+* guard-banded rule (default, guard band w = U): PASS when |x| + U ≤ L; FAIL when |x| − U > L;
+  CONDITIONAL PASS when |x| ≤ L < |x| + U; CONDITIONAL FAIL when |x| − U ≤ L < |x|;
+* simple acceptance (w = 0): PASS when |x| ≤ L, FAIL otherwise.
+
+An item given only as an upper bound (95 %) passes when the bound is within the limit and is
+INCONCLUSIVE otherwise; an item without an evaluated uncertainty (a maximum or spread of the
+data) is decided on its value.
 """
 
 from __future__ import annotations
@@ -20,11 +28,38 @@ from typing import Any
 
 PASS, FAIL, INCONCLUSIVE, NO_LIMIT, NOT_TESTED = ("PASS", "FAIL", "INCONCLUSIVE",
                                                   "no limit given", "not tested")
+COND_PASS, COND_FAIL = "CONDITIONAL PASS", "CONDITIONAL FAIL"
+#: overall verdict: the worst item, in this order
+SEVERITY = (FAIL, COND_FAIL, INCONCLUSIVE, COND_PASS, PASS)
 
-VERDICT_RULE = ("PASS: the measured value (or, where only an upper bound is established, that "
-                "bound) does not exceed the limit in magnitude; FAIL: the measured value "
-                "exceeds it; INCONCLUSIVE: only an upper bound is known and it exceeds the "
-                "limit.")
+GUARD_BAND, SIMPLE = "guard-band", "simple"
+
+
+def verdict_rule(rule: str = GUARD_BAND, k: float = 2.0) -> str:
+    """The decision rule as stated on the sheet."""
+    kk = f"{k:g}"
+    common = (f"U is the expanded uncertainty U = k·u with coverage factor k = {kk} "
+              f"(about {_coverage(k)} coverage for a normal distribution; GUM, JCGM 100:2008); "
+              "the limit L applies to the magnitude |x| of the measured value x. An item "
+              "established only as an upper bound (95 % confidence) passes when the bound is "
+              "within L and is INCONCLUSIVE otherwise. Items without an evaluated uncertainty "
+              "(maxima and spreads of the data) are decided on their value (U = 0).")
+    if rule == SIMPLE:
+        return ("Simple acceptance (ILAC-G8:09/2019 §4.2.1, guard band w = 0): PASS when "
+                "|x| ≤ L, FAIL when |x| > L; the uncertainty is stated but not used for the "
+                "decision, so the risk of a false accept reaches 50 % at the limit. " + common)
+    return ("Guarded acceptance (ILAC-G8:09/2019 §4.2.3, guard band w = U): PASS when "
+            "|x| + U ≤ L; FAIL when |x| − U > L; CONDITIONAL PASS when |x| ≤ L < |x| + U "
+            "(the value is within the limit, but the uncertainty interval extends beyond it); "
+            "CONDITIONAL FAIL when |x| − U ≤ L < |x|. " + common)
+
+
+def _coverage(k: float) -> str:
+    p = math.erf(k / math.sqrt(2.0)) * 100
+    return f"{p:.0f} %" if p < 99.5 else f"{p:.1f} %"
+
+
+VERDICT_RULE = verdict_rule()
 
 
 # ----------------------------------------------------------------------------- numbers
@@ -92,16 +127,24 @@ class Num:
     sigma_source: dict[str, Any] | None = None
     digits: int = 4
     prefix: str = ""
+    k: float = 1.0  # coverage factor of the ± shown: 1 (1σ) or 2 (expanded, customer sheet)
+
+    @property
+    def expanded(self) -> float | None:
+        """The uncertainty shown after ±: k·σ (None without σ)."""
+        if self.sigma is None or not math.isfinite(self.sigma):
+            return None
+        return self.k * self.sigma
 
     def text(self, unit: bool = True) -> str:
-        """Formatted value (``≤`` for bounds, ``±`` 1σ), with the unit unless ``unit`` is
+        """Formatted value (``≤`` for bounds, ``±`` k·σ), with the unit unless ``unit`` is
         False (the unit is then in the column header)."""
         if self.value is None or (isinstance(self.value, float) and not math.isfinite(self.value)):
             return "—"
         if self.bound:
             t = "≤ " + fmt_number(self.value, self.digits)
         else:
-            t = fmt_pm(self.value, self.sigma, self.digits)
+            t = fmt_pm(self.value, self.expanded, self.digits)
         t = self.prefix + t
         if unit and self.unit:
             t += f" {self.unit}"
@@ -112,6 +155,9 @@ class Num:
         d: dict[str, Any] = {"value": self.value, "unit": self.unit, "text": self.text()}
         if self.sigma is not None:
             d["sigma"] = self.sigma
+            if self.k != 1.0:
+                d["coverage_factor"] = self.k
+                d["expanded_uncertainty"] = self.expanded
         if self.bound:
             d["upper_bound"] = True
         if self.source:
@@ -208,24 +254,46 @@ class Check:
     limit: float | None
     unit: str
     section: str = ""
+    rule: str = GUARD_BAND
+    k: float = 2.0
+
+    @property
+    def expanded_uncertainty(self) -> float:
+        """U = k·σ of the measured value (0 when no σ was evaluated or for a bound)."""
+        m = self.measured
+        if m is None or m.bound or m.sigma is None or not math.isfinite(m.sigma):
+            return 0.0
+        return self.k * m.sigma
 
     @property
     def verdict(self) -> str:
-        """PASS / FAIL / INCONCLUSIVE / "no limit given" / "not tested"."""
+        """PASS / FAIL / CONDITIONAL PASS / CONDITIONAL FAIL / INCONCLUSIVE /
+        "no limit given" / "not tested" under the decision rule (module docstring)."""
         m = self.measured
         if m is None or m.value is None or not math.isfinite(m.value):
             return NOT_TESTED
         if self.limit is None:
             return NO_LIMIT
-        if abs(m.value) <= self.limit:
+        x = abs(m.value)
+        if m.bound:
+            return PASS if x <= self.limit else INCONCLUSIVE
+        u = self.expanded_uncertainty if self.rule == GUARD_BAND else 0.0
+        if x + u <= self.limit:
             return PASS
-        return INCONCLUSIVE if m.bound else FAIL
+        if x - u > self.limit:
+            return FAIL
+        return COND_PASS if x <= self.limit else COND_FAIL
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
-        return {"key": self.key, "item": self.label, "ieee": self.ieee, "section": self.section,
-                "measured": self.measured.to_dict() if self.measured else None,
-                "limit": self.limit, "unit": self.unit, "verdict": self.verdict}
+        d = {"key": self.key, "item": self.label, "ieee": self.ieee, "section": self.section,
+             "measured": self.measured.to_dict() if self.measured else None,
+             "limit": self.limit, "unit": self.unit, "verdict": self.verdict}
+        if self.limit is not None and self.measured is not None:
+            d["decision_rule"] = self.rule
+            d["coverage_factor"] = self.k
+            d["expanded_uncertainty"] = self.expanded_uncertainty
+        return d
 
 
 Block = Para | Table | Equation | Figure
@@ -287,6 +355,10 @@ class Sheet:
     provenance: dict[str, Any]
     header: str = ""  # running header (PDF): model and serial
     notes: str = ""
+    variant: str = "customer"  # customer | engineering
+    rule_text: str = VERDICT_RULE
+    logo: bytes | None = None  # lab logo (PNG/JPEG bytes) for the title block
+    lab: dict[str, Any] = field(default_factory=dict)
 
     def walk(self):
         """Every section and subsection in order."""
@@ -294,22 +366,20 @@ class Sheet:
             yield from s.walk()
 
     def overall(self) -> str:
-        """Overall verdict: FAIL if any check fails, INCONCLUSIVE if any is inconclusive,
-        PASS if every limited item passes, else "no limit given"."""
-        v = [c.verdict for c in self.checks]
-        if FAIL in v:
-            return FAIL
-        if INCONCLUSIVE in v:
-            return INCONCLUSIVE
-        if PASS in v:
-            return PASS
+        """Overall verdict: the worst item verdict in the order FAIL, CONDITIONAL FAIL,
+        INCONCLUSIVE, CONDITIONAL PASS, PASS; "no limit given" when no item has a limit."""
+        v = {c.verdict for c in self.checks}
+        for s in SEVERITY:
+            if s in v:
+                return s
         return NO_LIMIT
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form."""
         return {"format": "gyrotest-spec-sheet", "version": 1, "title": self.title,
+                "variant": self.variant,
                 "title_block": [{"label": a, "text": b} for a, b in self.identity],
-                "overall_verdict": self.overall(), "verdict_rule": VERDICT_RULE,
+                "overall_verdict": self.overall(), "verdict_rule": self.rule_text,
                 "checks": [c.to_dict() for c in self.checks],
                 "sections": [s.to_dict() for s in self.sections],
                 "figures": [f.to_dict() for f in self.figures],

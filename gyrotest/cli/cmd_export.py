@@ -1,0 +1,133 @@
+"""``gyrotest export KIND INPUT -o FILE``: deliverables as files (:mod:`gyrotest.export`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from .common import emit_json, ingest_options, json_option, load_log, note, warn, with_ingest
+
+
+@click.group("export")
+def command():
+    """Write results as files other tools and firmware read.
+
+    Every kind reads a result gyrotest saved (or, for the Allan-based kinds, a log) and writes
+    one file atomically (nothing half-written on error):
+
+    \b
+      kalibr       Kalibr imu.yaml (noise density, random walk, update rate, topic)
+      gyroparams   MATLAB gyroparams as a .m script or a .mat struct
+      stable32     Stable32-style deviation table (AF, tau, n, alpha, min/sigma/max)
+      allan-csv    the Allan deviation table as CSV, units in the header
+      env-model    drift model (thermal-fit/model fit -o) as .csv look-up table or .h C header
+      scale-factor scale-factor model eps_K(I, T) as .csv look-up table or .h C header
+
+    \b
+    Examples:
+      gyrotest allan static.csv --json > allan.json
+      gyrotest export kalibr allan.json -o imu.yaml --rostopic /imu0
+      gyrotest export gyroparams allan.json -o gyro.m --thermal thermal.json
+      gyrotest export stable32 static.csv -o static_oadev.txt --skip 30min
+      gyrotest export env-model thermal.json -o thermal_lut.csv --temps -40:85:5
+      gyrotest export scale-factor sf.json -o sf_comp.h
+    """
+
+
+def _axes_option(f):
+    return click.option("--axis", "axes", default=None,
+                        help="Axes to export (comma-separated); default all.")(f)
+
+
+def _allan_input_options(f):
+    f = click.option("--skip", default="0", show_default=True,
+                     help="Warm-up trim when INPUT is a log, e.g. 30min.")(f)
+    f = ingest_options(f)
+    return f
+
+
+def _split(v: str | None) -> list[str] | None:
+    if not v:
+        return None
+    return [x.strip() for x in v.split(",") if x.strip()] or None
+
+
+def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
+    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults."""
+    from ..export.common import Document, read_document
+
+    if Path(inp).suffix.lower() == ".json":
+        return read_document(inp, "allan")
+    from ..noise.analysis import allan_document, analyse_allan
+    from ..units import parse_duration
+
+    parse_duration(skip, what="--skip")
+    g = load_log(inp, ingest_opts, announce=not as_json)
+    res = analyse_allan(g, skip_s=skip)
+    return Document("allan", allan_document([res]), inp)
+
+
+def _check_suffix(output: str, suffixes: tuple[str, ...], kind: str) -> str:
+    suf = Path(output).suffix.lower()
+    if suf not in suffixes:
+        raise InputError(f"-o {output}: 'export {kind}' writes {' or '.join(suffixes)} files; "
+                         f"got {suf or 'no suffix'!r}")
+    parent = Path(output).parent
+    if str(parent) and not parent.is_dir():
+        raise InputError(f"cannot write {output}: directory {parent} does not exist")
+    return suf
+
+
+def _done(output: str, as_json: bool, summary: dict, warnings: list[str]) -> None:
+    for w in warnings:
+        warn(w)
+    if as_json:
+        emit_json({"output": str(output), **summary, "warnings": warnings})
+    else:
+        note(f"written to {output}")
+
+
+# ----------------------------------------------------------------------------- kalibr
+@command.command("kalibr")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The imu.yaml to write.")
+@click.option("--rostopic", default="/imu0", show_default=True, help="IMU ROS topic.")
+@click.option("--update-rate", type=float, default=None,
+              help="IMU rate, Hz (default: the log's sample rate 1/tau0).")
+@click.option("--inflate", type=float, default=1.0, show_default=True,
+              help="Multiply the gyro densities by this factor (unmodelled effects).")
+@click.option("--accel-noise-density", type=float, default=None,
+              help="Accelerometer noise density, m/s^2/sqrt(Hz) (default: a marked placeholder).")
+@click.option("--accel-random-walk", type=float, default=None,
+              help="Accelerometer bias random walk, m/s^3/sqrt(Hz) (default: a marked "
+                   "placeholder).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_density,
+               accel_random_walk, axes, skip, as_json, ingest_opts):
+    """Kalibr imu.yaml from the Allan noise model.
+
+    gyroscope_noise_density = N·(π/180)/60 rad/s/√Hz, gyroscope_random_walk =
+    K·(π/180)/216000 rad/s²/√Hz (continuous-time densities, Kalibr wiki "IMU Noise Model");
+    the largest over the axes; upper-bound terms at their bound. update_rate is the log rate.
+    Accelerometer fields come from the options or are marked PLACEHOLDER.
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.kalibr import kalibr_yaml
+
+    _check_suffix(output, (".yaml", ".yml"), "kalibr")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    text, p, warnings = kalibr_yaml(allan_axes(doc, _split(axes)), rostopic=rostopic,
+                                    update_rate=update_rate, inflate=inflate,
+                                    accel_noise_density=accel_noise_density,
+                                    accel_random_walk=accel_random_walk)
+    write_output(output, text)
+    _done(output, as_json, {"kind": "kalibr", "values": vars(p)}, warnings)
+

@@ -137,7 +137,7 @@ def _bad_inputs(tmp: Path, allan_json: Path) -> dict[str, tuple[Path, str]]:
     return out
 
 
-@pytest.mark.parametrize("kind,suffix", [("kalibr", ".yaml")])
+@pytest.mark.parametrize("kind,suffix", [("kalibr", ".yaml"), ("gyroparams", ".mat")])
 def test_malformed_allan_inputs(kind, suffix, allan_json, tmp_path):
     for name, (path, frag) in _bad_inputs(tmp_path, allan_json).items():
         out = tmp_path / f"out{suffix}"
@@ -185,3 +185,121 @@ def test_existing_file_untouched_on_error(allan_json, tmp_path):
     r.assert_clean_error("--inflate")
     assert out.read_text() == "keep me\n"
     assert [p.name for p in tmp_path.iterdir()] == ["imu.yaml"]
+
+
+# ----------------------------------------------------------------------------- MATLAB
+def _parse_m(text: str) -> dict[str, object]:
+    """Name/value pairs of the gyroparams(...) call of a .m script (MATLAB ignores the text
+    after '...' and '%')."""
+    import re
+
+    out: dict[str, object] = {}
+    for m in re.finditer(r"^\s+'(\w+)', (\[[^\]]*\]|[-+0-9.eE]+)", text, re.M):
+        v = m.group(2)
+        out[m.group(1)] = ([float(x) for x in v[1:-1].split()] if v.startswith("[")
+                           else float(v))
+    return out
+
+
+@pytest.fixture(scope="module")
+def thermal_model(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("thermal") / "thermal.json"
+    r = run_cli(["thermal-fit", SAMPLE / "thermal.parquet", "--profile",
+                 SAMPLE / "thermal.profile.toml", "-o", out, "--json"])
+    assert r.code == 0, r.err
+    return out
+
+
+def test_gyroparams_m_and_mat(allan_json, thermal_model, tmp_path):
+    from scipy.io import loadmat
+
+    m_path, mat_path = tmp_path / "gyro.m", tmp_path / "gyro.mat"
+    args = [allan_json, "--thermal", thermal_model, "--constant-bias", "1.8", "--range", "400"]
+    for p in (m_path, mat_path):
+        r = run_cli(["export", "gyroparams", *args[:1], "-o", p, *args[1:]])
+        assert r.code == 0, r.err
+    ax = _axis(json.loads(allan_json.read_text()))
+    n, _ = _term(ax, "N")
+    b, _ = _term(ax, "B")
+    k, _ = _term(ax, "K")
+    d2r = math.pi / 180
+    model = json.loads(thermal_model.read_text())
+    coef = {t["key"]: t["coefficients"][0]["value"] for t in model["terms"]}
+    t_ref = model["references"]["T_ref_degC"]["T_chamber_C"]
+    slope_25 = coef["T"] + 2 * coef["T2"] * (25.0 - t_ref)  # d/dT of w1·ΔT + w2·ΔT² at 25 °C
+    want = {"NoiseDensity": n * d2r / 60, "BiasInstability": b * d2r / 3600,
+            "RandomWalk": k * d2r / 216000, "ConstantBias": 1.8 * d2r / 3600,
+            "TemperatureBias": slope_25 * d2r / 3600, "MeasurementRange": 400 * d2r}
+    got_m = _parse_m(m_path.read_text())
+    s = loadmat(mat_path, squeeze_me=True, struct_as_record=False)
+    assert set(got_m) == set(want)
+    for name, v in want.items():
+        assert got_m[name] == pytest.approx(v, rel=1e-8), name
+        assert float(getattr(s["gyroparams"], name)) == pytest.approx(v, rel=1e-12), name
+    assert s["units"].NoiseDensity == "(rad/s)/sqrt(Hz)"
+    assert "namedargs2cell" in s["usage"]
+    assert m_path.read_text().count("gyroparams(") == 1
+
+
+def test_gyroparams_scale_factor_json(allan_json, tmp_path):
+    r = run_cli(["scale-factor", SAMPLE / "ratetable_22a.parquet", SAMPLE / "ratetable_45.parquet",
+                 "--profile", SAMPLE / "ratetable_22a.profile.toml", "--json"])
+    assert r.code == 0, r.err
+    sf = tmp_path / "sf.json"
+    sf.write_text(r.out)
+    doc = json.loads(r.out)
+    out = tmp_path / "g.m"
+    r = run_cli(["export", "gyroparams", allan_json, "-o", out, "--sf-json", sf])
+    assert r.code == 0, r.err
+    got = _parse_m(out.read_text())
+    eps_t = doc["epsilon_k"]["epsilon_T_ppm_per_degC"]
+    assert got["TemperatureScaleFactor"] == pytest.approx(-eps_t * 1e-4, rel=1e-8)
+    assert got["MeasurementRange"] == pytest.approx(doc["full_scale_dps"] * math.pi / 180)
+
+
+def _three_axis_log(tmp_path: Path, minutes: float = 30.0) -> tuple[Path, dict[str, float]]:
+    """White rate noise on gx, gy, gz (deg/s) with known densities N (deg/√h)."""
+    rng = np.random.default_rng(7)
+    fs = 10.0
+    n = int(fs * 60 * minutes)
+    dens = {"gx": 0.5, "gy": 1.0, "gz": 2.0}  # deg/sqrt(h)
+    cols = [np.arange(n) / fs]
+    for v in dens.values():
+        sigma_dph = v * 60.0 * math.sqrt(fs)  # per-sample σ = N·60/√τ0 in deg/h
+        cols.append(sigma_dph / 3600.0 * rng.standard_normal(n))
+    p = tmp_path / "imu3.csv"
+    np.savetxt(p, np.column_stack(cols), delimiter=",", header="time,gx,gy,gz", comments="",
+               fmt="%.9g")
+    return p, dens
+
+
+def test_gyroparams_three_axes_from_a_log(tmp_path):
+    from scipy.io import loadmat
+
+    log, dens = _three_axis_log(tmp_path)
+    out = tmp_path / "g3.mat"
+    r = run_cli(["export", "gyroparams", log, "-o", out, "--rate-col", "gx,gy,gz",
+                 "--rate-unit", "deg/s"])
+    assert r.code == 0, r.err
+    s = loadmat(out, squeeze_me=True, struct_as_record=False)
+    nd = np.asarray(s["gyroparams"].NoiseDensity)
+    assert nd.shape == (3,)
+    want = np.array([v * math.pi / 180 / 60 for v in dens.values()])
+    assert np.allclose(nd, want, rtol=0.05), (nd, want)
+    assert list(s["axes"]) == ["gx", "gy", "gz"]
+    r = run_cli(["export", "gyroparams", log, "-o", tmp_path / "g2.m", "--rate-col", "gx,gy,gz",
+                 "--rate-unit", "deg/s", "--axis", "gx,gy"])
+    r.assert_clean_error("one value or three", "--axis")
+    assert not (tmp_path / "g2.m").exists()
+
+
+def test_gyroparams_bad_inputs(allan_json, tmp_path):
+    r = run_cli(["export", "gyroparams", allan_json, "-o", tmp_path / "bad-name.m"])
+    r.assert_clean_error("bad-name.m", "MATLAB script name")
+    r = run_cli(["export", "gyroparams", allan_json, "-o", tmp_path / "g.m", "--thermal",
+                 allan_json])
+    r.assert_clean_error(str(allan_json), "model file")
+    r = run_cli(["export", "gyroparams", allan_json, "-o", tmp_path / "g.mat", "--sf-json",
+                 allan_json])
+    r.assert_clean_error(str(allan_json), "scale-factor")
+    assert list(tmp_path.iterdir()) == []

@@ -131,3 +131,53 @@ def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_densit
     write_output(output, text)
     _done(output, as_json, {"kind": "kalibr", "values": vars(p)}, warnings)
 
+
+
+# ----------------------------------------------------------------------------- gyroparams
+@command.command("gyroparams")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The .m script or .mat file to write.")
+@click.option("--thermal", "thermal_path", type=str, default=None,
+              help="Drift model file (thermal-fit -o) for TemperatureBias.")
+@click.option("--sf-json", "sf_path", type=str, default=None,
+              help="'gyrotest scale-factor --json' output for TemperatureScaleFactor and "
+                   "MeasurementRange.")
+@click.option("--constant-bias", type=float, default=None, help="ConstantBias, deg/h.")
+@click.option("--range", "range_dps", type=float, default=None,
+              help="MeasurementRange, deg/s (default: the --sf-json full scale).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def gyroparams_cmd(input, output, thermal_path, sf_path, constant_bias, range_dps, axes, skip,
+                   as_json, ingest_opts):
+    """MATLAB gyroparams (imuSensor) as a .m script or a .mat struct.
+
+    NoiseDensity = N·(π/180)/60 (rad/s)/√Hz, BiasInstability = B·(π/180)/3600 rad/s,
+    RandomWalk = K·(π/180)/216000 (rad/s)·√Hz from the Allan model (upper bounds at their
+    bound); TemperatureBias (rad/s)/°C = the drift model's slope at 25 °C (--thermal);
+    TemperatureScaleFactor %/°C = −ε_T·1e-4 and MeasurementRange from --sf-json. One
+    axis gives scalars, three axes 1×3 vectors. In MATLAB: run gyro.m, or
+    s = load('gyro.mat'); c = namedargs2cell(s.gyroparams); p = gyroparams(c{:}).
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, read_document, write_output
+    from ..export.matlab import UNITS, build_gyroparams, m_script, write_mat
+
+    suf = _check_suffix(output, (".m", ".mat"), "gyroparams")
+    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
+        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
+                         "(it is called by its name)")
+    thermal = read_document(thermal_path, "envmodel") if thermal_path else None
+    sf = read_document(sf_path, "scale-factor") if sf_path else None
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    gp = build_gyroparams(allan_axes(doc, _split(axes)), constant_bias_dph=constant_bias,
+                          thermal=thermal, scale_factor=sf, range_dps=range_dps)
+    if suf == ".m":
+        write_output(output, m_script(gp))
+    else:
+        write_output(output, writer=lambda tmp: write_mat(tmp, gp))
+    _done(output, as_json, {"kind": "gyroparams", "axes": gp.axes, "values": gp.values,
+                            "units": {k: UNITS[k] for k in gp.values}}, [])

@@ -137,7 +137,8 @@ def _bad_inputs(tmp: Path, allan_json: Path) -> dict[str, tuple[Path, str]]:
     return out
 
 
-@pytest.mark.parametrize("kind,suffix", [("kalibr", ".yaml"), ("gyroparams", ".mat")])
+@pytest.mark.parametrize("kind,suffix", [("kalibr", ".yaml"), ("gyroparams", ".mat"),
+                                         ("stable32", ".txt"), ("allan-csv", ".csv")])
 def test_malformed_allan_inputs(kind, suffix, allan_json, tmp_path):
     for name, (path, frag) in _bad_inputs(tmp_path, allan_json).items():
         out = tmp_path / f"out{suffix}"
@@ -303,3 +304,109 @@ def test_gyroparams_bad_inputs(allan_json, tmp_path):
                  allan_json])
     r.assert_clean_error(str(allan_json), "scale-factor")
     assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- Stable32, CSV
+S32_REF = Path(__file__).parents[2] / "shared" / "reference" / "data" / "realdata" / "stable32"
+
+
+def _read_stable32_blocks(text: str) -> list[tuple[dict[str, str], list[dict]]]:
+    """Blocks of a Stable32 table file: header 'key: value' / 'key = value' lines and rows
+    AF Tau # Alpha MinSigma Sigma MaxSigma (the parser the Stable32 conformance tests use)."""
+    blocks: list[tuple[dict[str, str], list[dict]]] = []
+    head: dict[str, str] = {}
+    rows: list[dict] = []
+    for line in text.splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("# STATISTICS FOR FILE:"):
+            if rows:
+                blocks.append((head, rows))
+            head, rows = {"file": s.split(":", 1)[1].strip()}, []
+            continue
+        if s.startswith("#"):
+            for sep in (":", "="):
+                if sep in s:
+                    k, v = s[1:].split(sep, 1)
+                    head.setdefault(k.strip(), v.strip())
+                    break
+            continue
+        p = s.split()
+        rows.append(dict(m=int(p[0]), tau=float(p[1]), n=int(p[2]), alpha=int(p[3]),
+                         lo=float(p[4]), sigma=float(p[5]), hi=float(p[6])))
+    if rows:
+        blocks.append((head, rows))
+    return blocks
+
+
+def _same_5_digits(a: float, b: float) -> bool:
+    return abs(a - b) <= 0.5e-4 * abs(b) * 1.0001 + 1e-300
+
+
+def test_stable32_table_parses_back(allan_json, tmp_path):
+    out = tmp_path / "static_oadev.txt"
+    r = run_cli(["export", "stable32", allan_json, "-o", out])
+    assert r.code == 0, r.err
+    blocks = _read_stable32_blocks(out.read_text())
+    assert len(blocks) == 1
+    head, rows = blocks[0]
+    assert head["file"].endswith("static.parquet (axis pulses)")
+    assert head["Tau0"] == "0.1 s"
+    assert head["Sigma Type"] == "Overlapping Allan"
+    assert head["Confidence Factor"] == "0.683"
+    assert "frequency" in head["Data Type"]
+    table = _axis(json.loads(allan_json.read_text()))["table"]
+    assert len(rows) == len(table)
+    for got, want in zip(rows, table):
+        assert got["m"] == want["m"] and got["n"] == want["n"] and got["alpha"] == want["alpha"]
+        for g, w in (("tau", "tau"), ("lo", "sigma_lo"), ("sigma", "sigma"), ("hi", "sigma_hi")):
+            assert _same_5_digits(got[g], want[w]), (g, got[g], want[w])
+
+
+@pytest.mark.skipif(not S32_REF.is_dir(), reason=f"Stable32 tables not found at {S32_REF}")
+def test_stable32_layout_matches_stable32s_own_tables(allan_json, tmp_path):
+    """Our table and a table printed by Stable32 go through the same parser, and their
+    column-title lines and row layout (column positions) are identical."""
+    ref = (S32_REF / "gps_OADEV_octave.txt").read_text()
+    (ref_head, ref_rows), = _read_stable32_blocks(ref)
+    out = tmp_path / "t.txt"
+    assert run_cli(["export", "stable32", allan_json, "-o", out]).code == 0
+    ours = out.read_text()
+    title = next(ln for ln in ref.splitlines() if ln.startswith("#  AF"))
+    assert title in ours.splitlines()
+    ref_row = next(ln for ln in ref.splitlines() if ln and not ln.startswith("#"))
+    our_row = next(ln for ln in ours.splitlines() if ln and not ln.startswith("#"))
+    assert [i for i, c in enumerate(ref_row) if c == "e"] == \
+        [i for i, c in enumerate(our_row) if c == "e"]
+    our_head = _read_stable32_blocks(ours)[0][0]
+    for key in ("file", "Sigma Type", "Confidence Factor", "Deadtime T/Tau"):
+        assert key in ref_head and key in our_head, key
+
+
+def test_allan_csv_units_in_header(allan_json, tmp_path):
+    import pandas as pd
+
+    out = tmp_path / "allan.csv"
+    r = run_cli(["export", "allan-csv", allan_json, "-o", out])
+    assert r.code == 0, r.err
+    df = pd.read_csv(out)
+    assert list(df.columns) == ["source", "axis", "deviation", "tau_s", "m", "n", "alpha", "edf",
+                                "sigma_lo_deg_h", "sigma_deg_h", "sigma_hi_deg_h", "model_deg_h",
+                                "residual_ci", "fitted"]
+    table = _axis(json.loads(allan_json.read_text()))["table"]
+    assert np.allclose(df["sigma_deg_h"], [t["sigma"] for t in table], rtol=1e-9)
+    assert np.allclose(df["tau_s"], [t["tau"] for t in table], rtol=1e-9)
+    assert df["fitted"].dtype == bool
+
+
+def test_table_exports_reject_malformed_rows(allan_json, tmp_path):
+    d = json.loads(allan_json.read_text())
+    d["logs"][0]["axes"][0]["table"][3].pop("sigma")
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    r = run_cli(["export", "stable32", bad, "-o", tmp_path / "t.txt"])
+    r.assert_clean_error("bad.json", "'sigma' missing", "row 4")
+    r = run_cli(["export", "stable32", allan_json, "-o", tmp_path / "t.txt", "--digits", "1"])
+    r.assert_clean_error("--digits")
+    assert not (tmp_path / "t.txt").exists()

@@ -181,3 +181,59 @@ def gyroparams_cmd(input, output, thermal_path, sf_path, constant_bias, range_dp
         write_output(output, writer=lambda tmp: write_mat(tmp, gp))
     _done(output, as_json, {"kind": "gyroparams", "axes": gp.axes, "values": gp.values,
                             "units": {k: UNITS[k] for k in gp.values}}, [])
+
+
+# ----------------------------------------------------------------------------- tables
+@command.command("stable32")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The table to write (.txt).")
+@click.option("--digits", type=int, default=5, show_default=True,
+              help="Significant digits of τ and σ (Stable32 prints 5).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def stable32_cmd(input, output, digits, axes, skip, as_json, ingest_opts):
+    """Stable32-style deviation table: AF, τ, n, α, min σ, σ, max σ.
+
+    A header names the file, the data points, the data type, τ0, the sigma type, the
+    confidence factor and the dead time, as Stable32 prints it; one block per axis. σ in the
+    unit of the analysis (deg/h).
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.stable32 import stable32_tables
+
+    _check_suffix(output, (".txt", ".dat", ".s32"), "stable32")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    ax = allan_axes(doc, _split(axes))
+    write_output(output, stable32_tables(ax, digits))
+    _done(output, as_json, {"kind": "stable32", "axes": [a.axis for a in ax]}, [])
+
+
+@command.command("allan-csv")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The CSV file to write.")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def allan_csv_cmd(input, output, axes, skip, as_json, ingest_opts):
+    """The Allan deviation table as CSV with units in the header.
+
+    Columns: source, axis, deviation, tau_s, m, n, alpha, edf, sigma_lo_deg_h, sigma_deg_h,
+    sigma_hi_deg_h, model_deg_h, residual_ci (residual in CI half-widths), fitted.
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.table import allan_csv
+
+    _check_suffix(output, (".csv",), "allan-csv")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    ax = allan_axes(doc, _split(axes))
+    write_output(output, allan_csv(ax))
+    _done(output, as_json, {"kind": "allan-csv", "axes": [a.axis for a in ax]}, [])

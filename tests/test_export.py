@@ -407,6 +407,8 @@ def test_table_exports_reject_malformed_rows(allan_json, tmp_path):
     bad.write_text(json.dumps(d))
     r = run_cli(["export", "stable32", bad, "-o", tmp_path / "t.txt"])
     r.assert_clean_error("bad.json", "'sigma' missing", "row 4")
+    r = run_cli(["export", "allan-csv", bad, "-o", tmp_path / "t.csv"])
+    r.assert_clean_error("bad.json", "'sigma' missing", "row 4")
     r = run_cli(["export", "stable32", allan_json, "-o", tmp_path / "t.txt", "--digits", "1"])
     r.assert_clean_error("--digits")
-    assert not (tmp_path / "t.txt").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]

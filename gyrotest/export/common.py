@@ -128,6 +128,7 @@ class AllanAxis:
     n_samples: int
     doc: dict  # the axis' JSON object
     log: dict  # the log's JSON object
+    file: str = ""  # the document it was read from (for messages)
 
     @property
     def label(self) -> str:
@@ -164,7 +165,7 @@ def allan_axes(doc: Document, axes: list[str] | None = None) -> list[AllanAxis]:
         for ax in need(lg, "axes", src, "logs[]"):
             name = str(need(ax, "axis", src, "logs[].axes[]"))
             out.append(AllanAxis(str(lg.get("source", src)), name, tau0,
-                                 int(lg.get("n_samples") or 0), ax, lg))
+                                 int(lg.get("n_samples") or 0), ax, lg, src))
     if not out:
         raise InputError(f"{src}: the Allan document has no analysed axis")
     if axes:

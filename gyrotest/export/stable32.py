@@ -44,8 +44,8 @@ def _e(x, digits: int) -> str:
 def stable32_block(a: AllanAxis, digits: int = 5) -> str:
     """One Stable32-style table for an analysed axis."""
     src = a.source
-    dev = need(a.doc, "deviation", src, f"axis {a.axis}")
-    rows = need(a.doc, "table", src, f"axis {a.axis}")
+    dev = need(a.doc, "deviation", a.file, f"axis {a.axis}")
+    rows = need(a.doc, "table", a.file, f"axis {a.axis}")
     kind = str(dev.get("kind", "oadev"))
     n = a.n_samples
     head = [f"# STATISTICS FOR FILE: {src} (axis {a.axis})",
@@ -61,14 +61,14 @@ def stable32_block(a: AllanAxis, digits: int = 5) -> str:
     body = []
     for i, r in enumerate(rows):
         where = f"axis {a.axis} table row {i + 1}"
-        tau = number(need(r, "tau", src, where), src, f"tau of {where}")
+        tau = number(need(r, "tau", a.file, where), a.file, f"tau of {where}")
         m = r.get("m")
         m = int(round(tau / a.tau0_s)) if m is None else int(m)
-        cnt = int(number(need(r, "n", src, where), src, f"n of {where}"))
+        cnt = int(number(need(r, "n", a.file, where), a.file, f"n of {where}"))
         alpha = r.get("alpha")
         al = "   -" if alpha is None else f"{int(alpha):4d}"
         body.append(f"{m:5d}   {_e(tau, digits)} {cnt:8d}  {al}   {_e(r.get('sigma_lo'), digits)}"
-                    f"    {_e(need(r, 'sigma', src, where), digits)}"
+                    f"    {_e(need(r, 'sigma', a.file, where), digits)}"
                     f"     {_e(r.get('sigma_hi'), digits)}")
     if not body:
         raise InputError(f"{src}: axis {a.axis} has an empty deviation table")

@@ -17,7 +17,7 @@ def _unit_tag(unit: str) -> str:
 
 
 def allan_csv(axes: list[AllanAxis]) -> str:
-    units = {str((need(a.doc, "deviation", a.source).get("unit")) or "deg/h") for a in axes}
+    units = {str((need(a.doc, "deviation", a.file).get("unit")) or "deg/h") for a in axes}
     if len(units) > 1:  # one header for all rows
         from ..errors import InputError
 
@@ -31,8 +31,10 @@ def allan_csv(axes: list[AllanAxis]) -> str:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(cols)
     for a in axes:
-        kind = need(a.doc, "deviation", a.source).get("kind", "")
-        for r in need(a.doc, "table", a.source, f"axis {a.axis}"):
+        kind = need(a.doc, "deviation", a.file).get("kind", "")
+        for i, r in enumerate(need(a.doc, "table", a.file, f"axis {a.axis}")):
+            for key in ("tau", "sigma"):
+                need(r, key, a.file, f"axis {a.axis} table row {i + 1}")
             vals = [r.get(k) for k in ("tau", "m", "n", "alpha", "edf", "sigma_lo", "sigma",
                                        "sigma_hi", "model", "residual_ci")]
             out = [a.source, a.axis, kind]

@@ -237,3 +237,44 @@ def allan_csv_cmd(input, output, axes, skip, as_json, ingest_opts):
     ax = allan_axes(doc, _split(axes))
     write_output(output, allan_csv(ax))
     _done(output, as_json, {"kind": "allan-csv", "axes": [a.axis for a in ax]}, [])
+
+
+# ----------------------------------------------------------------------------- models
+@command.command("env-model")
+@click.argument("model_file", type=str)
+@click.option("-o", "--output", required=True,
+              help="The look-up table (.csv) or C header (.h) to write.")
+@click.option("--temps", default=None,
+              help="Temperature grid of the .csv, degC: start:stop:step or a list "
+                   "(default: the fitted range in 1 degC steps).")
+@click.option("--prefix", default="gyro_drift", show_default=True,
+              help="Prefix of the C function and macros (.h).")
+@click.option("--static-only", is_flag=True,
+              help="Leave out terms with memory or time dependence (named in the file).")
+@json_option
+def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
+    """A drift model as a firmware look-up table (.csv) or C header (.h).
+
+    MODEL_FILE is a model written by 'gyrotest thermal-fit -o' or 'gyrotest model fit -o'.
+    The .csv tabulates the temperature terms (bias, T, T2, T3 of one channel) on --temps, a
+    column per term and their sum drift_dph, evaluated by the model's own term functions;
+    terms linear in other inputs (dT/dt, gradient rate, field, supply) are listed in its
+    header. The .h holds every coefficient with unit and 1σ, the equation in a comment and
+    an inline function <prefix>_dph(inputs...) returning the drift in deg/h. Firmware
+    subtracts it: compensated rate = rate − drift.
+    """
+    from ..export import envlut
+    from ..export.common import read_document, write_output
+
+    suf = _check_suffix(output, (".csv", ".h"), "env-model")
+    grid = envlut.parse_grid(temps) if temps else None
+    doc = read_document(model_file, "envmodel")
+    if suf == ".csv":
+        text, summary = envlut.lut_csv(doc, grid, static_only=static_only)
+    else:
+        if temps:
+            raise InputError("--temps applies to the .csv look-up table, not the .h header")
+        text, summary = envlut.c_header(doc, prefix=prefix, static_only=static_only)
+    write_output(output, text)
+    warnings = [f"left out: {', '.join(summary['left_out'])}"] if summary["left_out"] else []
+    _done(output, as_json, {"kind": "env-model", **summary}, warnings)

@@ -412,3 +412,128 @@ def test_table_exports_reject_malformed_rows(allan_json, tmp_path):
     r = run_cli(["export", "stable32", allan_json, "-o", tmp_path / "t.txt", "--digits", "1"])
     r.assert_clean_error("--digits")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]
+
+
+# ----------------------------------------------------------------------------- drift model
+def _ramp_log(tmp_path: Path, rate_c_per_h: float = 36.0) -> tuple[object, np.ndarray]:
+    """A 1 Hz log whose chamber temperature ramps 20 → 56 degC at ``rate_c_per_h``."""
+    from gyrotest.cli.common import load_log
+
+    n = int(36.0 / rate_c_per_h * 3600) + 1
+    t = np.arange(n, dtype=float)
+    temp = 20.0 + rate_c_per_h * t / 3600.0
+    p = tmp_path / "ramp.csv"
+    np.savetxt(p, np.column_stack([t, np.zeros(n), temp, temp, temp]), delimiter=",",
+               header="time,rate,T_chamber_C,T_coil_a_C,T_coil_b_C", comments="", fmt="%.12g")
+    log = load_log(str(p), {"rate_col": "rate", "rate_unit": "deg/h", "time_col": "time",
+                            "temp_col": ("T_chamber_C", "T_coil_a_C", "T_coil_b_C")},
+                   announce=False)
+    return log, temp
+
+
+def _compile(header: Path, calls: str, tmp_path: Path) -> list[float]:
+    import shutil
+    import subprocess
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    src = tmp_path / "main.c"
+    src.write_text(f'#include <stdio.h>\n#include "{header.name}"\nint main(void) {{\n{calls}\n'
+                   "return 0; }\n")
+    exe = tmp_path / "main"
+    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(src),
+                    "-lm"], check=True, cwd=tmp_path, capture_output=True)
+    out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    return [float(x) for x in out.split()]
+
+
+def test_env_model_lut_and_header_reproduce_the_model(thermal_model, tmp_path):
+    from gyrotest.envmodel.model import EnvModel
+
+    lut, hdr = tmp_path / "lut.csv", tmp_path / "thermal_comp.h"
+    r = run_cli(["export", "env-model", thermal_model, "-o", lut, "--temps", "20:56:1"])
+    assert r.code == 0, r.err
+    r = run_cli(["export", "env-model", thermal_model, "-o", hdr, "--prefix", "fog_comp"])
+    assert r.code == 0, r.err
+    import pandas as pd
+
+    df = pd.read_csv(lut, comment="#")
+    assert list(df.columns) == ["temperature_degC", "drift_dph", "bias_dph", "T_T_chamber_C_dph",
+                                "T2_T_chamber_C_dph"]
+    model = EnvModel.load(thermal_model)
+    log, temp = _ramp_log(tmp_path)
+    pred = model.predict(log)  # the model's own evaluation (as gyrotest compensate applies it)
+    # rows at the samples where the ramp crosses each whole degree (every 100 s)
+    idx = (np.round((df["temperature_degC"] - 20.0) * 100)).astype(int).to_numpy()
+    inner = (idx > 200) & (idx < len(temp) - 200)  # away from the ends of the dT/dt smoother
+    c_dtdt = model.coefficient("dTdt(T_chamber_C)")
+    want = pred[idx[inner]]
+    got_lut = df["drift_dph"].to_numpy()[inner] + c_dtdt * 36.0
+    assert np.allclose(got_lut, want, rtol=1e-9, atol=1e-9)
+    # closed form of the Antonova-Matveev polynomial with the stored coefficients
+    dT = df["temperature_degC"] - 21.0
+    closed = (model.coefficient("bias") + model.coefficient("T(T_chamber_C)") * dT
+              + model.coefficient("T2(T_chamber_C)") * dT ** 2)
+    assert np.allclose(df["drift_dph"], closed, rtol=1e-9, atol=1e-9)  # 10 digits in the CSV
+    # the C function, compiled, at the same points
+    calls = "\n".join(f'printf("%.17g\\n", fog_comp_dph({T!r}, 36.0));'
+                      for T in df["temperature_degC"][inner])
+    got_c = np.array(_compile(hdr, calls, tmp_path))
+    assert np.max(np.abs(got_c - want)) < 1e-9 * np.max(np.abs(want))
+
+
+def _edit_model(src: Path, dst: Path, add: list[dict]) -> Path:
+    d = json.loads(src.read_text())
+    d["terms"] += add
+    dst.write_text(json.dumps(d))
+    return dst
+
+
+def test_env_model_dynamic_terms_and_channels(thermal_model, tmp_path):
+    warm = {"key": "warmup", "label": "warmup",
+            "coefficients": [{"name": "warmup", "value": 0.3, "stderr": 0.01, "unit": "deg/h"}],
+            "nonlinear": [{"name": "tau_w_s", "value": 600.0, "stderr": 10.0, "unit": "s"}]}
+    dyn = _edit_model(thermal_model, tmp_path / "dyn.json", [warm])
+    r = run_cli(["export", "env-model", dyn, "-o", tmp_path / "d.h"])
+    r.assert_clean_error("dyn.json", "warmup", "--static-only")
+    r = run_cli(["export", "env-model", dyn, "-o", tmp_path / "d.h", "--static-only"])
+    assert r.code == 0 and "left out: warmup" in r.err
+    assert "Left out (--static-only): warmup" in (tmp_path / "d.h").read_text()
+    coil = {"key": "T", "label": "T(T_coil_a_C)", "channels": ["T_coil_a_C"],
+            "coefficients": [{"name": "T(T_coil_a_C)", "value": 0.5, "stderr": 0.1,
+                              "unit": "deg/h/degC"}]}
+    two = _edit_model(thermal_model, tmp_path / "two.json", [coil])
+    r = run_cli(["export", "env-model", two, "-o", tmp_path / "two.csv"])
+    r.assert_clean_error("two.json", "2 channels", ".h")
+    hdr = tmp_path / "two.h"
+    r = run_cli(["export", "env-model", two, "-o", hdr])
+    assert r.code == 0, r.err
+    # drift(T_chamber=30, dTdt=2, T_coil_a=25) by hand from the stored coefficients
+    m = json.loads(two.read_text())
+    c = [t["coefficients"][0]["value"] for t in m["terms"]]
+    want = c[0] + c[1] * 9 + c[2] * 81 + c[3] * 2 + c[4] * 4
+    got = _compile(hdr, 'printf("%.17g\\n", gyro_drift_dph(30.0, 2.0, 25.0));', tmp_path)
+    assert got[0] == pytest.approx(want, rel=1e-13)
+
+
+def test_env_model_bad_inputs(thermal_model, allan_json, tmp_path):
+    r = run_cli(["thermal-fit", SAMPLE / "thermal.parquet", "--profile",
+                 SAMPLE / "thermal.profile.toml", "--json"])
+    rep = tmp_path / "report.json"
+    rep.write_text(r.out)
+    r = run_cli(["export", "env-model", rep, "-o", tmp_path / "x.h"])
+    r.assert_clean_error("report.json", "thermal-fit LOG -o model.json")
+    r = run_cli(["export", "env-model", allan_json, "-o", tmp_path / "x.h"])
+    r.assert_clean_error("allan result", "model fit -o")
+    r = run_cli(["export", "env-model", thermal_model, "-o", tmp_path / "x.csv", "--temps", "5:1:1"])
+    r.assert_clean_error("--temps", "start:stop:step")
+    r = run_cli(["export", "env-model", thermal_model, "-o", tmp_path / "x.h", "--prefix", "1x"])
+    r.assert_clean_error("--prefix", "C identifier")
+    broken = json.loads(thermal_model.read_text())
+    del broken["terms"][1]["coefficients"]
+    b = tmp_path / "broken.json"
+    b.write_text(json.dumps(broken))
+    r = run_cli(["export", "env-model", b, "-o", tmp_path / "x.h"])
+    r.assert_clean_error("broken.json", "malformed model file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.json", "report.json"]

@@ -80,6 +80,10 @@ def plan(doc: Document, *, static_only: bool = False) -> Plan:
 
     for t in m.terms:
         k, ch = t.spec.key, t.spec.channels
+        if len(t.coef) != t.spec.n_coef or not all(math.isfinite(c) for c in t.coef):
+            raise InputError(f"{doc.source}: malformed model file: term {t.spec.label} has "
+                             f"{len(t.coef)} finite coefficient(s), needs {t.spec.n_coef}; "
+                             "write the model again with -o")
         if k in POLY:
             keep.append(t)
             if k != "bias":

@@ -1,0 +1,280 @@
+"""``gyrotest export KIND INPUT -o FILE``: deliverables as files (:mod:`gyrotest.export`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from .common import emit_json, ingest_options, json_option, load_log, note, warn, with_ingest
+
+
+@click.group("export")
+def command():
+    """Write results as files other tools and firmware read.
+
+    Every kind reads a result gyrotest saved (or, for the Allan-based kinds, a log) and writes
+    one file atomically (nothing half-written on error):
+
+    \b
+      kalibr       Kalibr imu.yaml (noise density, random walk, update rate, topic)
+      gyroparams   MATLAB gyroparams as a .m script or a .mat struct
+      stable32     Stable32-style deviation table (AF, tau, n, alpha, min/sigma/max)
+      allan-csv    the Allan deviation table as CSV, units in the header
+      env-model    drift model (thermal-fit/model fit -o) as .csv look-up table or .h C header
+      scale-factor scale-factor model eps_K(I, T) as .csv look-up table or .h C header
+
+    \b
+    Examples:
+      gyrotest allan static.csv --json > allan.json
+      gyrotest export kalibr allan.json -o imu.yaml --rostopic /imu0
+      gyrotest export gyroparams allan.json -o gyro.m --thermal thermal.json
+      gyrotest export stable32 static.csv -o static_oadev.txt --skip 30min
+      gyrotest export env-model thermal.json -o thermal_lut.csv --temps -40:85:5
+      gyrotest export scale-factor sf.json -o sf_comp.h
+    """
+
+
+def _axes_option(f):
+    return click.option("--axis", "axes", default=None,
+                        help="Axes to export (comma-separated); default all.")(f)
+
+
+def _allan_input_options(f):
+    f = click.option("--skip", default="0", show_default=True,
+                     help="Warm-up trim when INPUT is a log, e.g. 30min.")(f)
+    f = ingest_options(f)
+    return f
+
+
+def _split(v: str | None) -> list[str] | None:
+    if not v:
+        return None
+    return [x.strip() for x in v.split(",") if x.strip()] or None
+
+
+def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
+    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults."""
+    from ..export.common import Document, read_document
+
+    if Path(inp).suffix.lower() == ".json":
+        return read_document(inp, "allan")
+    from ..noise.analysis import allan_document, analyse_allan
+    from ..units import parse_duration
+
+    parse_duration(skip, what="--skip")
+    g = load_log(inp, ingest_opts, announce=not as_json)
+    res = analyse_allan(g, skip_s=skip)
+    return Document("allan", allan_document([res]), inp)
+
+
+def _check_suffix(output: str, suffixes: tuple[str, ...], kind: str) -> str:
+    suf = Path(output).suffix.lower()
+    if suf not in suffixes:
+        raise InputError(f"-o {output}: 'export {kind}' writes {' or '.join(suffixes)} files; "
+                         f"got {suf or 'no suffix'!r}")
+    parent = Path(output).parent
+    if str(parent) and not parent.is_dir():
+        raise InputError(f"cannot write {output}: directory {parent} does not exist")
+    return suf
+
+
+def _done(output: str, as_json: bool, summary: dict, warnings: list[str]) -> None:
+    for w in warnings:
+        warn(w)
+    if as_json:
+        emit_json({"output": str(output), **summary, "warnings": warnings})
+    else:
+        note(f"written to {output}")
+
+
+# ----------------------------------------------------------------------------- kalibr
+@command.command("kalibr")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The imu.yaml to write.")
+@click.option("--rostopic", default="/imu0", show_default=True, help="IMU ROS topic.")
+@click.option("--update-rate", type=float, default=None,
+              help="IMU rate, Hz (default: the log's sample rate 1/tau0).")
+@click.option("--inflate", type=float, default=1.0, show_default=True,
+              help="Multiply the gyro densities by this factor (unmodelled effects).")
+@click.option("--accel-noise-density", type=float, default=None,
+              help="Accelerometer noise density, m/s^2/sqrt(Hz) (default: a marked placeholder).")
+@click.option("--accel-random-walk", type=float, default=None,
+              help="Accelerometer bias random walk, m/s^3/sqrt(Hz) (default: a marked "
+                   "placeholder).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_density,
+               accel_random_walk, axes, skip, as_json, ingest_opts):
+    """Kalibr imu.yaml from the Allan noise model.
+
+    gyroscope_noise_density = N·(π/180)/60 rad/s/√Hz, gyroscope_random_walk =
+    K·(π/180)/216000 rad/s²/√Hz (continuous-time densities, Kalibr wiki "IMU Noise Model");
+    the largest over the axes; upper-bound terms at their bound. update_rate is the log rate.
+    Accelerometer fields come from the options or are marked PLACEHOLDER.
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.kalibr import kalibr_yaml
+
+    _check_suffix(output, (".yaml", ".yml"), "kalibr")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    text, p, warnings = kalibr_yaml(allan_axes(doc, _split(axes)), rostopic=rostopic,
+                                    update_rate=update_rate, inflate=inflate,
+                                    accel_noise_density=accel_noise_density,
+                                    accel_random_walk=accel_random_walk)
+    write_output(output, text)
+    _done(output, as_json, {"kind": "kalibr", "values": vars(p)}, warnings)
+
+
+
+# ----------------------------------------------------------------------------- gyroparams
+@command.command("gyroparams")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The .m script or .mat file to write.")
+@click.option("--thermal", "thermal_path", type=str, default=None,
+              help="Drift model file (thermal-fit -o) for TemperatureBias.")
+@click.option("--sf-json", "sf_path", type=str, default=None,
+              help="'gyrotest scale-factor --json' output for TemperatureScaleFactor and "
+                   "MeasurementRange.")
+@click.option("--constant-bias", type=float, default=None, help="ConstantBias, deg/h.")
+@click.option("--range", "range_dps", type=float, default=None,
+              help="MeasurementRange, deg/s (default: the --sf-json full scale).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def gyroparams_cmd(input, output, thermal_path, sf_path, constant_bias, range_dps, axes, skip,
+                   as_json, ingest_opts):
+    """MATLAB gyroparams (imuSensor) as a .m script or a .mat struct.
+
+    NoiseDensity = N·(π/180)/60 (rad/s)/√Hz, BiasInstability = B·(π/180)/3600 rad/s,
+    RandomWalk = K·(π/180)/216000 (rad/s)·√Hz from the Allan model (upper bounds at their
+    bound); TemperatureBias (rad/s)/°C = the drift model's slope at 25 °C (--thermal);
+    TemperatureScaleFactor %/°C = −ε_T·1e-4 and MeasurementRange from --sf-json. One
+    axis gives scalars, three axes 1×3 vectors. In MATLAB: run gyro.m, or
+    s = load('gyro.mat'); c = namedargs2cell(s.gyroparams); p = gyroparams(c{:}).
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, read_document, write_output
+    from ..export.matlab import UNITS, build_gyroparams, m_script, write_mat
+
+    suf = _check_suffix(output, (".m", ".mat"), "gyroparams")
+    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
+        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
+                         "(it is called by its name)")
+    thermal = read_document(thermal_path, "envmodel") if thermal_path else None
+    sf = read_document(sf_path, "scale-factor") if sf_path else None
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    gp = build_gyroparams(allan_axes(doc, _split(axes)), constant_bias_dph=constant_bias,
+                          thermal=thermal, scale_factor=sf, range_dps=range_dps)
+    if suf == ".m":
+        write_output(output, m_script(gp))
+    else:
+        write_output(output, writer=lambda tmp: write_mat(tmp, gp))
+    _done(output, as_json, {"kind": "gyroparams", "axes": gp.axes, "values": gp.values,
+                            "units": {k: UNITS[k] for k in gp.values}}, [])
+
+
+# ----------------------------------------------------------------------------- tables
+@command.command("stable32")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The table to write (.txt).")
+@click.option("--digits", type=int, default=5, show_default=True,
+              help="Significant digits of τ and σ (Stable32 prints 5).")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def stable32_cmd(input, output, digits, axes, skip, as_json, ingest_opts):
+    """Stable32-style deviation table: AF, τ, n, α, min σ, σ, max σ.
+
+    A header names the file, the data points, the data type, τ0, the sigma type, the
+    confidence factor and the dead time, as Stable32 prints it; one block per axis. σ in the
+    unit of the analysis (deg/h).
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.stable32 import stable32_tables
+
+    _check_suffix(output, (".txt", ".dat", ".s32"), "stable32")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    ax = allan_axes(doc, _split(axes))
+    write_output(output, stable32_tables(ax, digits))
+    _done(output, as_json, {"kind": "stable32", "axes": [a.axis for a in ax]}, [])
+
+
+@command.command("allan-csv")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The CSV file to write.")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def allan_csv_cmd(input, output, axes, skip, as_json, ingest_opts):
+    """The Allan deviation table as CSV with units in the header.
+
+    Columns: source, axis, deviation, tau_s, m, n, alpha, edf, sigma_lo_deg_h, sigma_deg_h,
+    sigma_hi_deg_h, model_deg_h, residual_ci (residual in CI half-widths), fitted.
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
+    analysed with the default Allan settings (--skip and the ingest options apply).
+    """
+    from ..export.common import allan_axes, write_output
+    from ..export.table import allan_csv
+
+    _check_suffix(output, (".csv",), "allan-csv")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    ax = allan_axes(doc, _split(axes))
+    write_output(output, allan_csv(ax))
+    _done(output, as_json, {"kind": "allan-csv", "axes": [a.axis for a in ax]}, [])
+
+
+# ----------------------------------------------------------------------------- models
+@command.command("env-model")
+@click.argument("model_file", type=str)
+@click.option("-o", "--output", required=True,
+              help="The look-up table (.csv) or C header (.h) to write.")
+@click.option("--temps", default=None,
+              help="Temperature grid of the .csv, degC: start:stop:step or a list "
+                   "(default: the fitted range in 1 degC steps).")
+@click.option("--prefix", default="gyro_drift", show_default=True,
+              help="Prefix of the C function and macros (.h).")
+@click.option("--static-only", is_flag=True,
+              help="Leave out terms with memory or time dependence (named in the file).")
+@json_option
+def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
+    """A drift model as a firmware look-up table (.csv) or C header (.h).
+
+    MODEL_FILE is a model written by 'gyrotest thermal-fit -o' or 'gyrotest model fit -o'.
+    The .csv tabulates the temperature terms (bias, T, T2, T3 of one channel) on --temps, a
+    column per term and their sum drift_dph, evaluated by the model's own term functions;
+    terms linear in other inputs (dT/dt, gradient rate, field, supply) are listed in its
+    header. The .h holds every coefficient with unit and 1σ, the equation in a comment and
+    an inline function <prefix>_dph(inputs...) returning the drift in deg/h. Firmware
+    subtracts it: compensated rate = rate − drift.
+    """
+    from ..export import envlut
+    from ..export.common import read_document, write_output
+
+    suf = _check_suffix(output, (".csv", ".h"), "env-model")
+    grid = envlut.parse_grid(temps) if temps else None
+    doc = read_document(model_file, "envmodel")
+    if suf == ".csv":
+        text, summary = envlut.lut_csv(doc, grid, static_only=static_only)
+    else:
+        if temps:
+            raise InputError("--temps applies to the .csv look-up table, not the .h header")
+        text, summary = envlut.c_header(doc, prefix=prefix, static_only=static_only)
+    write_output(output, text)
+    warnings = [f"left out: {', '.join(summary['left_out'])}"] if summary["left_out"] else []
+    _done(output, as_json, {"kind": "env-model", **summary}, warnings)

@@ -418,7 +418,9 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     if dev in ALLAN_TYPE:
         fit_dev = table_dev
     else:
-        fit_dev = deviation("oadev", [float(t) for t in table_dev.tau])
+        span = max(b - a for a, b in segs) * tau0  # Thêo1/ThêoH reach 0.75·T, OADEV T/4
+        fit_dev = deviation("oadev", [float(t) for t in table_dev.tau
+                                      if dev not in ("theo1", "theoh") or t <= span / 4])
         notes.append(f"the IEEE 952 noise model is the Allan variance: fitted to an OADEV on the "
                      f"same τ; the table shows {dev.upper()}")
     edf, edf_notes = robust_edf(table_dev)

@@ -95,7 +95,10 @@ __all__ = [
 INPUT_KINDS = ("rate", "increment", "angle")
 DEVIATION_KINDS = (
     "oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev", "hkdev",
+    # long-τ and gap-tolerant kinds, computed in gyrotest.noise.theo / gyrotest.noise.gapdev
+    "theo1", "theoh", "ttotdev", "htotdev", "gapadev",
 )
+_EXTRA_KINDS = ("theo1", "theoh", "ttotdev", "htotdev", "gapadev")
 _LONG_NAMES = {
     "adev": "Allan deviation (non-overlapping)",
     "oadev": "overlapping Allan deviation",
@@ -107,6 +110,11 @@ _LONG_NAMES = {
     "mtotdev": "modified total deviation",
     "akdev": "Allan-Krobka dispersion",
     "hkdev": "Hadamard-Krobka dispersion",
+    "theo1": "Thêo1 deviation",
+    "theoh": "ThêoH deviation (Allan deviation, then bias-removed Thêo1)",
+    "ttotdev": "time total deviation",
+    "htotdev": "Hadamard total deviation",
+    "gapadev": "gap-tolerant overlapping Allan deviation",
 }
 
 #: Elements per chunk of the streaming kernels (64 Ki float64 = 512 KiB buffer; with the three
@@ -1012,6 +1020,11 @@ def compute_deviation(
     """
     if kind not in DEVIATION_KINDS:
         raise InputError(f"unknown deviation {kind!r}; choose one of {', '.join(DEVIATION_KINDS)}")
+    if kind in _EXTRA_KINDS:
+        return _compute_extra(data, tau0, input_kind=input_kind, kind=kind, taus=taus,
+                              confidence=confidence, stop_ratio=stop_ratio, segments=segments,
+                              unit=unit, noise_id=noise_id, alpha=alpha,
+                              bias_correction=bias_correction)
     _check_kind(input_kind)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
@@ -1153,6 +1166,19 @@ def compute_deviation(
         n_samples=series.n_data,
         segments=list(series.segments),
     )
+
+
+def _compute_extra(data, tau0, *, kind, **kw) -> DeviationResult:
+    """Thêo1, ThêoH, TTOTDEV, HTOTDEV (:mod:`gyrotest.noise.theo`) and the gap-tolerant
+    OADEV (:mod:`gyrotest.noise.gapdev`), imported lazily (they build on this module)."""
+    if kind == "gapadev":
+        from .gapdev import compute_gap_oadev
+
+        kw.pop("bias_correction", None)
+        return compute_gap_oadev(data, tau0, **kw)
+    from .theo import compute_theo_deviation
+
+    return compute_theo_deviation(data, tau0, kind=kind, **kw)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -64,6 +64,8 @@ STOP_RATIOS: dict[str, int] = {
     "tierms": 4,
     "mtie": 2,
     "theo1": 1,
+    "theoh": 1,
+    "gapadev": 4,
     "akdev": 4,
     "hkdev": 4,
 }

@@ -90,6 +90,7 @@ from multiprocessing import Pool  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -209,9 +210,12 @@ def realised_magnitudes(case: ws.Case, wd) -> tuple[float, dict[str, dict]]:
     return floor, out
 
 
-def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True) -> dict:
+def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
+             reference: bool = False) -> dict:
     """Run one case through gyrotest (see the module docstring); returns a JSON-able row.
-    ``loop=False`` only fits the true model (the harness check)."""
+    ``loop=False`` only fits the true model (the harness check). ``reference``: the floor comes
+    from a static reference run of the same simulated gyro (:func:`workbench_sim.reference_noise`,
+    as ``--reference LOG`` does) instead of the log's own noise."""
     from gyrotest.envmodel import diagnose, fit_model, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
     from gyrotest.ingest import read_log
@@ -227,8 +231,25 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True) ->
         with tempfile.TemporaryDirectory(prefix="gt_wb_") as td:
             path = ws.write_case(case, td)
             log = read_log(path, overrides=case.profile)
+            ref_log = None
+            if reference:
+                x = ws.reference_noise(case.noise, len(case.df), case.seed)
+                if x is not None:
+                    rp = Path(td) / "reference.csv"
+                    pd.DataFrame({"t_s": np.arange(len(x), dtype=float), "rate_dph": x}
+                                 ).to_csv(rp, index=False)
+                    ref_log = read_log(rp, overrides={
+                        "columns": {"time": "t_s", "rate": ["rate_dph"]},
+                        "gyro": {"rate_unit": "deg/h"}})
         stage = "prepare"
         wd = prepare(log)
+        row["reference"] = ref_log is not None
+        if ref_log is not None:
+            from gyrotest.envmodel.floor import check_reference, reference_floor
+
+            fl = reference_floor(ref_log, wd)
+            check_reference(ref_log, log, wd, fl)
+            wd.floor = fl
         row.update(resolution_s=wd.resolution_s, smoothing_s=wd.refs.smoothing_s, blocks=wd.nb)
         stage = "truth mapping"
         floor, mags = realised_magnitudes(case, wd)
@@ -591,7 +612,7 @@ def markdown(s: dict, *, title: str = "") -> str:
 
 # ============================================================================ campaign
 def _job(args: tuple) -> dict:
-    seed, kind, max_hours, max_steps, loop = args
+    seed, kind, max_hours, max_steps, loop, reference = args
     t0 = time.perf_counter()
     try:
         case = ws.make_case(seed, kind, max_hours=max_hours)
@@ -600,16 +621,16 @@ def _job(args: tuple) -> dict:
                 "error": _fmt_err(e), "traceback": traceback.format_exc(limit=6),
                 "null": False, "truth": [], "times": {"total_s": time.perf_counter() - t0}}
     t_sim = time.perf_counter() - t0
-    row = run_case(case, max_steps=max_steps, loop=loop)
+    row = run_case(case, max_steps=max_steps, loop=loop, reference=reference)
     row["times"]["simulate_s"] = t_sim
     return row
 
 
 def run_campaign(seeds: list[int], *, kinds: list[str] | None = None, jobs: int = 1,
                  max_hours: float | None = None, max_steps: int = MAX_STEPS, loop: bool = True,
-                 progress: bool = True) -> list[dict]:
+                 progress: bool = True, reference: bool = False) -> list[dict]:
     """Run every seed (in a multiprocessing Pool when ``jobs`` > 1); rows in seed order."""
-    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop) for s in seeds]
+    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference) for s in seeds]
     rows: list[dict] = []
     t0 = time.perf_counter()
 
@@ -687,6 +708,9 @@ def main(argv: list[str] | None = None) -> int:
                          f"kinds cycled, <= {QUICK_MAX_HOURS:g} h) for the test suite")
     ap.add_argument("--max-steps", type=int, default=MAX_STEPS, help="diagnoses per case")
     ap.add_argument("--max-hours", type=float, default=None, help="cap the record length")
+    ap.add_argument("--reference", action="store_true",
+                    help="give every case a static reference run of the same simulated gyro "
+                         "(the floor then comes from it, as with --reference LOG)")
     ap.add_argument("--validate", action="store_true",
                     help="harness check only: fit the true model, no diagnosis loop")
     a = ap.parse_args(argv)
@@ -706,7 +730,7 @@ def main(argv: list[str] | None = None) -> int:
     state = gyrotest_state()
     t0 = time.perf_counter()
     rows = run_campaign(seeds, kinds=kinds, jobs=a.jobs, max_hours=max_hours,
-                        max_steps=a.max_steps, loop=not a.validate)
+                        max_steps=a.max_steps, loop=not a.validate, reference=a.reference)
     wall = time.perf_counter() - t0
     s = summarise(rows)
     rng = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else \

@@ -290,6 +290,41 @@ def make_noise(rng: np.random.Generator, n: int, real: bool) -> tuple[np.ndarray
     return x, desc
 
 
+def reference_noise(noise: dict, n_case: int, seed: int, n_ref: int = 7200
+                    ) -> np.ndarray | None:
+    """A static reference run of the same simulated gyro (deg/h at 1 s, ``n_ref`` samples) for
+    ``--reference``: fresh noise with the same N, B, K for synthetic noise; for real noise the
+    part of the same ADIS16405 axis that the case did not use (before or after its segment,
+    whichever is longer), scaled alike, or, when less than 20 min is left, a stretch of the
+    next axis of the same IMU scaled to the same white noise."""
+    rng = np.random.default_rng(10_000_000 + seed)
+    if noise.get("type") == "real":
+        rec = _real_noise_record()
+        if rec is None or "axis" not in noise:
+            return None
+        ax = "xyz".index(noise["axis"])
+        x = rec[ax]
+        a, b = int(noise["start_s"]), int(noise["start_s"]) + n_case
+        seg = x[:a] if a >= len(x) - b else x[b:]
+        if len(seg) >= 1200:
+            seg = seg[:n_ref] - seg[:n_ref].mean()
+            return seg * float(noise["scale"])
+        # the case used (nearly) the whole record: a neighbouring axis of the same IMU (the
+        # same MEMS part) stands in for a second run, scaled to the same white noise
+        y = rec[(ax + 1) % 3]
+        start = int(rng.integers(0, max(1, len(y) - n_ref)))
+        seg = y[start:start + n_ref] - y[start:start + n_ref].mean()
+        s1 = float(np.std(np.diff(seg)) / math.sqrt(2.0))
+        return seg * float(noise["white_sigma_1s_dph"]) / s1
+    x = rng.normal(scale=float(noise["white_sigma_1s_dph"]), size=n_ref)
+    if "B" in noise:
+        x += flicker(rng, n_ref, float(noise["B"]))
+    if "K" in noise:
+        rw = np.cumsum(rng.normal(scale=float(noise["K"]) * math.sqrt(1.0 / 3600.0), size=n_ref))
+        x += rw - rw.mean()
+    return x
+
+
 # ============================================================================ the run
 @dataclass
 class _Sensor:

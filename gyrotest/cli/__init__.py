@@ -34,6 +34,7 @@ COMMANDS: dict[str, str] = {
     "mag-fit": "cmd_mag_fit",
     "compensate": "cmd_compensate",
     "report": "cmd_report",
+    "fleet": "cmd_fleet",
     "simulate": "cmd_simulate",
 }
 
@@ -49,6 +50,7 @@ SHORT_HELP: dict[str, str] = {
     "mag-fit": "Magnetic sensitivities wx, wy, wz from Helmholtz-coil runs.",
     "compensate": "Apply a drift model to another run: drift before and after.",
     "report": "IEEE-952-style spec sheet of a campaign (Markdown/HTML/PDF).",
+    "fleet": "Lot summary of many serials: table, control charts, outliers.",
     "simulate": "Simulate a bench log with known truth from a scenario TOML.",
 }
 

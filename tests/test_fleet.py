@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.cliutil import run_cli
+from cliutil import run_cli
 
 
 @pytest.fixture(scope="module")

@@ -10,6 +10,9 @@ from .. import __version__
 from ..report.sheet import Figure, Num, Para, Section, Sheet, Table, fmt_number
 from .core import OUTLIER_ALPHA, OUTLIER_MIN_N, Fleet, outlier_threshold
 
+#: serial columns per summary table (wider lots continue in a second table)
+PER_TABLE = 8
+
 SHORT = {"PASS": "PASS", "FAIL": "FAIL", "CONDITIONAL PASS": "COND. PASS",
          "CONDITIONAL FAIL": "COND. FAIL", "INCONCLUSIVE": "INCONCL.",
          "no limit given": "", "not tested": "not tested"}
@@ -67,19 +70,22 @@ def fleet_sheet(fleet: Fleet, figures: bool = True) -> Sheet:
 
     # 1 summary: spec item × serial
     s1 = Section("1", "Lot summary: every spec item of every serial")
-    rows = [["overall verdict", "", "", *[r["overall"] for r in lot]]]
-    for s in stats:
-        cells: list[Any] = [s.item, s.unit, _num(s.limit) if s.limit is not None else "—"]
-        for r in lot:
-            t = _value_text(fleet.item(r, s.key), k)
-            if r["serial"] in s.outliers:
-                t += " (outlier)"
-            cells.append(t)
-        rows.append(cells)
-    s1.add(Table(["spec item", "unit", "limit", *[f"s/n {x}" for x in serials]], rows,
-                 title=f"Latest acceptance test of each serial: value ± U (k = {k:g}) and "
-                       "verdict; ≤: upper bound (95 %)", key="summary",
-                 widths=[3.2, 1.4, 0.9, *[2.0] * len(serials)]))
+    for lo in range(0, len(lot), PER_TABLE):  # at most PER_TABLE serials side by side
+        part = lot[lo:lo + PER_TABLE]
+        rows = [["overall verdict", "", "", *[r["overall"] for r in part]]]
+        for s in stats:
+            cells: list[Any] = [s.item, s.unit, _num(s.limit) if s.limit is not None else "—"]
+            for r in part:
+                t = _value_text(fleet.item(r, s.key), k)
+                if r["serial"] in s.outliers:
+                    t += " (outlier)"
+                cells.append(t)
+            rows.append(cells)
+        span = "" if len(lot) <= PER_TABLE else f" (serials {lo + 1}…{lo + len(part)})"
+        s1.add(Table(["spec item", "unit", "limit", *[f"s/n {r['serial']}" for r in part]],
+                     rows, title=f"Latest acceptance test of each serial{span}: value ± U "
+                                 f"(k = {k:g}) and verdict; ≤: upper bound (95 %)",
+                     key="summary", widths=[3.2, 1.4, 0.9, *[2.0] * len(part)]))
     s1.add(Para("Verdicts follow each campaign's decision rule (guarded acceptance per "
                 "ILAC-G8 unless the campaign states simple acceptance); COND.: conditional; "
                 "INCONCL.: an upper bound above the limit. The overall verdict of a serial is "

@@ -97,6 +97,10 @@ def test_cli_outputs_and_errors(lot, tmp_path):
     run_cli(["fleet", lot.campaigns[0], bad, "--pdf", out]).assert_clean_error("bad.toml")
     assert not out.exists()
     run_cli(["fleet", lot.campaigns[0], "--jobs", "0"]).assert_clean_error("--jobs")
+    run_cli(["fleet", lot.campaigns[0], lot.campaigns[0]]).assert_clean_error("given twice")
+    html = tmp_path / "lot.html"
+    r = run_cli(["-q", "fleet", *lot.campaigns, "--html", html, "-j", "1"])
+    assert r.code == 0 and html.read_text(encoding="utf-8").count("data:image/png;base64,") == 1
     run_cli(["fleet", lot.campaigns[0], "--md", tmp_path / "x.png"]).assert_clean_error(".md")
 
 

@@ -108,6 +108,13 @@ def run_fleet(paths: list[str], *, jobs: int | None = None, scheduler: str | Non
     paths = [str(p) for p in paths]
     if not paths:
         raise InputError("fleet: give one or more CAMPAIGN files")
+    seen: dict[str, str] = {}
+    for p in paths:
+        key = os.path.realpath(p)
+        if key in seen:
+            raise InputError(f"fleet: campaign {p} is given twice (also as {seen[key]}); give "
+                             "each campaign once")
+        seen[key] = p
     jobs = default_jobs() if jobs is None else jobs
     if jobs < 1:
         raise InputError(f"--jobs {jobs}: give 1 or more worker processes")

@@ -41,23 +41,35 @@ def figure_bias(analysis, *, size: tuple[float, float] | None = None):
         t, x = block_means(th, g.rates[r.axis], 3000)
         ax.plot(t, x, color=col, lw=0.6, alpha=0.35)
         t2, x2 = block_means(th, g.rates[r.axis], 150)
-        ax.plot(t2, x2, color=col, lw=1.6, label=f"{name}: indicated rate (fine and coarse means)")
+        if multi:
+            ax.plot(t2, x2, color=col, lw=1.6, label=f"{name}: indicated rate")
+        else:  # one legend entry per run; the line styles are explained once, below
+            ax.plot(t2, x2, color=col, lw=1.6,
+                    label=f"{name}: D_F = {r.bias_dph:.5g} ± {r.sigma_dph:.2g} deg/h (1σ)")
         if not multi:
             er = r.earth_rate_ia_dph or 0.0
             t_end = th[-1] if len(th) else 0.0
             lo = r.mean_output_dph - 2 * r.sigma_dph
-            ax.hlines(r.mean_output_dph, skip_s / 3600.0, t_end, color=col, ls="--", lw=1.3,
-                      label=f"mean = D_F + Ω_IA = {r.mean_output_dph:.5g} deg/h "
-                            f"(Ω_IA = {er:.5g})")
+            ax.hlines(r.mean_output_dph, skip_s / 3600.0, t_end, color=col, ls="--", lw=1.3)
             ax.fill_between([skip_s / 3600.0, t_end], lo, lo + 4 * r.sigma_dph, color=col,
-                            alpha=0.18, label=f"D_F = {r.bias_dph:.5g} ± {r.sigma_dph:.2g} deg/h "
-                                              "(1σ); band ±2σ")
+                            alpha=0.18)
+    if not multi:
+        er = runs[0].earth_rate_ia_dph or 0.0 if runs else 0.0
+        ax.plot([], [], color="0.35", lw=0.6, alpha=0.6,
+                label="thin: fine means; thick: coarse means")
+        ax.plot([], [], color="0.35", ls="--", lw=1.3,
+                label=f"dashed: mean = D_F + Ω_IA (Ω_IA = {er:.5g} deg/h)")
+        ax.fill_between([], [], [], color="0.35", alpha=0.18, label="band: mean ± 2σ")
     if skip_s > 0:
         ax.axvspan(0, skip_s / 3600.0, color="0.5", alpha=0.15, label="warm-up trim")
     ax.set_xlabel("time, h")
     ax.set_ylabel("indicated rate, deg/h")
     ax.set_title("Static run(s): indicated rate and bias estimate")
-    ax.legend(loc="best")
+    if multi:
+        ax.legend(loc="best")
+    else:  # below the axes: inside, one entry per run and style covered half the data
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8,
+                  frameon=False)
     if multi:
         ax2 = axes[1]
         labels = [p.label for p in multi.positions]

@@ -118,8 +118,10 @@ def render() -> str:
         esc("gyrotest report sample_data/campaign.toml --pdf spec.pdf\n"
             "gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml "
             "--skip 30min --plot allan.png\n"
-            "gyrotest bias run1.csv run2.csv --profile bench.toml --skip 40min --json\n"
-            "gyrotest model diagnose chamber.csv --profile chamber.profile.toml --terms T,dTdt"),
+            "gyrotest bias sample_data/bias_run1.parquet sample_data/bias_run2.parquet "
+            "--profile sample_data/bias_run1.profile.toml --skip 30min --json\n"
+            "gyrotest model diagnose sample_data/thermal.parquet "
+            "--profile sample_data/thermal.profile.toml --terms T,dTdt"),
         ".fi",
         ".SH SEE ALSO",
         "README.md and CHANGELOG.md in the gyrotest sources; IEEE Std 952\\-1997.",

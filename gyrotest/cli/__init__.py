@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "compensate": "cmd_compensate",
     "report": "cmd_report",
     "export": "cmd_export",
+    "fleet": "cmd_fleet",
     "simulate": "cmd_simulate",
 }
 
@@ -51,6 +52,7 @@ SHORT_HELP: dict[str, str] = {
     "compensate": "Apply a drift model to another run: drift before and after.",
     "report": "IEEE-952-style spec sheet of a campaign (Markdown/HTML/PDF).",
     "export": "Deliverables as files: Kalibr, MATLAB, Stable32, firmware tables.",
+    "fleet": "Lot summary of many serials: table, control charts, outliers.",
     "simulate": "Simulate a bench log with known truth from a scenario TOML.",
 }
 

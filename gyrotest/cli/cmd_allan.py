@@ -90,8 +90,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
 
     \b
     Examples:
-      gyrotest allan static.csv --profile bench.toml --plot allan.png
-      gyrotest allan static.csv --terms +markov --vehicle-rate 10deg/s --json
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --plot allan.png
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --terms +markov --vehicle-rate 10deg/s --json
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
     """
     from ..noise.analysis import allan_document, analyse_allan, parse_taus

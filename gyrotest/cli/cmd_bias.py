@@ -49,8 +49,10 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
 
     \b
     Examples:
-      gyrotest bias static.csv --profile bench.toml --skip 40min
-      gyrotest bias run1.csv run2.csv run3.csv --profile bench.toml --skip 30min
+      gyrotest bias sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --skip 30min
+      gyrotest bias sample_data/bias_run1.parquet sample_data/bias_run2.parquet \\
+          sample_data/bias_run3.parquet --profile sample_data/bias_run1.profile.toml --skip 30min
       gyrotest bias up.csv down.csv --positions up,down --latitude 48.1 --rate-unit deg/h
     """
     skip_s = parse_duration(skip, what="--skip")

@@ -41,7 +41,10 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
 
     \b
     Example:
-      gyrotest compensate run2.csv --profile bench.toml --model model.json -o run2_comp.parquet
+      gyrotest model fit sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --terms "T(T_case_C)" -o model.json
+      gyrotest compensate sample_data/bias_run2.parquet \\
+          --profile sample_data/bias_run2.profile.toml --model model.json -o run2_comp.parquet
     """
     from ..envmodel.compensate import compensate
     from ..envmodel.model import EnvModel

@@ -27,7 +27,8 @@ def command(log, output, as_json, ingest_opts):
 
     \b
     Example:
-      gyrotest ingest run1.csv --profile bench.toml -o run1.parquet
+      gyrotest ingest sample_data/multipos.csv --profile sample_data/multipos.profile.toml \\
+          -o multipos.parquet
     """
     t0 = time.perf_counter()
     g = load_log(log, ingest_opts, announce=not as_json)

@@ -48,8 +48,9 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
 
     \b
     Examples:
-      gyrotest mag-fit helmholtz.csv --profile bench.toml
-      gyrotest mag-fit long_run.csv --field-cols Hx,Hy,Hz --with T -o mag.json
+      gyrotest mag-fit sample_data/magnetic.parquet --profile sample_data/magnetic.profile.toml
+      gyrotest mag-fit sample_data/magnetic.parquet --profile sample_data/magnetic.profile.toml \\
+          --with T -o mag.json
     """
     from ..envmodel.domain import analyse_mag, mag_document, mag_terms
 

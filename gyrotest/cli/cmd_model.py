@@ -336,9 +336,11 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 
     \b
     Examples:
-      gyrotest model fit chamber.csv --profile bench.toml --terms T,T2,dTdt -o model.json
-      gyrotest model fit run.csv --terms "T(T_coil),Tlag(T_case),Hx,Hy,Hz" --plot fit.png
-      gyrotest model fit run.csv --terms T --term "vib:extra.vib_g**2" --json
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms T,T2,dTdt -o model.json
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms "T(T_coil_a_C),Tlag(T_chamber_C)" --plot fit.png
+      gyrotest model fit vib_run.csv --terms T --term "vib:extra.vib_g**2" --json   # your log
     """
     from ..envmodel.fit import fit_document, fit_log
     from ..envmodel.history import append_history, session_paths
@@ -437,8 +439,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
 
     \b
     Examples:
-      gyrotest model diagnose chamber.csv --profile bench.toml --terms T,T2
-      gyrotest model diagnose run.csv --terms T --candidates dTdt,Tlag,dGdt --json
+      gyrotest model diagnose sample_data/thermal.parquet \\
+          --profile sample_data/thermal.profile.toml --terms T,T2
+      gyrotest model diagnose sample_data/thermal.parquet \\
+          --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
     from ..envmodel.diagnose import diagnose_log
     from ..envmodel.prepare import collect_terms

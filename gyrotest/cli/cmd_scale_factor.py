@@ -93,7 +93,9 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
 
     \b
     Examples:
-      gyrotest scale-factor run1.csv run2.csv run3.csv --profile bench.toml --settle 10s
+      gyrotest scale-factor sample_data/ratetable_22a.parquet sample_data/ratetable_22b.parquet \\
+          sample_data/ratetable_45.parquet --profile sample_data/ratetable_22a.profile.toml \\
+          --settle 10s
       gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
           --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
       gyrotest scale-factor --table points.csv --scale-factor 0.5 --json

@@ -69,8 +69,9 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
 
     \b
     Examples:
-      gyrotest thermal-fit chamber.csv --profile bench.toml --t0 21 -o thermal.json
-      gyrotest thermal-fit --setpoints thermostat.csv --t0 21
+      gyrotest thermal-fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --t0 21 -o thermal.json
+      gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t0 21
     """
     from ..envmodel.domain import (
         analyse_thermal,

@@ -48,11 +48,22 @@ def write_figures(figs: list[tuple[str, object]], path: str | Path) -> list[Path
     return out
 
 
+def _block_means(t: np.ndarray, x: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:
+    """Means of consecutive blocks of ``x`` (and ``t``), about ``target`` points."""
+    k = max(1, len(x) // target)
+    m = (len(x) // k) * k
+    if m == 0:
+        return t, x
+    return t[:m].reshape(-1, k).mean(axis=1), np.nanmean(x[:m].reshape(-1, k), axis=1)
+
+
 def _excursion_spans(ax, excursions, tscale: float) -> None:
     for i, e in enumerate(excursions, 1):
-        ax.axvspan(e.t_start_s / tscale, e.t_end_s / tscale, color="#E69F00", alpha=0.25, lw=0)
-        ax.annotate(str(i), ((e.t_start_s + e.t_end_s) / 2 / tscale, 1.0),
-                    xycoords=("data", "axes fraction"), ha="center", va="bottom", fontsize=8,
+        # light and behind the traces: a long excursion must not hide the residual
+        ax.axvspan(e.t_start_s / tscale, e.t_end_s / tscale, color="#E69F00", alpha=0.12, lw=0,
+                   zorder=0)
+        ax.annotate(str(i), ((e.t_start_s + e.t_end_s) / 2 / tscale, 0.98),
+                    xycoords=("data", "axes fraction"), ha="center", va="top", fontsize=8,
                     color="#8a5a00")
 
 
@@ -85,21 +96,30 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
     ax.axhline(0, color="k", lw=0.6)
     _excursion_spans(ax, res.excursions, tscale)
     ax.set_ylabel("residual, deg/h")
-    ax.legend(loc="upper right", ncol=2)
+    # legend and RMS line above the panel (inside they covered the trace)
+    ax.legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, fontsize=8, frameon=False,
+              borderaxespad=0.1)
     txt = (f"RMS fit {res.rms_fit:.3g}, held-out {res.rms_holdout:.3g} deg/h"
-           + (f"; noise floor {res.floor.rms_dph:.3g}" if res.floor else ""))
-    ax.text(0.01, 0.02, txt, transform=ax.transAxes, fontsize=8.5, va="bottom",
-            bbox={"facecolor": "white", "alpha": 0.8, "lw": 0})
+           + (f"; noise floor {res.floor.rms_dph:.3g}" if res.floor else "")
+           + ("; shaded: excursions" if res.excursions else ""))
+    ax.set_title(txt, loc="left", fontsize=8.5)
     if nrow == 3:
         ax = axes[2]
         for i, (name, v) in enumerate(chans):
-            ax.plot(wd.frame.t / tscale, v, color=COLORS[2 + i], lw=1.0, label=f"{name}, °C")
+            # block means: the raw sensor noise drew a solid band that hid the other traces
+            tb, vb = _block_means(wd.frame.t / tscale, np.asarray(v, float), 600)
+            ax.plot(tb, vb, color=COLORS[2 + i], lw=1.0, label=f"{name}, °C (block means)")
         ax.set_ylabel("temperature, °C" if chans else "")
+        if chans:  # at least 1 °C shown: sensor noise on a steady temperature stays flat
+            lo, hi = ax.get_ylim()
+            mid, half = (lo + hi) / 2, max((hi - lo) / 2, 0.5)
+            ax.set_ylim(mid - half, mid + half)
+            ax.ticklabel_format(axis="y", useOffset=False)
         ax2 = None
         if wd.frame.field_uT:
             ax2 = ax.twinx()
             for i, (name, v) in enumerate(wd.frame.field_uT.items()):
-                ax2.plot(wd.frame.t / tscale, v, lw=0.7, ls="--", color=COLORS[4 + i % 3],
+                ax2.plot(wd.frame.t / tscale, v, lw=1.1, ls="--", color=COLORS[4 + i % 3],
                          label=f"{name}, µT")
             ax2.set_ylabel("field, µT")
             ax2.spines["right"].set_visible(True)
@@ -112,7 +132,8 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
         h1, l1 = ax.get_legend_handles_labels()
         h2, l2 = ax2.get_legend_handles_labels() if ax2 else ([], [])
         if h1 or h2:
-            ax.legend(h1 + h2, l1 + l2, loc="upper right", ncol=3, fontsize=7.5)
+            ax.legend(h1 + h2, l1 + l2, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=4,
+                      fontsize=7.5, frameon=False, borderaxespad=0.1)
     axes[-1].set_xlabel(tlabel)
     if res.excursions:
         lines = [f"{i}: {e.t_start_s / tscale:.3g}–{e.t_end_s / tscale:.3g} "
@@ -136,6 +157,8 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
         ch.append((name, v))
     ch = ch[:8]
     if ch:
+        from matplotlib.ticker import MaxNLocator
+
         from .terms import temperature_rate
 
         ncol = min(3, len(ch))
@@ -161,6 +184,9 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
             ax.axhline(0, color="k", lw=0.6)
             ax.set_xlabel(label)
             ax.set_ylabel("residual, deg/h")
+            # few ticks, no offset: a narrow range (22 ± 0.008 °C) made overlapping labels
+            ax.xaxis.set_major_locator(MaxNLocator(5))
+            ax.ticklabel_format(axis="x", useOffset=False)
         if heat is not None:
             axes[0].legend(loc="best", markerscale=3)
         for ax in axes[len(ch):]:
@@ -277,7 +303,9 @@ def thermal_figures(th) -> list[tuple[str, object]]:
     ax.set_xlabel(f"{th.sensor}, °C")
     ax.set_ylabel("rate − input, deg/h")
     ax.set_title("drift vs temperature: loops = rate/lag effects", loc="left")
-    ax.legend(loc="best", markerscale=3)
+    # below the axes: inside, it covered a branch of the loop
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.15), ncol=2, markerscale=3,
+              fontsize=8, frameon=False)
     ax = axes[1]
     part = res.y - (c["w0"] + c["w1"] * (T - th.t0_c) + c["w2"] * (T - th.t0_c) ** 2)
     ax.scatter(rate, part, s=5, color=COLORS[2], alpha=0.6, lw=0, label="data − static part")

@@ -28,6 +28,7 @@ from typing import Any
 
 from .. import __version__
 from ..errors import GyrotestError, InputError
+from ..scalefactor.fit import TERM_LABELS
 from . import adapters as ad
 from .campaign import LIMITS, Campaign
 from .layout import (  # noqa: F401 - re-exported for the section modules and callers
@@ -66,12 +67,7 @@ from .sheet import (
 VARIANTS = ("customer", "engineering")
 #: sheet names of the f(I) terms: named by their power of u = I/FS in f(I) and by the order
 #: of the nonlinearity they make in the output I·f(I)
-F_OF_I_NAMES = {"quadratic": "u¹ (quadratic in the output)",
-                "cubic": "u² (cubic in the output)",
-                "quartic": "u³ (quartic in the output)",
-                "quintic": "u⁴ (quintic in the output)",
-                "asymmetry": "A (asymmetry step)", "periodic": "periodic",
-                "lockin": "lock-in"}
+F_OF_I_NAMES = TERM_LABELS
 
 
 def asymmetry_explanation(r: dict) -> str:

@@ -130,7 +130,7 @@ def render_html(sheet: Sheet) -> str:
             cls = f' class="{v.split(":")[0]}"' if v.split(":")[0] in (PASS, FAIL,
                                                                         INCONCLUSIVE) else ""
         rows.append(f"<tr><th>{_e(k)}</th><td{cls}>{_e(v)}</td></tr>")
-    body = [f'<div class="runhead">{_e(sheet.header)} — gyro specification sheet</div>',
+    body = [f'<div class="runhead">{_e(sheet.header)} — {_e(sheet.kind.split(" (")[0])}</div>',
             "<header>" + (_logo(sheet.logo) if sheet.logo else "")
             + f"<h1>{_e(sheet.title)}</h1>",
             '<table class="ident"><tbody>' + "".join(rows) + "</tbody></table>"]

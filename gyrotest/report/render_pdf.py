@@ -205,7 +205,7 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
     width = pw - lm - rm
     max_h = (ph - tm - bm) * 0.62
     prov = sheet.provenance
-    left_head = f"{sheet.header} — gyro specification sheet (IEEE 952 style)"
+    left_head = f"{sheet.header} — {sheet.kind}"
     ident = dict(sheet.identity)
     right_head = " · ".join(x for x in (ident.get("Report"), ident.get("Date of test")) if x)
     foot = (f"gyrotest {prov.get('gyrotest_version', '')} · {prov['campaign']['name']} "
@@ -278,7 +278,7 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
         story += _section(s, 1, st, width, max_h)
     buf = io.BytesIO()
     meta = {"title": sheet.title, "author": ident.get("Operator", ""),
-            "subject": "gyro specification sheet (IEEE 952 style)",
+            "subject": sheet.kind,
             "creator": f"gyrotest {prov.get('gyrotest_version', '')}"}
     # creation date: now, or SOURCE_DATE_EPOCH when set (reproducible builds; the document
     # is then byte-for-byte invariant)

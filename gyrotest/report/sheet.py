@@ -359,6 +359,7 @@ class Sheet:
     rule_text: str = VERDICT_RULE
     logo: bytes | None = None  # lab logo (PNG/JPEG bytes) for the title block
     lab: dict[str, Any] = field(default_factory=dict)
+    kind: str = "gyro specification sheet (IEEE 952 style)"  # running header, PDF subject
 
     def walk(self):
         """Every section and subsection in order."""

@@ -76,6 +76,19 @@ TERMS: dict[str, Term] = {
 }
 
 
+#: Names shown to users (sheet tables, figure legends): each f(I) term by its power of
+#: u = I/FS in f(I) and the order of the nonlinearity it makes in the output I·f(I).
+TERM_LABELS = {"quadratic": "u¹ (quadratic in the output)",
+               "cubic": "u² (cubic in the output)",
+               "quartic": "u³ (quartic in the output)",
+               "quintic": "u⁴ (quintic in the output)",
+               "asymmetry": "A (asymmetry step)", "periodic": "periodic",
+               "lockin": "lock-in"}
+#: the same, short (figure legends and bar labels)
+TERM_SHORT = {"quadratic": "u¹", "cubic": "u²", "quartic": "u³", "quintic": "u⁴",
+              "asymmetry": "A", "periodic": "periodic", "lockin": "lock-in"}
+
+
 #: A higher power term is only offered together with the lower one of the same parity.
 HIERARCHY = {"quartic": "quadratic", "quintic": "cubic"}
 

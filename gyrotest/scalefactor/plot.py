@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ..plotting import COLORS, new_figure, save_figure
+from .fit import TERM_LABELS, TERM_SHORT
 
 DPS = 3600.0
 
@@ -58,7 +59,7 @@ def _history(fig, ax2, history) -> None:
     axh = fig.add_subplot(spec[1])
     labels, vals, cols = [], [], []
     for h in history:
-        labels.append(("+ " + h.added) if h.terms else "line")
+        labels.append(("+ " + TERM_SHORT.get(h.added, h.added)) if h.terms else "line")
         vals.append(max(h.rms_ppm_fs, 1e-6))
         cols.append(COLORS[0] if h.accepted else "0.7")
     y = np.arange(len(vals))[::-1]
@@ -120,7 +121,9 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
         g = _grid(Ifit / DPS, lin) * DPS
         k = float(np.median([r.slope for r in runs]))
         ax.plot(g / DPS, _project(model, Ifit, g, k, fs), color="k", lw=1.8,
-                label="model f(I): " + ", ".join(model.terms))
+                label="model f(I): " + (", ".join(TERM_SHORT.get(t, t) for t in model.terms)
+                                        if len(model.terms) > 1
+                                        else TERM_LABELS.get(model.terms[0], model.terms[0])))
         if len(model.terms) > 1:
             for j, t in enumerate(model.terms):
                 def one(x, t=t):
@@ -135,16 +138,17 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
                         fpp = c_[0] * TERMS[t].g(u)
                     return -model.kref * x * 1e-6 * fpp
                 ax.plot(g / DPS, _project(model, Ifit, g, k, fs, one), lw=1.0, ls="--",
-                        color=COLORS[(j + 4) % len(COLORS)], label=f"  {t} term")
+                        color=COLORS[(j + 4) % len(COLORS)], label=f"  {TERM_LABELS.get(t, t)} term")
     ax.axhline(0, color="0.5", lw=0.8)
     ax2.axhline(0, color="0.5", lw=0.8)
     li = res.linearity
     ax.set_title(f"Linearity error vs input rate (IEEE 952 §12.9.4.2.1): max {li.max_ppm_fs:.3g} "
                  f"ppm FS, 1σ {li.sigma_ppm_fs:.3g} ppm FS; FS = ±{fs / DPS:g} deg/s")
     ax.set_ylabel("deviation from the\nstraight line, ppm FS")
-    ax.legend(loc="best", ncol=2 if len(runs) + len(res.model.terms) > 3 else 1, fontsize=8,
-              framealpha=0.85)
-    terms_txt = ", ".join(res.model.terms) or "straight line only"
+    # the legend below the panel: inside it covered the curves
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8,
+              frameon=False)
+    terms_txt = ", ".join(TERM_SHORT.get(t, t) for t in res.model.terms) or "straight line only"
     ax2.set_title(f"After the model ({terms_txt}): residual RMS "
                   f"{res.model.residual_rms_ppm_fs:.3g} ppm FS, χ²/dof {res.model.chi2_per_dof:.3g}",
                   fontsize=9.5)

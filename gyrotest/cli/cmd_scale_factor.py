@@ -38,8 +38,11 @@ def _duration(ctx, param, value):
 @click.option("--table", "table_path", type=click.Path(dir_okay=False), default=None,
               help="Ready plateau table (CSV: table_rate_dps, output_dph|output_pps|output_v "
                    "[, stderr_*, temperature_degC, run]) instead of logs.")
-@click.option("--settle", default="10s", show_default=True, callback=_duration,
-              help="Settling time excluded after each rate change (e.g. 10s, 1min).")
+@click.option("--settle", default="0s", show_default=True, callback=_duration,
+              help="Minimum settling time after each rate change (e.g. 10s, 1min); the "
+                   "settling of each plateau is found from its data and can only be longer.")
+@click.option("--fixed-settle", is_flag=True,
+              help="Use --settle exactly after every rate change (no settling from the data).")
 @click.option("--trim-end", default="0s", show_default=True, callback=_duration,
               help="Time excluded before the end of each plateau.")
 @click.option("--min-dwell", default="2s", show_default=True, callback=_duration,
@@ -78,7 +81,7 @@ def _duration(ctx, param, value):
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr_method,
+def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect, rates, stderr_method,
             snap_tol, full_scale,
             terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, no_asymmetry,
             common_rates, points_path, plot_path, as_json, ingest_opts):
@@ -86,14 +89,15 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
 
     Each LOG is one run (a continuous rate-table log); several runs give repeatability,
     stability and, at different temperatures, the temperature sensitivity. Plateaus come from
-    the commanded-rate column (--table-col) or are detected in the output; the settling time
-    is excluded. The input is the table rate plus the earth rate along the IA (--latitude,
+    the commanded-rate column (--table-col) or are detected in the output; each plateau's
+    settling time is found from its own data (transient against its noise floor; --settle is
+    a minimum) and excluded. The input is the table rate plus the earth rate along the IA (--latitude,
     --ia). The scale factor is in the log's units: arcsec/pulse for pulse output, (deg/h)/V for
     analog, 1 for rate output (input per unit output).
 
     \b
     Examples:
-      gyrotest scale-factor run1.csv run2.csv run3.csv --profile bench.toml --settle 10s
+      gyrotest scale-factor run1.csv run2.csv run3.csv --profile bench.toml
       gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
           --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
       gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
@@ -127,7 +131,8 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
         if not logs:
             raise InputError("no input: give one rate-table log per run, or --table FILE")
         loaded = load_logs(logs, ingest_opts, announce=not as_json)
-        result = sfm.reduce_logs(loaded, settle_s=settle, trim_end_s=trim_end,
+        result = sfm.reduce_logs(loaded, settle_s=settle, auto_settle=not fixed_settle,
+                                 trim_end_s=trim_end,
                                  min_dwell_s=min_dwell, detect=detect, rates_dps=rate_list,
                                  snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
@@ -149,6 +154,37 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
 
 
 # ----------------------------------------------------------------------------- rendering
+def _render_settling(c, res) -> None:
+    """Settling found per rate step (runs side by side) and the worst case."""
+    from rich.table import Table
+
+    runs = [rp for rp in res.run_plateaus if rp.settling]
+    if not runs:
+        return
+    auto = any(rp.auto_settle for rp in runs)
+    t = Table(title="settling time found in the data per plateau, s after the rate change" + (
+        "" if auto else " (not used: --fixed-settle)"), title_justify="left")
+    t.add_column("rate deg/s", justify="right")
+    for rp in runs:
+        t.add_column(rp.run, justify="right")
+    rows: dict[float, list[str]] = {}
+    for i, rp in enumerate(runs):
+        for st in rp.settling:
+            row = rows.setdefault(round(st.to_rate_dps, 9), [""] * len(runs))
+            v = f"{st.found_s:.3g}"
+            if math.isfinite(st.tau_s):
+                v += f" (τ {st.tau_s:.2g})"
+            row[i] = v if not row[i] else row[i] + ", " + v
+    for rate, row in rows.items():
+        t.add_row(f"{rate:+g}", *row)
+    c.print(t)
+    worst = max((st for rp in runs for st in rp.settling), key=lambda s: s.found_s)
+    run = next(rp.run for rp in runs if worst in rp.settling)
+    c.print(f"  settling worst case {worst.found_s:.3g} s ({run}, step {worst.from_rate_dps:+g} → "
+            f"{worst.to_rate_dps:+g} deg/s); τ = fitted time constant of the transient"
+            + ("" if auto else f"; window started {runs[0].settle_s:g} s after each change "
+                               "(--fixed-settle)"))
+
 def _pm(v: float, s: float, digits: int = 6) -> str:
     if v is None or not math.isfinite(v):
         return "—"
@@ -193,6 +229,7 @@ def _render(res, plot_path, points_path) -> None:
                          res.scale_factor_error_ppm, res.scale_factor_model, res.bias_dph,
                          res.bias_sigma_dph))
     c.print(t)
+    _render_settling(c, res)
     c.print("  ε0 = (SF/S0 − 1)·1e6; ε0 model: linear coefficient with f(I) fitted; bias D_F "
             "input-referred, earth rate removed")
     if math.isfinite(res.bias_zero_rate_dph):

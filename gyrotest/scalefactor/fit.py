@@ -863,7 +863,8 @@ def detect_lock_in(P: Points, *, ratio: float = 0.1) -> tuple[np.ndarray, list[s
             continue
         fit = line_fit(I[hi], y[hi], None)
         b, k = fit.coef
-        rho = (y - b) / (k * I)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho = (y - b) / (k * I)
         lk = nz & ~hi & (rho < ratio)
         locked[sel[lk]] = True
     return locked, notes

@@ -206,7 +206,7 @@ def _eps_k(sc: Scenario, I: np.ndarray, node_T: dict[str, np.ndarray], sf_off: f
     sf = sc.effects.scale_factor
     eps: np.ndarray | float = sf.offset_ppm + sf_off
     if sf.asymmetry_ppm:
-        eps = eps - 0.5 * sf.asymmetry_ppm * np.sign(I)
+        eps = eps + 0.5 * sf.asymmetry_ppm * np.sign(I)
     for k, c in enumerate(sf.nonlinearity_ppm, start=1):
         if c:
             eps = eps + c * (I / i_fs) ** k
@@ -548,7 +548,9 @@ def _plateau_truth(sc: Scenario, table: env.TableSchedule, noise_free: np.ndarra
         out["sf_dph_per_v"] = float(s0 / sf)
 
     def asym(sp: float, sm: float) -> float:
-        return float((abs(sp) - abs(sm)) / (0.5 * (abs(sp) + abs(sm))) * 1e6)
+        # (SF+ − SF−)/(½(SF+ + SF−)) with SF = input per output = 1/slope (the SF column's
+        # convention); from the output-per-input slopes sp, sm: (|sm| − |sp|)/(½(|sp| + |sm|))
+        return float((abs(sm) - abs(sp)) / (0.5 * (abs(sp) + abs(sm))) * 1e6)
 
     pos, neg = x > 0, x < 0
     if pos.any() and neg.any():
@@ -720,8 +722,10 @@ def _truth(sc, seed, run, n, tau0, tm, t_end, sf_off, bias_off, ntruth, pos, tab
                   "commanded rate (deg/h); dimensionless (1 = nominal S0)",
             "linearity_ppm_fs": "residual from that line / (sf * max |input|) * 1e6; max of |.| "
                                 "and 1 sigma (RMS)",
-            "asymmetry_ppm": "(|SF+| - |SF-|)/(0.5(|SF+| + |SF-|)) * 1e6 (IEEE 952); SF+ and "
-                             "SF- are least-squares slopes of the positive (negative) plateaus "
+            "asymmetry_ppm": "(SF+ - SF-)/(0.5(SF+ + SF-)) * 1e6 (IEEE 952) with SF = input "
+                             "per unit output = 1/slope (the unit of the scale-factor column); "
+                             "the slopes sf_plus, sf_minus (output per input) are least-squares "
+                             "slopes of the positive (negative) plateaus "
                              "with the zero-rate plateaus (asymmetry_method 'separate lines'), or "
                              "through the intercept of the full fit ('common intercept') when a "
                              "side has fewer than two distinct rates",

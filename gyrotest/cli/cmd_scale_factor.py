@@ -154,6 +154,27 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
 
 
 # ----------------------------------------------------------------------------- rendering
+def _render_repeatability(c, rp) -> None:
+    """Repeatability within each temperature group, then the spread of all runs (labelled)."""
+    for g in rp.groups:
+        if len(g.runs) < 2:
+            continue
+        c.print(f"  repeatability (§12.9.4.2.3, {g.kind}) at {fmt_num(g.temperature_degC, 3)} °C, "
+                f"{len(g.runs)} runs ({', '.join(g.runs)}): 1σ "
+                f"{_pm(g.sigma_ppm, g.sigma_uncertainty_ppm)} ppm, max spread "
+                f"{fmt_num(g.max_spread_ppm, 4)} ppm")
+    multi = [g for g in rp.groups if len(g.runs) > 1]
+    if len(multi) > 1:
+        c.print(f"  repeatability pooled over {len(multi)} temperatures: 1σ "
+                f"{_pm(rp.sigma_ppm, rp.sigma_uncertainty_ppm)} ppm, max spread "
+                f"{fmt_num(rp.max_spread_ppm, 4)} ppm")
+    if len(rp.groups) > 1:
+        c.print(f"  all {rp.n_runs} runs together (different temperatures, includes ε_T·ΔT; not "
+                f"the repeatability): 1σ {fmt_num(rp.all_runs_sigma_ppm, 4)} ppm, max spread "
+                f"{fmt_num(rp.all_runs_max_spread_ppm, 4)} ppm")
+    elif not multi:
+        c.print("  repeatability: not measured (no two runs share a condition)")
+
 def _render_settling(c, res) -> None:
     """Settling found per rate step (runs side by side) and the worst case."""
     from rich.table import Table
@@ -297,7 +318,8 @@ def _render(res, plot_path, points_path) -> None:
     c.print(f"  [bold]{res.model.statement}[/bold]")
     a = res.asymmetry
     if a.status == "ok":
-        c.print(f"  asymmetry (§12.9.4.2.2, SF = output/input, {a.method.split(' (')[0]}): "
+        c.print(f"  asymmetry (SF+ − SF−)/SF̄ (§12.9.4.2.2, SF in {u} as in the table above, "
+                f"{a.method.split(' (')[0]}): "
                 f"{_pm(a.asymmetry_ppm, a.asymmetry_sigma_ppm)} ppm; through the common "
                 f"intercept {_pm(a.common_intercept_ppm, a.common_intercept_sigma_ppm)} ppm; "
                 f"model term A {_pm(a.model_ppm, a.model_sigma_ppm)} ppm "
@@ -309,9 +331,7 @@ def _render(res, plot_path, points_path) -> None:
         f"A = {_pm(p.amplitude_ppm, p.amplitude_sigma_ppm)} ppm, period {p.period_dps:.4g} deg/s "
         f"(p = {p.p_value:.2g})" if p.supported else p.status))
     if res.repeatability:
-        rp = res.repeatability
-        c.print(f"  repeatability (§12.9.4.2.3, {rp.n_runs} runs): 1σ {fmt_num(rp.sigma_ppm, 4)} ppm, "
-                f"max spread {fmt_num(rp.max_spread_ppm, 4)} ppm")
+        _render_repeatability(c, res.repeatability)
     for r in res.runs:
         if r.stability:
             s = r.stability

@@ -389,14 +389,24 @@ class Builder:
                                 "(|SF+| − |SF−|)/(½(|SF+| + |SF−|))", "§5.3.2.1 b", asym,
                                 sec.number))
         rep = r.get("repeatability")
+        multi = [g for g in (rep or {}).get("groups", []) if g.get("n_runs", 0) > 1]
+        where = "; ".join(f"{fmt_number(g['temperature_degC'], 3)} °C: {g['n_runs']} runs, "
+                          f"{g['kind']}" for g in multi) or f"{len(runs)} runs"
         items.append(self.check("scale_factor", "repeatability_1sigma_ppm", "repeatability, 1σ "
-                                f"over {len(runs)} runs", "§5.3.2.1 c",
-                                s.num(["repeatability", "repeatability_1sigma_ppm"], "ppm")
-                                if rep else None, sec.number))
+                                f"at one temperature ({where})", "§5.3.2.1 c",
+                                s.num(["repeatability", "repeatability_1sigma_ppm"], "ppm",
+                                      ["repeatability", "repeatability_1sigma_uncertainty_ppm"])
+                                if rep and multi else None, sec.number))
         items.append(self.check("scale_factor", "repeatability_max_spread_ppm",
                                 "repeatability, max spread", "§5.3.2.1 c",
                                 s.num(["repeatability", "repeatability_max_spread_ppm"], "ppm")
-                                if rep else None, sec.number))
+                                if rep and multi else None, sec.number))
+        if rep and len(rep.get("groups", [])) > 1:
+            sec.add(P(f"All {rep['n_runs']} runs together span several temperatures: 1σ "
+                      f"{s.t(['repeatability', 'all_runs_1sigma_ppm'], 'ppm')}, max spread "
+                      f"{s.t(['repeatability', 'all_runs_max_spread_ppm'], 'ppm')}; that spread "
+                      "holds ε_T·ΔT and is not the repeatability (IEEE 952 §5.3.2.1 c vs "
+                      "§5.3.2.2 a).", "note"))
         for i, run in enumerate(runs):
             st = run.get("stability")
             items.append(self.check(

@@ -36,6 +36,7 @@ from .fit import (
     select_model,
 )
 from .plateaus import STDERR_METHODS, Plateau, RunPlateaus
+from .repeatability import repeatability_by_condition
 
 PULSE_KINDS = ("counts", "updown", "counter")
 
@@ -218,19 +219,35 @@ class PeriodicCheck:
 
 @dataclass
 class Repeatability:
-    """Run-to-run scale factor (IEEE 952 §12.9.4.2.3): 1σ (ddof=1) and max spread, ppm."""
+    """Run-to-run scale factor (IEEE 952 §12.9.4.2.3, §5.3.2.1 c) per condition
+    (:mod:`.repeatability`): the repeatability is the pooled 1σ (ddof=1) and the largest
+    spread *within* groups of runs at one temperature (NaN when no two runs share one); the
+    spread of all runs is kept beside it (``all_runs_*``), labelled as such."""
 
     n_runs: int
-    sigma_ppm: float
+    sigma_ppm: float  # within-condition (pooled over temperature groups)
     max_spread_ppm: float
-    run_sf_ppm: list[float]  # each run's SF − mean, ppm
-    sigma_model_ppm: float
+    run_sf_ppm: list[float]  # each run's SF − mean of all runs, ppm
+    sigma_model_ppm: float  # all runs, model SF
+    sigma_uncertainty_ppm: float = math.nan  # measurement uncertainty of sigma_ppm
+    all_runs_sigma_ppm: float = math.nan
+    all_runs_max_spread_ppm: float = math.nan
+    groups: list = field(default_factory=list)  # RepeatGroup
+    notes: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"n_runs": self.n_runs, "repeatability_1sigma_ppm": self.sigma_ppm,
+                "repeatability_1sigma_uncertainty_ppm": self.sigma_uncertainty_ppm,
                 "repeatability_max_spread_ppm": self.max_spread_ppm,
+                "definition": "pooled 1 sigma (ddof=1) and largest max-min spread of the run "
+                              "scale factors within groups of runs at one temperature (power "
+                              "cycles between them); null when no two runs share a temperature",
+                "groups": [g.to_dict() for g in self.groups],
+                "all_runs_1sigma_ppm": self.all_runs_sigma_ppm,
+                "all_runs_max_spread_ppm": self.all_runs_max_spread_ppm,
                 "run_sf_change_ppm": self.run_sf_ppm,
-                "repeatability_model_1sigma_ppm": self.sigma_model_ppm}
+                "repeatability_model_1sigma_ppm": self.sigma_model_ppm,
+                "notes": self.notes}
 
 
 @dataclass
@@ -494,7 +511,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
             nominal_scale_factor: float | None = None, full_scale_dps: float | None = None,
             terms: str | list[str] = "auto", alpha: float = 0.05, weighted: bool = True,
             weighted_line: bool = False, lock_in: bool = True, periodic: bool = True,
-            common_rates: bool = False, temp_min_range_degC: float = 1.0) -> ScaleFactorResult:
+            common_rates: bool = False, temp_min_range_degC: float = 1.0,
+            repeat_temp_tol_degC: float = 2.0) -> ScaleFactorResult:
     """Reduce rate-table plateau points to the IEEE 952 scale-factor figures.
 
     Inputs: per point the input I = table rate + Ω_IA (deg/h), the mean output y = S0 ×
@@ -513,7 +531,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
       shared terms chosen by the data (``terms="auto"``; "linear"; or a list), see
       :func:`~gyrotest.scalefactor.fit.select_model`. ``scale_factor_model`` = S0/k_r.
     * Asymmetry (§12.9.4.2.2), periodic check (§5.3.2.1 a), repeatability (§12.9.4.2.3: 1σ
-      with ddof=1 and max spread of the run SFs, ppm of their mean), stability
+      with ddof=1 and max spread of the run SFs, ppm, within groups of runs whose mean
+      temperatures agree within ``repeat_temp_tol_degC``; :mod:`.repeatability`), stability
       (§12.9.4.2.4: per sweep), temperature sensitivity (§12.9.4.3.1: ppm/°C of the model SF
       across runs), lock-in dead band (points whose output collapsed are excluded).
 
@@ -686,8 +705,14 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
     if R >= 2:
         rel = (sfs / np.mean(sfs) - 1) * 1e6
         relm = (sfm / np.mean(sfm) - 1) * 1e6
-        rep = Repeatability(R, float(np.std(rel, ddof=1)), float(np.ptp(rel)), rel.tolist(),
-                            float(np.std(relm, ddof=1)))
+        groups, within, within_unc, within_spread, rnotes = repeatability_by_condition(
+            [rr.run for rr in run_results], sfs, ssf,
+            [rr.temperature_mean_degC for rr in run_results],
+            [rp.power_on for rp in runs], tol_degC=repeat_temp_tol_degC)
+        rep = Repeatability(R, within, within_spread, rel.tolist(), float(np.std(relm, ddof=1)),
+                            within_unc, float(np.std(rel, ddof=1)), float(np.ptp(rel)),
+                            groups, rnotes)
+        notes += [f"repeatability: {n}" for n in rnotes]
     # ---- temperature sensitivity (ε_T, model SF across runs)
     tr = np.array([rr.temperature_mean_degC for rr in run_results])
     ok = np.isfinite(tr)
@@ -711,8 +736,9 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
             "ok", float(t_ok.min()), float(t_ok.max()), float(beta[1]),
             float(math.sqrt(cov[1, 1] * max(1.0, chi))), float(np.ptp(v) / np.ptp(t_ok)))
         if R > len(np.unique(np.round(t_ok, 1))):
-            notes.append("temperature sensitivity: several runs share a temperature; the slope "
-                         "also absorbs run-to-run changes")
+            notes.append("temperature sensitivity: several runs share a temperature; the "
+                         "slope goes through the temperature groups and its σ includes the "
+                         "run-to-run scatter (repeatability)")
     # ---- asymmetry
     have_neg = bool(np.any(P.table < 0) and np.any(P.table > 0))
     if not have_neg:

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import AnalysisError, InputError
+from .repeatability import power_on_label
 from .settling import SettlingFound, find_settling
 
 DPS = 3600.0  # deg/h per deg/s
@@ -138,6 +139,7 @@ class RunPlateaus:
     notes: list[str] = field(default_factory=list)
     stderr_method: str = "allan"
     auto_settle: bool = False
+    power_on: str | None = None  # power-on label from the log (None: not given)
 
     @property
     def settling(self) -> list[SettlingFound]:
@@ -707,4 +709,5 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 0.0,
                        earth_rate_dph=er, settle_s=settle_s, trim_end_s=trim_end_s,
                        noise_block_dph=info.get("noise_block", math.nan),
                        block_s=info.get("block_s", math.nan), ignored_short=ignored, notes=notes,
-                       stderr_method=stderr, auto_settle=auto_settle)
+                       stderr_method=stderr, auto_settle=auto_settle,
+                       power_on=power_on_label(log))

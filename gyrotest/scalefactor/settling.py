@@ -7,10 +7,14 @@ the plateau mean by far more than its standard error (an 800 deg/s reversal with
 carries e^(−5)·800 deg/s after 10 s). :func:`find_settling` looks at the plateau itself:
 
 1. block means m_j over blocks of T_b ≈ 1 s (at least 40 blocks per plateau);
-2. the plateau's own noise floor from its settled end (the final quarter, shortened while it
-   still contains the transient): the Allan deviation at T_b,
-   σ_b = 1.4826·MAD(m_{j+1} − m_j)/√2 (robust, a linear drift does not count; IEEE 952
-   Annex C), and the final level L (mean of the last eighth) with its standard error;
+2. the plateau's own noise floor from its settled end (the final half, shortened while it
+   still contains the transient): the Allan deviation at T_b from the first differences
+   Δm_j (IEEE 952 Annex C), σ_b = RMS₉₀(Δm − median Δm)/(0.789·√2) (the 90 % smallest
+   deviations, so a spike or the transient's end does not count; a linear drift does not
+   either), and the final level L (mean of the last eighth) with its standard error;
+   The noise window must itself be flat (a fitted line may not change by more than 2k
+   standard errors over it; else it is shortened by a quarter at a time, and a plateau still
+   drifting over its last 12 blocks never settled);
 3. a block is unsettled when |m_j − L| > k·√(σ_b² + σ_L²) (``k_sigma`` = 5: about 6e-7
    false alarms per block for Gaussian noise); the transient ends with the last unsettled block
    that is not an isolated spike (a run of two, or the first block);
@@ -64,15 +68,15 @@ class SettlingFound:
 
 
 def _noise(m: np.ndarray) -> float:
-    """Allan deviation of block means from first differences: 1.4826·MAD(Δm)/√2, falling back
-    to the RMS of Δm/√2 when most differences are equal (quantized outputs)."""
+    """Allan deviation of block means from first differences Δm, robust to a few outliers and to
+    quantized outputs: the RMS of the 90 % smallest |Δm − median Δm|, divided by 0.789 (the RMS
+    of a normal variable truncated at its 90 % quantile is 0.789 σ) and by √2."""
     d = np.diff(m)
     if len(d) < 2:
         return 0.0
-    s = 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
-    if s <= 0:
-        s = float(np.sqrt(np.mean((d - np.mean(d)) ** 2))) / math.sqrt(2.0)
-    return s
+    a = np.sort(np.abs(d - np.median(d)))
+    keep = a[: max(2, int(math.ceil(0.9 * len(a))))]
+    return float(np.sqrt(np.mean(keep ** 2))) / 0.789 / math.sqrt(2.0)
 
 
 def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: float = 0.5,
@@ -95,12 +99,25 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
     Tb = B * tau0
     T = n * tau0
     n_lev = max(8, nb // 8)  # level from the final eighth (at least 8 blocks)
-    j_noise = nb - max(16, nb // 4)  # noise floor from the final quarter (at least 16 blocks)
+    j_noise = nb - max(16, nb // 2)  # noise floor from the final half (at least 16 blocks)
     last = -1
     sig = thr = 0.0
     L = float(np.mean(m[nb - n_lev:]))
-    for _ in range(4):
-        sig = _noise(m[max(0, j_noise):])
+    trending = False
+    for _ in range(12):
+        win = m[max(0, j_noise):]
+        sig = _noise(win)
+        # the noise window itself must be flat: a straight line over it may not change by
+        # more than 2k standard errors of that change (σ_b·√(12/n) for white block noise)
+        xx = np.arange(len(win), dtype=float)
+        trend = abs(float(np.polyfit(xx, win, 1)[0])) * len(win)
+        trending = trend > 2 * k_sigma * sig * math.sqrt(12.0 / len(win))
+        if trending:
+            step = max(2, (nb - j_noise) // 4)
+            if nb - j_noise - step < 12:
+                break
+            j_noise += step
+            continue
         L = float(np.mean(m[nb - n_lev:]))
         sig_tot = math.hypot(sig, sig / math.sqrt(n_lev))
         thr = k_sigma * max(sig_tot, 1e-12 * max(1.0, abs(L)))
@@ -117,6 +134,9 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
     detected = (last + 1) * Tb
     res = SettlingFound(found_s=detected, detected_s=detected, noise_block_dph=sig,
                         block_s=Tb)
+    if trending:  # still drifting at the end of the plateau: never stationary
+        return SettlingFound(found_s=T, detected_s=T, noise_block_dph=sig, block_s=Tb,
+                             settled=False)
     res.settled = last < nb - n_lev and T - detected >= min_window_frac * T
     if last >= 0:
         dev = np.abs(m[: last + 1] - L)
@@ -126,7 +146,7 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
             sel = sel[brk[-1] + 1:] if len(brk) else sel
         if len(sel) >= 3:
             tt = (sel + 0.5) * Tb
-            slope = np.polyfit(tt, np.log(dev[sel]), 1)[0]
+            slope, icpt = np.polyfit(tt, np.log(dev[sel]), 1)
             if slope < 0:
                 tau = -1.0 / slope
                 Tw = max(Tb, T - detected)
@@ -138,7 +158,10 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
                     res.margin_capped = True
                     margin = cap
                 Tw = max(Tb, T - detected - margin)
-                res.tail_bias_bound_dph = float(thr * tau * math.exp(-margin / tau) / Tw)
+                # amplitude at the detected end: the fitted decay there, at least the band
+                # plus two noise scales (the last block outside may be just inside in truth)
+                amp = max(thr * (k_sigma + 2) / k_sigma, math.exp(icpt + slope * detected))
+                res.tail_bias_bound_dph = float(amp * tau * math.exp(-margin / tau) / Tw)
                 res.tau_s = float(tau)
                 res.margin_s = float(margin)
                 res.found_s = float(detected + margin)

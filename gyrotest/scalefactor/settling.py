@@ -79,7 +79,7 @@ def _noise(m: np.ndarray) -> float:
     return float(np.sqrt(np.mean(keep ** 2))) / 0.789 / math.sqrt(2.0)
 
 
-def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: float = 0.5,
+def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: float = 0.2,
                   block_s: float = 1.0, min_blocks: int = 40,
                   min_window_frac: float = 0.1) -> SettlingFound:
     """Settling time (s from the first sample of ``y``) of one plateau's output ``y``, which

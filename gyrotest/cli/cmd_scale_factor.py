@@ -154,6 +154,30 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
 
 
 # ----------------------------------------------------------------------------- rendering
+def _render_lowrate(c, res) -> None:
+    """Threshold, resolution and input range (IEEE 952 §5.3.1/§5.3.2, IEEE Std 528 terms)."""
+    for name, r in (("threshold", res.threshold), ("resolution", res.resolution)):
+        if r is None:
+            continue
+        if r.status == "ok":
+            txt = f"≤ {r.value_dps:g} deg/s"
+            if math.isfinite(r.lower_dps):
+                txt = f"between {r.lower_dps:g} and {r.value_dps:g} deg/s"
+            else:
+                txt += " (the smallest tried already responds)"
+            c.print(f"  {name} (50 % of the expected output, {len(r.steps)} tried): {txt}")
+        else:
+            c.print(f"  {name}: {r.status}")
+    ir = res.input_range
+    if ir is not None:
+        if ir.saturated:
+            c.print(f"  input range: +{ir.positive_dps:g} / −{ir.negative_dps:g} deg/s; the output "
+                    f"saturates at {', '.join(f'{v:+g}' for v in ir.saturated_rates_dps)} deg/s "
+                    "(excluded from the fits)")
+        else:
+            c.print(f"  input range: at least +{ir.positive_dps:g} / −{ir.negative_dps:g} deg/s "
+                    "(no saturation at the rates tested)")
+
 def _render_repeatability(c, rp) -> None:
     """Repeatability within each temperature group, then the spread of all runs (labelled)."""
     for g in rp.groups:
@@ -353,6 +377,7 @@ def _render(res, plot_path, points_path) -> None:
                     li2.dead_band_above_dps) else "")
                 + (f"; Adler fit Ω_L = {_pm(li2.fitted_dps, li2.fitted_sigma_dps)} deg/s"
                    if math.isfinite(li2.fitted_dps) else ""))
+    _render_lowrate(c, res)
     if plot_path:
         note(f"plot written to {plot_path}")
     if points_path:

@@ -35,6 +35,7 @@ from .fit import (
     per_rate_asymmetry,
     select_model,
 )
+from .lowrate import InputRange, StepResponse, detect_saturation, resolution, threshold
 from .plateaus import STDERR_METHODS, Plateau, RunPlateaus
 from .repeatability import repeatability_by_condition
 
@@ -326,6 +327,9 @@ class ScaleFactorResult:
     point_table: dict[str, np.ndarray]
     run_plateaus: list[RunPlateaus]
     notes: list[str] = field(default_factory=list)
+    threshold: StepResponse | None = None
+    resolution: StepResponse | None = None
+    input_range: InputRange | None = None
 
     def to_dict(self) -> dict:
         k = self.sf_key
@@ -377,6 +381,9 @@ class ScaleFactorResult:
             "epsilon_k": self.epsilon_k(),
             "plateau_extraction": [rp.to_dict() for rp in self.run_plateaus],
             "points": pts,
+            "threshold": self.threshold.to_dict() if self.threshold else None,
+            "resolution": self.resolution.to_dict() if self.resolution else None,
+            "input_range": self.input_range.to_dict() if self.input_range else None,
             "notes": self.notes,
         }
 
@@ -569,6 +576,16 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         P_all.se = np.full_like(se, math.nan)
     keep, n2 = _check_runs(P_all, runs, common_rates)
     notes += n2
+    # ---- saturation (input range, IEEE 952 §5.3.1): excluded from the fits like lock-in
+    sat_sub, in_range = detect_saturation(P_all.subset(keep))
+    saturated = np.zeros(P_all.n, bool)
+    saturated[np.flatnonzero(keep)[sat_sub]] = True
+    if saturated.any():
+        notes.append(f"saturation: the output stops following the table at "
+                     f"{', '.join(f'{r:+g}' for r in in_range.saturated_rates_dps)} deg/s "
+                     f"({int(saturated.sum())} point(s)); excluded from the fits")
+        keep &= ~saturated
+        _check_runs(P_all.subset(keep), runs, True)
     # ---- lock-in (dead band)
     li = LockIn(checked=lock_in)
     if lock_in:
@@ -589,6 +606,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
                          f"({int(full.sum())} point(s)); excluded from the fits")
             keep &= ~full
             _check_runs(P_all.subset(keep), runs, True)
+    locked_all = np.array([p.locked for p in plist], dtype=bool)
     P = P_all.subset(keep)
     weighted = weighted and P.weighted
     weighted_line = weighted_line and P.weighted
@@ -837,6 +855,10 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
                                              float(math.sqrt(cv[0, 0])), False))
             except AnalysisError:
                 pass
+    # ---- threshold and resolution (IEEE Std 528 definitions; IEEE 952 §5.3.2)
+    thr = threshold(P_all, saturated | ~keep & ~locked_all, fs, locked=locked_all)
+    res_ = resolution(P_all, saturated | locked_all,
+                      above_dps=thr.value_dps if math.isfinite(thr.value_dps) else 0.0)
     if model.lockin_dph:
         li.fitted_dps = model.lockin_dph / DPS
         li.fitted_sigma_dps = model.lockin_sigma_dph / DPS
@@ -881,7 +903,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         linearity=linearity_stats(P.I, lin_fs, lin_out),
         linearity_after_model=linearity_stats(P.I, after_fs, after_out),
         model=nl, asymmetry=asym, periodic=per, repeatability=rep, temperature=ts,
-        lock_in=li, points=plist, point_table=point_table, run_plateaus=runs, notes=notes)
+        lock_in=li, points=plist, point_table=point_table, run_plateaus=runs, notes=notes,
+        threshold=thr, resolution=res_, input_range=in_range)
 
 
 def _statement(model: ModelFit, hist: list[ModelStep], asym: AsymmetryResult,

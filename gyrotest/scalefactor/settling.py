@@ -106,7 +106,8 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
     trending = False
     for _ in range(12):
         win = m[max(0, j_noise):]
-        sig = _noise(win)
+        # a noise-free (e.g. clipped) output: a floor of 1e-9 of the level, not zero
+        sig = max(_noise(win), 1e-9 * max(1.0, abs(float(np.median(win)))))
         # the noise window itself must be flat: a straight line over it may not change by
         # more than 2k standard errors of that change (σ_b·√(12/n) for white block noise)
         xx = np.arange(len(win), dtype=float)

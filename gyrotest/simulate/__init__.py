@@ -166,6 +166,7 @@ in the key names or listed here; durations accept seconds or strings like ``"40m
     node = "core"
     t_ref_c = 21.0
     lock_in_dph = 0.0             # RLG dead band L: output sign(x) sqrt(x^2 - L^2)
+    saturation_dps = 450          # optional: output clipped at ± this input (input range)
 
     [rate_table]
     rates_dps = [0, 1, -1, 10, -10, 100, -100]

@@ -330,6 +330,10 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
     else:
         ideal = noise_free.copy()
     del rand
+    if sf.saturation_dps:  # the output stops following beyond the input range
+        lim = sf.saturation_dps * 3600.0
+        np.clip(noise_free, -lim, lim, out=noise_free)
+        np.clip(ideal, -lim, lim, out=ideal)
 
     # ---- output encoding
     out = _encode(sc, seed, run, ideal, tau0)
@@ -520,6 +524,14 @@ def _plateau_truth(sc: Scenario, table: env.TableSchedule, noise_free: np.ndarra
     x, y = np.array(xs), np.array(ys)
     out: dict[str, Any] = {"plateaus": rows, "exclude_s": spec.exclude_s,
                            "settle_tau_s": spec.settle_tau_s}
+    sat = sc.effects.scale_factor.saturation_dps
+    if sat:  # saturated plateaus are outside the input range: not on the SF line
+        inside = np.abs(x) < sat * 3600.0
+        for row, ok in zip(rows, inside):
+            row["saturated"] = not bool(ok)
+        rows = [r for r, ok in zip(rows, inside) if ok]
+        x, y = x[inside], y[inside]
+        out["saturation_dps"] = sat
     if np.unique(x).size < 2:
         out["note"] = "fewer than two distinct plateau rates: no scale-factor line"
         return out
@@ -715,7 +727,7 @@ def _truth(sc, seed, run, n, tau0, tm, t_end, sf_off, bias_off, ntruth, pos, tab
                   "full_scale_dph": i_fs, "periodic_ppm": sf.periodic_ppm,
                   "periodic_period_dps": sf.periodic_period_dps,
                   "temp_ppm_per_c": sf.temp_ppm_per_c, "node": sf.node, "t_ref_c": sf.t_ref_c,
-                  "lock_in_dph": sf.lock_in_dph},
+                  "lock_in_dph": sf.lock_in_dph, "saturation_dps": sf.saturation_dps},
         "sf_nominal": 1.0 / (1.0 + 1e-6 * (sf.offset_ppm + sf_off)),
         "definitions": {
             "sf": "slope of the least-squares line of noise-free plateau means (deg/h) vs "

@@ -401,12 +401,13 @@ class Builder:
                                 "repeatability, max spread", "§5.3.2.1 c",
                                 s.num(["repeatability", "repeatability_max_spread_ppm"], "ppm")
                                 if rep and multi else None, sec.number))
+        rep_note = None
         if rep and len(rep.get("groups", [])) > 1:
-            sec.add(P(f"All {rep['n_runs']} runs together span several temperatures: 1σ "
+            rep_note = P(f"All {rep['n_runs']} runs together span several temperatures: 1σ "
                       f"{s.t(['repeatability', 'all_runs_1sigma_ppm'], 'ppm')}, max spread "
                       f"{s.t(['repeatability', 'all_runs_max_spread_ppm'], 'ppm')}; that spread "
                       "holds ε_T·ΔT and is not the repeatability (IEEE 952 §5.3.2.1 c vs "
-                      "§5.3.2.2 a).", "note"))
+                      "§5.3.2.2 a).", "note")
         for i, run in enumerate(runs):
             st = run.get("stability")
             items.append(self.check(
@@ -460,6 +461,8 @@ class Builder:
             self.checks.append(ch)
             items.append(ch)
         sec.add(_check_table(items, "Scale-factor items"))
+        if rep_note is not None:
+            sec.add(rep_note)
         # per-run table
         rows = []
         for i, run in enumerate(runs):

@@ -75,6 +75,10 @@ def _duration(ctx, param, value):
               help="Accept a table without negative rates (asymmetry is then not computed).")
 @click.option("--common-rates", is_flag=True,
               help="Runs tested at different rate sets: keep only the rates all runs share.")
+@click.option("--matrix", is_flag=True,
+              help="3-axis log turned about each case axis (position column +x, -y, z …): the "
+                   "scale-factor/misalignment matrix K = I + M instead of the single-axis "
+                   "reduction.")
 @click.option("--points", "points_path", type=click.Path(dir_okay=False), default=None,
               help="Write the plateau table (CSV) to this file.")
 @plot_option("Residuals vs input rate and output vs time (.png, .svg or .pdf).")
@@ -84,7 +88,7 @@ def _duration(ctx, param, value):
 def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect, rates, stderr_method,
             snap_tol, full_scale,
             terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, no_asymmetry,
-            common_rates, points_path, plot_path, as_json, ingest_opts):
+            common_rates, matrix, points_path, plot_path, as_json, ingest_opts):
     """Scale factor, linearity, asymmetry and nonlinearity from rate-table LOGS (IEEE 952 §12.9.4).
 
     Each LOG is one run (a continuous rate-table log); several runs give repeatability,
@@ -120,6 +124,11 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
               periodic=not no_periodic, common_rates=common_rates,
               require_asymmetry=not no_asymmetry)
     loaded = []
+    if matrix:
+        if table_path or len(logs) != 1:
+            raise InputError("--matrix reduces one 3-axis log (no --table)")
+        _matrix(logs[0], ingest_opts, settle, not fixed_settle, min_dwell, as_json)
+        return
     if table_path:
         if logs:
             raise InputError("give either rate-table logs or --table FILE, not both")
@@ -151,6 +160,34 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     for n in result.notes:
         (warn if ("χ²/dof" in n or "asymmetry not" in n or "lock-in" in n) else note)(n)
     _render(result, plot_path, points_path)
+
+
+def _matrix(path, ingest_opts, settle, auto_settle, min_dwell, as_json) -> None:
+    from ..scalefactor.matrix import misalignment_matrix
+
+    lg = load_logs([path], ingest_opts, announce=not as_json)[0]
+    res = misalignment_matrix(lg, settle_s=settle, auto_settle=auto_settle,
+                              min_dwell_s=min_dwell)
+    if as_json:
+        emit_json({"command": "scale-factor", "source": lg.source, "matrix": res.to_dict()})
+        return
+    for n in res.notes:
+        note(n)
+    from rich.table import Table
+
+    c = console()
+    t = Table(title="K = I + M (row: gyro output, column: case axis on the table); diagonal: "
+                    "SF error ppm, off-diagonal: µrad (±1σ)", title_justify="left")
+    t.add_column("gyro", justify="left")
+    for a in "xyz":
+        t.add_column(f"case {a}", justify="right")
+    M, S = res.M, res.K_sigma
+    for i, name in enumerate(res.axes):
+        t.add_row(name, *[_pm(M[i, a] * 1e6, S[i, a] * 1e6) for a in range(3)])
+    c.print(t)
+    c.print(f"  plateaus per case axis {res.n_plateaus}; settling worst case "
+            f"{res.settling_worst_s:.3g} s; misalignment M_ia = sensitivity of gyro i to rotation "
+            "about case axis a (small angle)")
 
 
 # ----------------------------------------------------------------------------- rendering

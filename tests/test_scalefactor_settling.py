@@ -189,3 +189,40 @@ def test_cli_settling_json_and_short_plateau(gen, tmp_path):
     r = run_cli(["scale-factor", *short["logs"], "--profile", short["profile"], "--settle", "8s",
                  "--fixed-settle", "--json"])
     assert r.code == 0, r.err
+
+
+def test_power_on_column_groups_runs(gen, tmp_path):
+    """A numeric power_on column in the logs (an unused column becomes an extra channel): runs
+    1 and 2 in one power-on, run 3 after a power cycle → two groups at 22 °C."""
+    import pandas as pd
+
+    truth = gen.write_campaign(tmp_path, seed=5, lag_s=0.0, rates=(1, 10, 100))
+    for path, po in zip(truth["logs"], (1, 1, 2)):
+        d = pd.read_csv(path)
+        d["power_on"] = po
+        d.to_csv(path, index=False)
+    res = _reduce(truth)
+    rp = res.repeatability
+    assert [g.runs for g in rp.groups] == [["run1", "run2"], ["run3"]]
+    assert rp.groups[0].kind == "within one power-on"
+    assert any("several power-ons" in n for n in res.notes)
+
+
+def test_quick_randomized_campaign(tmp_path):
+    """The quick version of benchmarks/bench_settling.py: 6 report seeds (random lag 0…5 s
+    with nulls, random ARW), never used for tuning. Bounds are looser than the 60-case figures
+    in benchmarks/README.md (misses 1.0 %, no false alarms, asymmetry 95 % within 2σ)."""
+    saved = list(sys.path)
+    sys.path.insert(0, str(BENCH))
+    try:
+        import bench_settling as bs
+    finally:
+        sys.path[:] = saved  # the benchmark adds its own directories at import
+    results = [bs.run_case(bs.draw_case(1000 + i), tmp_path / f"c{i}") for i in range(6)]
+    s = bs.summarise(results)["auto"]
+    assert s["refused"] == 0
+    assert s["miss_rate_z_tail_gt_1"] < 0.05
+    assert s["false_alarm_rate_found_gt_1p5s"] == 0.0
+    assert s["asymmetry_within_2sigma"] >= 5 / 6 and s["sf_within_2sigma"] >= 5 / 6
+    old = bs.summarise(results)["fixed10"]
+    assert old["miss_rate_z_tail_gt_1"] > 0.1  # the fixed 10 s leaves transients in

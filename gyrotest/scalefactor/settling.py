@@ -114,10 +114,9 @@ def find_settling(y: np.ndarray, tau0: float, *, k_sigma: float = 5.0, beta: flo
         trend = abs(float(np.polyfit(xx, win, 1)[0])) * len(win)
         trending = trend > 2 * k_sigma * sig * math.sqrt(12.0 / len(win))
         if trending:
-            step = max(2, (nb - j_noise) // 4)
-            if nb - j_noise - step < 12:
+            if nb - j_noise <= 12:
                 break
-            j_noise += step
+            j_noise = min(j_noise + max(2, (nb - j_noise) // 4), nb - 12)
             continue
         L = float(np.mean(m[nb - n_lev:]))
         sig_tot = math.hypot(sig, sig / math.sqrt(n_lev))

@@ -168,3 +168,36 @@ def repeatability_by_condition(names: list[str], sf, sf_sigma, temps_degC,
                          f"{np.max(ok_t):.3g} °C): repeatability not measured (no two runs "
                          "share a condition); the spread of all runs is mostly ε_T·ΔT")
     return groups, pooled, unc, spread, notes
+
+
+@dataclass
+class Repeatability:
+    """Run-to-run scale factor (IEEE 952 §12.9.4.2.3, §5.3.2.1 c) per condition
+    (:mod:`.repeatability`): the repeatability is the pooled 1σ (ddof=1) and the largest
+    spread *within* groups of runs at one temperature (NaN when no two runs share one); the
+    spread of all runs is kept beside it (``all_runs_*``), labelled as such."""
+
+    n_runs: int
+    sigma_ppm: float  # within-condition (pooled over temperature groups)
+    max_spread_ppm: float
+    run_sf_ppm: list[float]  # each run's SF − mean of all runs, ppm
+    sigma_model_ppm: float  # all runs, model SF
+    sigma_uncertainty_ppm: float = math.nan  # measurement uncertainty of sigma_ppm
+    all_runs_sigma_ppm: float = math.nan
+    all_runs_max_spread_ppm: float = math.nan
+    groups: list[RepeatGroup] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {"n_runs": self.n_runs, "repeatability_1sigma_ppm": self.sigma_ppm,
+                "repeatability_1sigma_uncertainty_ppm": self.sigma_uncertainty_ppm,
+                "repeatability_max_spread_ppm": self.max_spread_ppm,
+                "definition": "pooled 1 sigma (ddof=1) and largest max-min spread of the run "
+                              "scale factors within groups of runs at one temperature (power "
+                              "cycles between them); null when no two runs share a temperature",
+                "groups": [g.to_dict() for g in self.groups],
+                "all_runs_1sigma_ppm": self.all_runs_sigma_ppm,
+                "all_runs_max_spread_ppm": self.all_runs_max_spread_ppm,
+                "run_sf_change_ppm": self.run_sf_ppm,
+                "repeatability_model_1sigma_ppm": self.sigma_model_ppm,
+                "notes": self.notes}

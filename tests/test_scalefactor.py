@@ -52,7 +52,8 @@ def make_log(rates_dps, dwell_s=30.0, *, fs=50.0, s0=0.5, kind="counts", eps0=10
              asym=0.0, c=(), noise_dph=0.05 * 60, bias=2.0, lat=45.0, seed=1, tau_table=0.15,
              table=True, temp=25.0, lock_dph=0.0, fs_dps=None):
     """A rate-table log with the simulator's model: S0·out = LockIn(I + D)/(1 + 1e-6 ε),
-    ε = eps0 − (asym/2) sgn(I) + Σ c_k (I/FS)^k; I = table (first-order lag) + earth rate.
+    ε = eps0 + (asym/2) sgn(I) + Σ c_k (I/FS)^k; I = table (first-order lag) + earth rate
+    (asym in the SF column's convention: (SF+ − SF−)/SF̄ with SF input per output).
     ``noise_dph``: white rate noise N (deg/h·√s, i.e. N[deg/√h]·60)."""
     rng = np.random.default_rng(seed)
     dw = np.broadcast_to(np.asarray(dwell_s, float), (len(rates_dps),))
@@ -69,7 +70,7 @@ def make_log(rates_dps, dwell_s=30.0, *, fs=50.0, s0=0.5, kind="counts", eps0=10
     I = act + site.earth_rate_dph()
     FS = (fs_dps or max(abs(r) for r in rates_dps)) * DPS
     u = I / FS
-    eps = eps0 - 0.5 * asym * np.sign(I) + sum(ck * u ** (k + 1) for k, ck in enumerate(c))
+    eps = eps0 + 0.5 * asym * np.sign(I) + sum(ck * u ** (k + 1) for k, ck in enumerate(c))
     x = I + bias + rng.normal(0, noise_dph * math.sqrt(fs), n)
     if lock_dph:
         x = adler(x, lock_dph)
@@ -92,7 +93,7 @@ def truth_line(rates_dps, s0=0.5, eps0=100.0, asym=0.0, c=(), fs_dps=500.0):
     """Noise-free IEEE line (unweighted) of the generator's output vs table rate."""
     x = np.array(rates_dps, float) * DPS
     u = x / (fs_dps * DPS)
-    eps = eps0 - 0.5 * asym * np.sign(x) + sum(ck * u ** (k + 1) for k, ck in enumerate(c))
+    eps = eps0 + 0.5 * asym * np.sign(x) + sum(ck * u ** (k + 1) for k, ck in enumerate(c))
     y = x / (1 + 1e-6 * eps)
     k, b = np.polyfit(x, y, 1)
     return s0 / k, x, y
@@ -259,7 +260,7 @@ def test_select_model_recovers_terms_and_rejects_spurious():
     found = []
     for seed in range(6):
         r = np.random.default_rng(seed)
-        eps = 50 - 0.5 * 40 * np.sign(x) + (-25) * u ** 2
+        eps = 50 + 0.5 * 40 * np.sign(x) + (-25) * u ** 2
         se = np.full(len(x), 0.3)
         y = x / (1 + 1e-6 * eps) + 1.0 + r.normal(0, se)
         m, hist, _ = select_model(_points(x, y, se), fs, 1.0,
@@ -309,10 +310,15 @@ def test_lock_in_exact_adler():
 
 
 def test_asymmetry_estimators_sign_and_value():
-    """SF+ larger (output per input) → positive asymmetry; pure kink: all three agree."""
+    """SF+ larger (input per output, the SF column's unit) → positive asymmetry, equal to
+    (SF+ − SF−)/SF̄ with SF± = S0/k±; pure kink: all three estimators agree."""
     x = np.array([0] + [s * r for r in SYM for s in (1, -1)], float) * DPS
     A = 60.0
-    y = x / (1 + 1e-6 * (-0.5 * A * np.sign(x))) + 3.0
+    y = x / (1 + 1e-6 * (0.5 * A * np.sign(x))) + 3.0
+    kp = np.polyfit(x[x >= 0], y[x >= 0], 1)[0]
+    km = np.polyfit(x[x <= 0], y[x <= 0], 1)[0]
+    sfp, sfm = 0.5 / kp, 0.5 / km  # arcsec/pulse with S0 = 0.5
+    assert (sfp - sfm) / (0.5 * (sfp + sfm)) * 1e6 == pytest.approx(A, rel=1e-3)
     sep = asymmetry_separate_lines(x, y, None)
     f = ieee_line(x, y, None)
     ci = asymmetry_common_intercept(x, y, None, f.coef[0], np.zeros_like(x))
@@ -338,7 +344,10 @@ def test_analyse_recovers_generator_truth():
     assert set(res.model.terms) == {"asymmetry", "cubic"}
     assert res.asymmetry.model_ppm == pytest.approx(40, abs=2.0)
     rel = np.array([100, 112, 95]) - np.mean([100, 112, 95])
-    assert res.repeatability.sigma_ppm == pytest.approx(np.std(rel, ddof=1), rel=0.1)
+    # runs at 20/30/40 °C: their spread is ε_T·ΔT + run-to-run, kept apart from repeatability
+    assert res.repeatability.all_runs_sigma_ppm == pytest.approx(np.std(rel, ddof=1), rel=0.1)
+    assert math.isnan(res.repeatability.sigma_ppm)
+    assert any("repeatability not measured" in n for n in res.notes)
     assert res.runs[0].stability is not None and res.runs[0].stability.n_sweeps == 2
     assert res.temperature.status == "ok"
     d = json.loads(dumps(res))  # strict JSON, no NaN

@@ -271,11 +271,13 @@ def test_sf_offset_and_asymmetry_truth():
     r = simulate(_table([0, 10, -10, 50, -50], offset_ppm=100.0, asymmetry_ppm=40.0),
                  seed=1)
     sf = r.truth["scale_factor"]
-    sp, sm = 1 / (1 - 20e-6 + 100e-6), 1 / (1 + 20e-6 + 100e-6)
+    sp, sm = 1 / (1 + 20e-6 + 100e-6), 1 / (1 - 20e-6 + 100e-6)  # ε_K += ½A·sgn(I)
     assert sf["asymmetry_method"] == "separate lines"
     assert sf["sf_plus"] == pytest.approx(sp, rel=1e-8)
     assert sf["sf_minus"] == pytest.approx(sm, rel=1e-8)
-    assert sf["asymmetry_ppm"] == pytest.approx((sp - sm) / (0.5 * (sp + sm)) * 1e6, abs=2e-3)
+    # SF column convention: SF = 1/slope (input per output), A = (SF+ − SF−)/SF̄
+    assert sf["asymmetry_ppm"] == pytest.approx((1 / sp - 1 / sm) / (0.5 * (1 / sp + 1 / sm)) * 1e6,
+                                                abs=2e-3)
     assert sf["asymmetry_ppm"] == pytest.approx(40.0, rel=1e-3)
     # the table column is the commanded rate in deg/s
     assert r.profile["columns"]["table_rate"] == "table_dps"

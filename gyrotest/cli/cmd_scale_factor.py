@@ -38,8 +38,11 @@ def _duration(ctx, param, value):
 @click.option("--table", "table_path", type=click.Path(dir_okay=False), default=None,
               help="Ready plateau table (CSV: table_rate_dps, output_dph|output_pps|output_v "
                    "[, stderr_*, temperature_degC, run]) instead of logs.")
-@click.option("--settle", default="10s", show_default=True, callback=_duration,
-              help="Settling time excluded after each rate change (e.g. 10s, 1min).")
+@click.option("--settle", default="0s", show_default=True, callback=_duration,
+              help="Minimum settling time after each rate change (e.g. 10s, 1min); the "
+                   "settling of each plateau is found from its data and can only be longer.")
+@click.option("--fixed-settle", is_flag=True,
+              help="Use --settle exactly after every rate change (no settling from the data).")
 @click.option("--trim-end", default="0s", show_default=True, callback=_duration,
               help="Time excluded before the end of each plateau.")
 @click.option("--min-dwell", default="2s", show_default=True, callback=_duration,
@@ -72,30 +75,34 @@ def _duration(ctx, param, value):
               help="Accept a table without negative rates (asymmetry is then not computed).")
 @click.option("--common-rates", is_flag=True,
               help="Runs tested at different rate sets: keep only the rates all runs share.")
+@click.option("--matrix", is_flag=True,
+              help="3-axis log turned about each case axis (position column +x, -y, z …): the "
+                   "scale-factor/misalignment matrix K = I + M instead of the single-axis "
+                   "reduction.")
 @click.option("--points", "points_path", type=click.Path(dir_okay=False), default=None,
               help="Write the plateau table (CSV) to this file.")
 @plot_option("Residuals vs input rate and output vs time (.png, .svg or .pdf).")
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr_method,
+def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect, rates, stderr_method,
             snap_tol, full_scale,
             terms, alpha, weighted_line, unweighted, no_lock_in, no_periodic, no_asymmetry,
-            common_rates, points_path, plot_path, as_json, ingest_opts):
+            common_rates, matrix, points_path, plot_path, as_json, ingest_opts):
     """Scale factor, linearity, asymmetry and nonlinearity from rate-table LOGS (IEEE 952 §12.9.4).
 
     Each LOG is one run (a continuous rate-table log); several runs give repeatability,
     stability and, at different temperatures, the temperature sensitivity. Plateaus come from
-    the commanded-rate column (--table-col) or are detected in the output; the settling time
-    is excluded. The input is the table rate plus the earth rate along the IA (--latitude,
+    the commanded-rate column (--table-col) or are detected in the output; each plateau's
+    settling time is found from its own data (transient against its noise floor; --settle is
+    a minimum) and excluded. The input is the table rate plus the earth rate along the IA (--latitude,
     --ia). The scale factor is in the log's units: arcsec/pulse for pulse output, (deg/h)/V for
     analog, 1 for rate output (input per unit output).
 
     \b
     Examples:
       gyrotest scale-factor sample_data/ratetable_22a.parquet sample_data/ratetable_22b.parquet \\
-          sample_data/ratetable_45.parquet --profile sample_data/ratetable_22a.profile.toml \\
-          --settle 10s
+          sample_data/ratetable_45.parquet --profile sample_data/ratetable_22a.profile.toml
       gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
           --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
       gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
@@ -118,6 +125,11 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
               periodic=not no_periodic, common_rates=common_rates,
               require_asymmetry=not no_asymmetry)
     loaded = []
+    if matrix:
+        if table_path or len(logs) != 1:
+            raise InputError("--matrix reduces one 3-axis log (no --table)")
+        _matrix(logs[0], ingest_opts, settle, not fixed_settle, min_dwell, as_json)
+        return
     if table_path:
         if logs:
             raise InputError("give either rate-table logs or --table FILE, not both")
@@ -129,7 +141,8 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
         if not logs:
             raise InputError("no input: give one rate-table log per run, or --table FILE")
         loaded = load_logs(logs, ingest_opts, announce=not as_json)
-        result = sfm.reduce_logs(loaded, settle_s=settle, trim_end_s=trim_end,
+        result = sfm.reduce_logs(loaded, settle_s=settle, auto_settle=not fixed_settle,
+                                 trim_end_s=trim_end,
                                  min_dwell_s=min_dwell, detect=detect, rates_dps=rate_list,
                                  snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
@@ -150,7 +163,111 @@ def command(logs, table_path, settle, trim_end, min_dwell, detect, rates, stderr
     _render(result, plot_path, points_path)
 
 
+def _matrix(path, ingest_opts, settle, auto_settle, min_dwell, as_json) -> None:
+    from ..scalefactor.matrix import misalignment_matrix
+
+    lg = load_logs([path], ingest_opts, announce=not as_json)[0]
+    res = misalignment_matrix(lg, settle_s=settle, auto_settle=auto_settle,
+                              min_dwell_s=min_dwell)
+    if as_json:
+        emit_json({"command": "scale-factor", "source": lg.source, "matrix": res.to_dict()})
+        return
+    for n in res.notes:
+        note(n)
+    from rich.table import Table
+
+    c = console()
+    t = Table(title="K = I + M (row: gyro output, column: case axis on the table); diagonal: "
+                    "SF error ppm, off-diagonal: µrad (±1σ)", title_justify="left")
+    t.add_column("gyro", justify="left")
+    for a in "xyz":
+        t.add_column(f"case {a}", justify="right")
+    M, S = res.M, res.K_sigma
+    for i, name in enumerate(res.axes):
+        t.add_row(name, *[_pm(M[i, a] * 1e6, S[i, a] * 1e6) for a in range(3)])
+    c.print(t)
+    c.print(f"  plateaus per case axis {res.n_plateaus}; settling worst case "
+            f"{res.settling_worst_s:.3g} s; misalignment M_ia = sensitivity of gyro i to rotation "
+            "about case axis a (small angle)")
+
+
 # ----------------------------------------------------------------------------- rendering
+def _render_lowrate(c, res) -> None:
+    """Threshold, resolution and input range (IEEE 952 §5.3.1/§5.3.2, IEEE Std 528 terms)."""
+    for name, r in (("threshold", res.threshold), ("resolution", res.resolution)):
+        if r is None:
+            continue
+        if r.status == "ok":
+            txt = f"≤ {r.value_dps:g} deg/s"
+            if math.isfinite(r.lower_dps):
+                txt = f"between {r.lower_dps:g} and {r.value_dps:g} deg/s"
+            else:
+                txt += " (the smallest tried already responds)"
+            c.print(f"  {name} (50 % of the expected output, {len(r.steps)} tried): {txt}")
+        else:
+            c.print(f"  {name}: {r.status}")
+    ir = res.input_range
+    if ir is not None:
+        if ir.saturated:
+            c.print(f"  input range: +{ir.positive_dps:g} / −{ir.negative_dps:g} deg/s; the output "
+                    f"saturates at {', '.join(f'{v:+g}' for v in ir.saturated_rates_dps)} deg/s "
+                    "(excluded from the fits)")
+        else:
+            c.print(f"  input range: at least +{ir.positive_dps:g} / −{ir.negative_dps:g} deg/s "
+                    "(no saturation at the rates tested)")
+
+def _render_repeatability(c, rp) -> None:
+    """Repeatability within each temperature group, then the spread of all runs (labelled)."""
+    for g in rp.groups:
+        if len(g.runs) < 2:
+            continue
+        c.print(f"  repeatability (§12.9.4.2.3, {g.kind}) at {fmt_num(g.temperature_degC, 3)} °C, "
+                f"{len(g.runs)} runs ({', '.join(g.runs)}): 1σ "
+                f"{_pm(g.sigma_ppm, g.sigma_uncertainty_ppm)} ppm, max spread "
+                f"{fmt_num(g.max_spread_ppm, 4)} ppm")
+    multi = [g for g in rp.groups if len(g.runs) > 1]
+    if len(multi) > 1:
+        c.print(f"  repeatability pooled over {len(multi)} temperatures: 1σ "
+                f"{_pm(rp.sigma_ppm, rp.sigma_uncertainty_ppm)} ppm, max spread "
+                f"{fmt_num(rp.max_spread_ppm, 4)} ppm")
+    if len(rp.groups) > 1:
+        c.print(f"  all {rp.n_runs} runs together (different temperatures, includes ε_T·ΔT; not "
+                f"the repeatability): 1σ {fmt_num(rp.all_runs_sigma_ppm, 4)} ppm, max spread "
+                f"{fmt_num(rp.all_runs_max_spread_ppm, 4)} ppm")
+    elif not multi:
+        c.print("  repeatability: not measured (no two runs share a condition)")
+
+def _render_settling(c, res) -> None:
+    """Settling found per rate step (runs side by side) and the worst case."""
+    from rich.table import Table
+
+    runs = [rp for rp in res.run_plateaus if rp.settling]
+    if not runs:
+        return
+    auto = any(rp.auto_settle for rp in runs)
+    t = Table(title="settling time found in the data per plateau, s after the rate change" + (
+        "" if auto else " (not used: --fixed-settle)"), title_justify="left")
+    t.add_column("rate deg/s", justify="right")
+    for rp in runs:
+        t.add_column(rp.run, justify="right")
+    rows: dict[float, list[str]] = {}
+    for i, rp in enumerate(runs):
+        for st in rp.settling:
+            row = rows.setdefault(round(st.to_rate_dps, 9), [""] * len(runs))
+            v = f"{st.found_s:.3g}"
+            if math.isfinite(st.tau_s):
+                v += f" (τ {st.tau_s:.2g})"
+            row[i] = v if not row[i] else row[i] + ", " + v
+    for rate, row in rows.items():
+        t.add_row(f"{rate:+g}", *row)
+    c.print(t)
+    worst = max((st for rp in runs for st in rp.settling), key=lambda s: s.found_s)
+    run = next(rp.run for rp in runs if worst in rp.settling)
+    c.print(f"  settling worst case {worst.found_s:.3g} s ({run}, step {worst.from_rate_dps:+g} → "
+            f"{worst.to_rate_dps:+g} deg/s); τ = fitted time constant of the transient"
+            + ("" if auto else f"; window started {runs[0].settle_s:g} s after each change "
+                               "(--fixed-settle)"))
+
 def _pm(v: float, s: float, digits: int = 6) -> str:
     if v is None or not math.isfinite(v):
         return "—"
@@ -195,6 +312,7 @@ def _render(res, plot_path, points_path) -> None:
                          res.scale_factor_error_ppm, res.scale_factor_model, res.bias_dph,
                          res.bias_sigma_dph))
     c.print(t)
+    _render_settling(c, res)
     c.print("  ε0 = (SF/S0 − 1)·1e6; ε0 model: linear coefficient with f(I) fitted; bias D_F "
             "input-referred, earth rate removed")
     if math.isfinite(res.bias_zero_rate_dph):
@@ -262,7 +380,8 @@ def _render(res, plot_path, points_path) -> None:
     c.print(f"  [bold]{res.model.statement}[/bold]")
     a = res.asymmetry
     if a.status == "ok":
-        c.print(f"  asymmetry (§12.9.4.2.2, SF = output/input, {a.method.split(' (')[0]}): "
+        c.print(f"  asymmetry (SF+ − SF−)/SF̄ (§12.9.4.2.2, SF in {u} as in the table above, "
+                f"{a.method.split(' (')[0]}): "
                 f"{_pm(a.asymmetry_ppm, a.asymmetry_sigma_ppm)} ppm; through the common "
                 f"intercept {_pm(a.common_intercept_ppm, a.common_intercept_sigma_ppm)} ppm; "
                 f"model term A {_pm(a.model_ppm, a.model_sigma_ppm)} ppm "
@@ -274,9 +393,7 @@ def _render(res, plot_path, points_path) -> None:
         f"A = {_pm(p.amplitude_ppm, p.amplitude_sigma_ppm)} ppm, period {p.period_dps:.4g} deg/s "
         f"(p = {p.p_value:.2g})" if p.supported else p.status))
     if res.repeatability:
-        rp = res.repeatability
-        c.print(f"  repeatability (§12.9.4.2.3, {rp.n_runs} runs): 1σ {fmt_num(rp.sigma_ppm, 4)} ppm, "
-                f"max spread {fmt_num(rp.max_spread_ppm, 4)} ppm")
+        _render_repeatability(c, res.repeatability)
     for r in res.runs:
         if r.stability:
             s = r.stability
@@ -298,6 +415,7 @@ def _render(res, plot_path, points_path) -> None:
                     li2.dead_band_above_dps) else "")
                 + (f"; Adler fit Ω_L = {_pm(li2.fitted_dps, li2.fitted_sigma_dps)} deg/s"
                    if math.isfinite(li2.fitted_dps) else ""))
+    _render_lowrate(c, res)
     if plot_path:
         note(f"plot written to {plot_path}")
     if points_path:

@@ -199,7 +199,8 @@ def run_scale_factor(test: Test, campaign: Campaign, cache: LogCache) -> Analysi
         """The command body: returns (result, objects, logs)."""
         loaded = [cache.get(p, opts) for p in test.logs]
         result = sfm.reduce_logs(
-            loaded, settle_s=parse_duration(test.opt("settle", "10s"), what="--settle"),
+            loaded, settle_s=parse_duration(test.opt("settle", "0s"), what="--settle"),
+            auto_settle=not test.opt("fixed_settle", False),
             trim_end_s=parse_duration(test.opt("trim_end", "0s"), what="--trim-end"),
             min_dwell_s=parse_duration(test.opt("min_dwell", "2s"), what="--min-dwell"),
             detect=test.opt("detect", "auto"), rates_dps=sfm.parse_rates(test.opt("rates")),

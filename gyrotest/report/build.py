@@ -402,17 +402,28 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
             asym = None
             self.warn("scale-factor", f"asymmetry: {dig(r, ['asymmetry', 'status'])}")
         items.append(self.check("scale_factor", "asymmetry_ppm", "asymmetry "
-                                "(|SF+| − |SF−|)/(½(|SF+| + |SF−|))", "§5.3.2.1 b", asym,
+                                f"(SF+ − SF−)/(½(SF+ + SF−)), SF in {sfu}", "§5.3.2.1 b", asym,
                                 sec.number))
         rep = r.get("repeatability")
+        multi = [g for g in (rep or {}).get("groups", []) if g.get("n_runs", 0) > 1]
+        where = "; ".join(f"{fmt_number(g['temperature_degC'], 3)} °C: {g['n_runs']} runs, "
+                          f"{g['kind']}" for g in multi) or f"{len(runs)} runs"
         items.append(self.check("scale_factor", "repeatability_1sigma_ppm", "repeatability, 1σ "
-                                f"over {len(runs)} runs", "§5.3.2.1 c",
-                                s.num(["repeatability", "repeatability_1sigma_ppm"], "ppm")
-                                if rep else None, sec.number))
+                                f"at one temperature ({where})", "§5.3.2.1 c",
+                                s.num(["repeatability", "repeatability_1sigma_ppm"], "ppm",
+                                      ["repeatability", "repeatability_1sigma_uncertainty_ppm"])
+                                if rep and multi else None, sec.number))
         items.append(self.check("scale_factor", "repeatability_max_spread_ppm",
                                 "repeatability, max spread", "§5.3.2.1 c",
                                 s.num(["repeatability", "repeatability_max_spread_ppm"], "ppm")
-                                if rep else None, sec.number))
+                                if rep and multi else None, sec.number))
+        rep_note = None
+        if rep and len(rep.get("groups", [])) > 1:
+            rep_note = P(f"All {rep['n_runs']} runs together span several temperatures: 1σ "
+                      f"{s.t(['repeatability', 'all_runs_1sigma_ppm'], 'ppm')}, max spread "
+                      f"{s.t(['repeatability', 'all_runs_max_spread_ppm'], 'ppm')}; that spread "
+                      "holds ε_T·ΔT and is not the repeatability (IEEE 952 §5.3.2.1 c vs "
+                      "§5.3.2.2 a).", "note")
         for i, run in enumerate(runs):
             st = run.get("stability")
             items.append(self.check(
@@ -443,7 +454,31 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                    s.num(["full_scale_dps"], "°/s"), None, "°/s", sec.number)
         self.checks.append(ch)
         items.append(ch)
+        # threshold, resolution, input range: "not tested" unless the runs hold the sequence
+        for key_, lab, ieee in (("threshold", "threshold (50 % of expected output)", "§5.3.2"),
+                                ("resolution", "resolution (50 % of expected change)", "§5.3.2")):
+            tr = r.get(key_) or {}
+            ok = tr.get("status") == "ok"
+            lab2 = lab + (f", above {fmt_number(tr['above_dps'])} °/s"
+                          if ok and _isnum(tr.get("above_dps")) else "")
+            ch = Check(f"scale_factor.{key_}", lab2 + (", at most" if ok else ""), ieee,
+                       s.num([key_, "at_most_dps"], "°/s") if ok else None, None, "°/s",
+                       sec.number)
+            self.checks.append(ch)
+            items.append(ch)
+        ir = r.get("input_range") or {}
+        if ir:
+            sat = ir.get("saturation_detected")
+            ch = Check("scale_factor.input_range", "input range (output follows the table)"
+                       + (f"; saturates at {', '.join(f'{v:+g}' for v in ir['saturated_rates_dps'])} °/s"
+                          if sat else ", at least"), "§5.3.1",
+                       s.num(["input_range", "input_range_positive_dps"], "°/s"), None, "°/s",
+                       sec.number)
+            self.checks.append(ch)
+            items.append(ch)
         sec.add(_check_table(items, "Scale-factor items"))
+        if rep_note is not None:
+            sec.add(rep_note)
         # per-run table
         rows = []
         for i, run in enumerate(runs):
@@ -493,6 +528,17 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         t = self.c.tests["scale_factor"]
         if t.conditions:
             sec.add(P(f"Conditions: {t.conditions}.", "note"))
+        pe = [x for x in r.get("plateau_extraction", []) if x.get("settling_per_step")]
+        if pe:
+            w = max(pe, key=lambda x: x.get("settling_worst_s") or 0.0)
+            step = w.get("settling_worst_step_dps") or [None, None]
+            frm = f"{step[0]:+g}" if _isnum(step[0]) else "start"
+            auto = all(x.get("settling_from_data") for x in pe)
+            sec.add(P(f"Settling {'found in each plateau’s data' if auto else 'fixed'} (transient "
+                      "against the plateau’s own noise floor): worst case "
+                      f"{fmt_number(w['settling_worst_s'], 3)} s ({w['run']}, step {frm} → "
+                      f"{step[1]:+g} °/s); every plateau’s settling time is in the JSON "
+                      "(plateau_extraction.settling_per_step).", "note"))
         for n in r.get("notes", []):
             self.warn("scale-factor", n)
         fig = self.draw("scale_factor", lambda: _fig("scale_factor_figure", a.obj))

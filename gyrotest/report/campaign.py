@@ -126,7 +126,9 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
     },
     "scale_factor": {
         "logs": ("paths", None, "rate-table runs (one log per run)"),
-        "settle": ("duration", "--settle", "settling time excluded after each rate change"),
+        "settle": ("duration", "--settle", "minimum settling time after each rate change "
+                   "(each plateau's settling is found from its data)"),
+        "fixed_settle": ("bool", "--fixed-settle", "use settle exactly (no settling from the data)"),
         "trim_end": ("duration", "--trim-end", "time excluded before the end of a plateau"),
         "min_dwell": ("duration", "--min-dwell", "shortest plateau"),
         "detect": ("str", "--detect", "auto, table or output"),

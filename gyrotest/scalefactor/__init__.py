@@ -4,15 +4,16 @@ Pipeline (all pure: numpy/pandas in, dataclasses out)::
 
     from gyrotest.scalefactor import extract_plateaus, analyse, reduce_logs
 
-    runs = [extract_plateaus(log, settle_s=10) for log in logs]   # RunPlateaus per log
+    runs = [extract_plateaus(log) for log in logs]   # RunPlateaus per log (settling from the data)
     res = analyse(runs, output_kind="counts", nominal_scale_factor=0.5)
     res.scale_factor, res.scale_factor_sigma        # arcsec/pulse (mean over runs)
     res.model.f_ppm(I_dph)                           # f(I) of ε_K, ppm
     res.to_dict()                                    # JSON-ready, units in the key names
 
-or simply ``reduce_logs(logs, settle_s=10)`` (what ``gyrotest scale-factor`` and the spec-sheet
+or simply ``reduce_logs(logs)`` (what ``gyrotest scale-factor`` and the spec-sheet
 report call; ``reduce_table(path)`` for a ready plateau table). Modules:
 
+* :mod:`.settling` — the settling time of each plateau, found from its data;
 * :mod:`.plateaus` — plateau extraction (commanded column or step detection), batch-means
   standard errors, rate snapping, sweeps;
 * :mod:`.fit` — weighted least squares, nonlinearity terms f(I), forward model selection
@@ -49,9 +50,11 @@ from .plateaus import (
     snap_rates,
 )
 from .points import read_points_table, write_points_csv
+from .settling import SettlingFound, find_settling
 
 __all__ = [
-    "ASYMMETRY_SKIPPED", "PULSE_KINDS", "Plateau", "Points", "RunPlateaus", "ScaleFactorResult", "TERMS",
+    "ASYMMETRY_SKIPPED", "PULSE_KINDS", "Plateau", "Points", "RunPlateaus", "ScaleFactorResult",
+    "SettlingFound", "TERMS", "find_settling",
     "allan_stderr", "analyse", "check_runs_match", "check_settings", "detect_steps",
     "extract_plateaus", "fit_model", "line_fit", "mean_stderr", "parse_rates",
     "parse_term_choice", "read_points_table", "reduce_logs", "reduce_table",
@@ -82,7 +85,7 @@ def parse_term_choice(value: str) -> str | list[str]:
     return [t.strip() for t in v.split(",") if t.strip()]
 
 
-def check_settings(*, settle_s: float = 10.0, trim_end_s: float = 0.0, min_dwell_s: float = 2.0,
+def check_settings(*, settle_s: float = 0.0, trim_end_s: float = 0.0, min_dwell_s: float = 2.0,
                    alpha: float = 0.05, snap_tol: float = 3e-3,
                    full_scale_dps: float | None = None) -> None:
     """InputError for settings no reduction can use (the command checks them before it reads
@@ -140,14 +143,17 @@ def run_name(source: str) -> str:
     return Path(source).stem if source not in ("-", "<stdin>") else "stdin"
 
 
-def reduce_logs(logs, *, settle_s: float = 10.0, trim_end_s: float = 0.0,
+def reduce_logs(logs, *, settle_s: float = 0.0, auto_settle: bool = True,
+                trim_end_s: float = 0.0,
                 min_dwell_s: float = 2.0, detect: str = "auto",
                 rates_dps: list[float] | None = None, snap_tol: float = 3e-3,
                 stderr: str = "allan", require_asymmetry: bool = False,
                 **analyse_kw) -> ScaleFactorResult:
     """Extract the plateaus of each log (one log = one run) and :func:`analyse` them: the
     reduction of ``gyrotest scale-factor LOGS``. Keyword arguments as in
-    :func:`extract_plateaus` and :func:`analyse` (checked by :func:`check_settings`). With
+    :func:`extract_plateaus` and :func:`analyse` (checked by :func:`check_settings`): the
+    settling of each plateau is found from its data, at least ``settle_s``
+    (``auto_settle=False``: exactly ``settle_s``). With
     ``require_asymmetry`` (the command's default; ``--no-asymmetry`` turns it off), runs
     without negative input rates are an InputError instead of a note."""
     if not logs:
@@ -156,7 +162,8 @@ def reduce_logs(logs, *, settle_s: float = 10.0, trim_end_s: float = 0.0,
                    snap_tol=snap_tol, alpha=analyse_kw.get("alpha", 0.05),
                    full_scale_dps=analyse_kw.get("full_scale_dps"))
     check_runs_match(logs)
-    runs = [extract_plateaus(lg, run_name(lg.source), settle_s=settle_s, trim_end_s=trim_end_s,
+    runs = [extract_plateaus(lg, run_name(lg.source), settle_s=settle_s,
+                             auto_settle=auto_settle, trim_end_s=trim_end_s,
                              min_dwell_s=min_dwell_s, detect=detect, rates_dps=rates_dps,
                              snap_tol=snap_tol, stderr=stderr) for lg in logs]
     g = logs[0].gyro

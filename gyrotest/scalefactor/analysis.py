@@ -35,7 +35,9 @@ from .fit import (
     per_rate_asymmetry,
     select_model,
 )
+from .lowrate import InputRange, StepResponse, detect_saturation, resolution, threshold
 from .plateaus import STDERR_METHODS, Plateau, RunPlateaus
+from .repeatability import Repeatability, repeatability_by_condition
 
 PULSE_KINDS = ("counts", "updown", "counter")
 
@@ -217,23 +219,6 @@ class PeriodicCheck:
 
 
 @dataclass
-class Repeatability:
-    """Run-to-run scale factor (IEEE 952 §12.9.4.2.3): 1σ (ddof=1) and max spread, ppm."""
-
-    n_runs: int
-    sigma_ppm: float
-    max_spread_ppm: float
-    run_sf_ppm: list[float]  # each run's SF − mean, ppm
-    sigma_model_ppm: float
-
-    def to_dict(self) -> dict:
-        return {"n_runs": self.n_runs, "repeatability_1sigma_ppm": self.sigma_ppm,
-                "repeatability_max_spread_ppm": self.max_spread_ppm,
-                "run_sf_change_ppm": self.run_sf_ppm,
-                "repeatability_model_1sigma_ppm": self.sigma_model_ppm}
-
-
-@dataclass
 class TemperatureSensitivity:
     """SF temperature sensitivity across runs at different temperatures (IEEE 952 §12.9.4.3.1):
     ``max change/range`` and the slope of a weighted line through (T_r, SF_r), ppm/°C of SF."""
@@ -309,6 +294,9 @@ class ScaleFactorResult:
     point_table: dict[str, np.ndarray]
     run_plateaus: list[RunPlateaus]
     notes: list[str] = field(default_factory=list)
+    threshold: StepResponse | None = None
+    resolution: StepResponse | None = None
+    input_range: InputRange | None = None
 
     def to_dict(self) -> dict:
         k = self.sf_key
@@ -360,6 +348,9 @@ class ScaleFactorResult:
             "epsilon_k": self.epsilon_k(),
             "plateau_extraction": [rp.to_dict() for rp in self.run_plateaus],
             "points": pts,
+            "threshold": self.threshold.to_dict() if self.threshold else None,
+            "resolution": self.resolution.to_dict() if self.resolution else None,
+            "input_range": self.input_range.to_dict() if self.input_range else None,
             "notes": self.notes,
         }
 
@@ -494,7 +485,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
             nominal_scale_factor: float | None = None, full_scale_dps: float | None = None,
             terms: str | list[str] = "auto", alpha: float = 0.05, weighted: bool = True,
             weighted_line: bool = False, lock_in: bool = True, periodic: bool = True,
-            common_rates: bool = False, temp_min_range_degC: float = 1.0) -> ScaleFactorResult:
+            common_rates: bool = False, temp_min_range_degC: float = 1.0,
+            repeat_temp_tol_degC: float = 2.0) -> ScaleFactorResult:
     """Reduce rate-table plateau points to the IEEE 952 scale-factor figures.
 
     Inputs: per point the input I = table rate + Ω_IA (deg/h), the mean output y = S0 ×
@@ -513,7 +505,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
       shared terms chosen by the data (``terms="auto"``; "linear"; or a list), see
       :func:`~gyrotest.scalefactor.fit.select_model`. ``scale_factor_model`` = S0/k_r.
     * Asymmetry (§12.9.4.2.2), periodic check (§5.3.2.1 a), repeatability (§12.9.4.2.3: 1σ
-      with ddof=1 and max spread of the run SFs, ppm of their mean), stability
+      with ddof=1 and max spread of the run SFs, ppm, within groups of runs whose mean
+      temperatures agree within ``repeat_temp_tol_degC``; :mod:`.repeatability`), stability
       (§12.9.4.2.4: per sweep), temperature sensitivity (§12.9.4.3.1: ppm/°C of the model SF
       across runs), lock-in dead band (points whose output collapsed are excluded).
 
@@ -550,6 +543,16 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         P_all.se = np.full_like(se, math.nan)
     keep, n2 = _check_runs(P_all, runs, common_rates)
     notes += n2
+    # ---- saturation (input range, IEEE 952 §5.3.1): excluded from the fits like lock-in
+    sat_sub, in_range = detect_saturation(P_all.subset(keep))
+    saturated = np.zeros(P_all.n, bool)
+    saturated[np.flatnonzero(keep)[sat_sub]] = True
+    if saturated.any():
+        notes.append(f"saturation: the output stops following the table at "
+                     f"{', '.join(f'{r:+g}' for r in in_range.saturated_rates_dps)} deg/s "
+                     f"({int(saturated.sum())} point(s)); excluded from the fits")
+        keep &= ~saturated
+        _check_runs(P_all.subset(keep), runs, True)
     # ---- lock-in (dead band)
     li = LockIn(checked=lock_in)
     if lock_in:
@@ -570,6 +573,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
                          f"({int(full.sum())} point(s)); excluded from the fits")
             keep &= ~full
             _check_runs(P_all.subset(keep), runs, True)
+    locked_all = np.array([p.locked for p in plist], dtype=bool)
     P = P_all.subset(keep)
     weighted = weighted and P.weighted
     weighted_line = weighted_line and P.weighted
@@ -686,8 +690,14 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
     if R >= 2:
         rel = (sfs / np.mean(sfs) - 1) * 1e6
         relm = (sfm / np.mean(sfm) - 1) * 1e6
-        rep = Repeatability(R, float(np.std(rel, ddof=1)), float(np.ptp(rel)), rel.tolist(),
-                            float(np.std(relm, ddof=1)))
+        groups, within, within_unc, within_spread, rnotes = repeatability_by_condition(
+            [rr.run for rr in run_results], sfs, ssf,
+            [rr.temperature_mean_degC for rr in run_results],
+            [rp.power_on for rp in runs], tol_degC=repeat_temp_tol_degC)
+        rep = Repeatability(R, within, within_spread, rel.tolist(), float(np.std(relm, ddof=1)),
+                            within_unc, float(np.std(rel, ddof=1)), float(np.ptp(rel)),
+                            groups, rnotes)
+        notes += [f"repeatability: {n}" for n in rnotes]
     # ---- temperature sensitivity (ε_T, model SF across runs)
     tr = np.array([rr.temperature_mean_degC for rr in run_results])
     ok = np.isfinite(tr)
@@ -711,8 +721,9 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
             "ok", float(t_ok.min()), float(t_ok.max()), float(beta[1]),
             float(math.sqrt(cov[1, 1] * max(1.0, chi))), float(np.ptp(v) / np.ptp(t_ok)))
         if R > len(np.unique(np.round(t_ok, 1))):
-            notes.append("temperature sensitivity: several runs share a temperature; the slope "
-                         "also absorbs run-to-run changes")
+            notes.append("temperature sensitivity: several runs share a temperature; the "
+                         "slope goes through the temperature groups and its σ includes the "
+                         "run-to-run scatter (repeatability)")
     # ---- asymmetry
     have_neg = bool(np.any(P.table < 0) and np.any(P.table > 0))
     if not have_neg:
@@ -811,6 +822,10 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
                                              float(math.sqrt(cv[0, 0])), False))
             except AnalysisError:
                 pass
+    # ---- threshold and resolution (IEEE Std 528 definitions; IEEE 952 §5.3.2)
+    thr = threshold(P_all, saturated | ~keep & ~locked_all, fs, locked=locked_all)
+    res_ = resolution(P_all, saturated | locked_all,
+                      above_dps=thr.value_dps if math.isfinite(thr.value_dps) else 0.0)
     if model.lockin_dph:
         li.fitted_dps = model.lockin_dph / DPS
         li.fitted_sigma_dps = model.lockin_sigma_dph / DPS
@@ -855,7 +870,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         linearity=linearity_stats(P.I, lin_fs, lin_out),
         linearity_after_model=linearity_stats(P.I, after_fs, after_out),
         model=nl, asymmetry=asym, periodic=per, repeatability=rep, temperature=ts,
-        lock_in=li, points=plist, point_table=point_table, run_plateaus=runs, notes=notes)
+        lock_in=li, points=plist, point_table=point_table, run_plateaus=runs, notes=notes,
+        threshold=thr, resolution=res_, input_range=in_range)
 
 
 def _statement(model: ModelFit, hist: list[ModelStep], asym: AsymmetryResult,

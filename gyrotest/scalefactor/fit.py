@@ -63,8 +63,8 @@ def _lockin_g(u: np.ndarray) -> np.ndarray:
 #: names follow the simulator and GYRO_REFERENCE §1: asymmetry A, c_k for (I/FS)^k, periodic
 #: amplitude p, Adler lock-in coefficient e_L = ½(Ω_L/FS)²·1e6.
 TERMS: dict[str, Term] = {
-    "asymmetry": Term("asymmetry", "−(A/2)·sgn(I)", "∝ |I| (SF+ ≠ SF−)", "even",
-                      lambda u: -0.5 * np.sign(u), 3),
+    "asymmetry": Term("asymmetry", "(A/2)·sgn(I)", "∝ |I| (SF+ ≠ SF−)", "even",
+                      lambda u: 0.5 * np.sign(u), 3),
     "quadratic": Term("quadratic", "c1·(I/FS)", "∝ I²", "even", lambda u: u, 4),
     "cubic": Term("cubic", "c2·(I/FS)²", "∝ I³", "odd", lambda u: u * u, 5),
     "quartic": Term("quartic", "c3·(I/FS)³", "∝ I⁴", "even", lambda u: u ** 3, 6),
@@ -714,16 +714,20 @@ def linearity_stats(I: np.ndarray, ppm_fs: np.ndarray, ppm_out: np.ndarray) -> L
 
 
 # ----------------------------------------------------------------------------- asymmetry
-ASYM_DEFINITION = ("(|SF+| - |SF-|) / (0.5 (|SF+| + |SF-|)) * 1e6 with SF = output per unit input "
-                   "(IEEE 528: change in output / change in input); the same ratio formed with "
-                   "an input-per-output SF (arcsec/pulse, (deg/h)/V) has the opposite sign")
+ASYM_DEFINITION = ("(SF+ - SF-) / (0.5 (SF+ + SF-)) * 1e6 with SF+ (SF-) the scale factor of "
+                   "the positive (negative) inputs in the unit of the scale_factor column, input "
+                   "per unit output (arcsec/pulse, (deg/h)/V; IEEE 952 §8.3, §12.9.4.2.2): "
+                   "positive when a pulse (volt) is worth more input for positive rates, i.e. "
+                   "when the positive inputs give less output per unit input")
 
 
 @dataclass
 class AsymmetryResult:
     """Scale-factor asymmetry (IEEE 952 §12.9.4.2.2, §5.3.2.1 b), ppm.
 
-    ``A = (|SF+| − |SF−|)/(½(|SF+| + |SF−|))`` with SF the output-per-input slope.
+    ``A = (SF+ − SF−)/(½(SF+ + SF−))`` with SF the scale factor of the SF column (input per
+    unit output, IEEE 952 §8.3); with the fitted output-per-input slopes k± this is
+    ``A = (|k−| − |k+|)/(½(|k+| + |k−|))`` exactly (the one sign convention of the tool).
 
     * ``asymmetry_ppm`` (primary; per run, then the mean): SF+ and SF− from separate
       least-squares lines through the positive and the negative inputs, each with the
@@ -764,21 +768,23 @@ class AsymmetryResult:
 
 def _asym_from(sp: float, sm: float, gp: np.ndarray, gm: np.ndarray,
                se: np.ndarray | None) -> tuple[float, float]:
-    """A (ppm) from slopes SF± and their gradients wrt y, and σ_A from the SEs."""
+    """A (ppm, SF-column convention: (|k−| − |k+|)/(½(|k+| + |k−|)) for output-per-input
+    slopes k± = ``sp``, ``sm``) and σ_A from the SEs through the gradients wrt y."""
     m = 0.5 * (abs(sp) + abs(sm))
-    A = (abs(sp) - abs(sm)) / m * 1e6
+    A = (abs(sm) - abs(sp)) / m * 1e6
     if se is None or not np.all(np.isfinite(se)):
         return A, math.nan
     gp, gm = gp * np.sign(sp), gm * np.sign(sm)
-    gA = ((gp - gm) / m - (abs(sp) - abs(sm)) / (2 * m * m) * (gp + gm)) * 1e6
+    gA = ((gm - gp) / m - (abs(sm) - abs(sp)) / (2 * m * m) * (gp + gm)) * 1e6
     return A, float(np.sqrt(np.sum((gA * se) ** 2)))
 
 
 def asymmetry_common_intercept(I: np.ndarray, y: np.ndarray, se: np.ndarray | None,
                                b: float, db_dy: np.ndarray) -> tuple[float, float]:
-    """Asymmetry of one run through the common intercept, ppm: SF± = Σ_{±} I(y − b)/Σ_{±} I²
+    """Asymmetry of one run through the common intercept, ppm: slopes k± = Σ_{±} I(y − b)/Σ_{±} I²
     with b the intercept of the §12.9.4.1 line (``db_dy`` = ∂b/∂y of that line, for the error
-    propagation); A = (|SF+| − |SF−|)/(½(|SF+| + |SF−|))·1e6. Returns (A, σ_A)."""
+    propagation); A = (|k−| − |k+|)/(½(|k+| + |k−|))·1e6 = (SF+ − SF−)/(½(SF+ + SF−))·1e6
+    (SF = S0/k). Returns (A, σ_A)."""
     pos, neg = I > 0, I < 0
     sp_den, sm_den = float(np.sum(I[pos] ** 2)), float(np.sum(I[neg] ** 2))
     sp = float(np.sum(I[pos] * (y[pos] - b))) / sp_den
@@ -811,7 +817,7 @@ def asymmetry_separate_lines(I: np.ndarray, y: np.ndarray, se: np.ndarray | None
 
 def per_rate_asymmetry(P: Points, bias: np.ndarray) -> list[dict]:
     """Asymmetry at each |table rate| present with both signs, pooled over runs:
-    k± = (ȳ± − b_r)/Ī±, A = (|k+| − |k−|)/(½(|k+| + |k−|))·1e6 (output-per-input SF), with
+    k± = (ȳ± − b_r)/Ī±, A = (|k−| − |k+|)/(½(|k+| + |k−|))·1e6 (= (SF+ − SF−)/SF̄), with
     σ propagated from the plateau SEs (b_r taken as exact)."""
     tab = P.table if P.table is not None else P.I
     out = []
@@ -837,7 +843,7 @@ def per_rate_asymmetry(P: Points, bias: np.ndarray) -> list[dict]:
             yn, sn, in_ = avg(neg)
             kp = (yp - bias[r]) / ip
             kn = (yn - bias[r]) / in_
-            a = (abs(kp) - abs(kn)) / (0.5 * (abs(kp) + abs(kn))) * 1e6
+            a = (abs(kn) - abs(kp)) / (0.5 * (abs(kp) + abs(kn))) * 1e6
             s = math.hypot(sp / (kp * ip), sn / (kn * in_)) * 1e6
             vals.append(a)
             sig.append(s)
@@ -876,7 +882,8 @@ def detect_lock_in(P: Points, *, ratio: float = 0.1) -> tuple[np.ndarray, list[s
             continue
         fit = line_fit(I[hi], y[hi], None)
         b, k = fit.coef
-        rho = (y - b) / (k * I)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rho = (y - b) / (k * I)
         lk = nz & ~hi & (rho < ratio)
         locked[sel[lk]] = True
     return locked, notes

@@ -15,8 +15,11 @@ standard error, duration, mean temperature):
   plateau comes from ``--rates`` or is snapped to the shortest decimal within ``snap_tol``
   of the bias-corrected output level (:func:`snap_rates`).
 
-Settling: the averaging window starts ``settle_s`` after the command change (detected: after
-the end of the previous plateau) and ends ``trim_end_s`` before the next change.
+Settling: the averaging window starts at the settling time found in the plateau's own data
+(:func:`~gyrotest.scalefactor.settling.find_settling`: transient against the plateau's noise
+floor), at least ``settle_s`` after the command change (detected: after the end of the
+previous plateau); ``auto_settle=False`` uses ``settle_s`` as given. It ends ``trim_end_s``
+before the next change.
 
 Standard error of a plateau mean (honest for correlated noise), two methods:
 
@@ -42,6 +45,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import AnalysisError, InputError
+from .repeatability import power_on_label
+from .settling import SettlingFound, find_settling
 
 DPS = 3600.0  # deg/h per deg/s
 
@@ -78,6 +83,7 @@ class Plateau:
     rate_source: str = "table column"
     sweep: int = 0
     locked: bool = False  # inside a lock-in dead band (excluded from the fits)
+    settling: SettlingFound | None = None  # found from the data (None: points table)
 
     @property
     def input_rate_dph(self) -> float:
@@ -111,6 +117,8 @@ class Plateau:
             "temperature_degC": self.temperature_degC,
             "rate_source": self.rate_source,
             "locked": self.locked,
+            "settling_found_s": self.settling.found_s if self.settling else math.nan,
+            "settling_used_s": self.settling.used_s if self.settling else math.nan,
         }
 
 
@@ -130,9 +138,27 @@ class RunPlateaus:
     ignored_short: int = 0  # constant stretches shorter than min_dwell_s
     notes: list[str] = field(default_factory=list)
     stderr_method: str = "allan"
+    auto_settle: bool = False
+    power_on: str | None = None  # power-on label from the log (None: not given)
+
+    @property
+    def settling(self) -> list[SettlingFound]:
+        return [p.settling for p in self.plateaus if p.settling is not None]
+
+    @property
+    def settling_worst_s(self) -> float:
+        """Longest settling found in the data over the run's plateaus (NaN: none)."""
+        st = self.settling
+        return max(s.found_s for s in st) if st else math.nan
 
     def to_dict(self) -> dict:
+        st = self.settling
+        worst = max(st, key=lambda s: s.found_s) if st else None
         return {
+            "settling_from_data": self.auto_settle,
+            "settling_worst_s": worst.found_s if worst else math.nan,
+            "settling_worst_step_dps": [worst.from_rate_dps, worst.to_rate_dps] if worst else None,
+            "settling_per_step": [s.to_dict() for s in st],
             "run": self.run,
             "source": self.source,
             "method": self.method,
@@ -531,7 +557,8 @@ def assign_sweeps(rates_dph: np.ndarray) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- main entry
-def extract_plateaus(log, run: str | None = None, *, settle_s: float = 10.0,
+def extract_plateaus(log, run: str | None = None, *, settle_s: float = 0.0,
+                     auto_settle: bool = True,
                      trim_end_s: float = 0.0, min_dwell_s: float = 2.0, detect: str = "auto",
                      rates_dps: list[float] | None = None, snap_tol: float = 3e-3,
                      stderr: str = "allan", n_batches: int = 32, k_sigma: float = 6.0
@@ -539,14 +566,17 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 10.0,
     """Reduce a continuous rate-table log to plateau points (IEEE 952 §12.9.3.1/§12.9.4).
 
     ``detect``: ``auto`` (commanded column if the log has one, else the output), ``table`` or
-    ``output``. Each plateau's window is [change + settle_s, next change − trim_end_s]; its
+    ``output``. Each plateau's window is [change + settle, next change − trim_end_s], with
+    settle the settling time found in the plateau's data (:func:`find_settling`) but at least
+    ``settle_s`` (``auto_settle=False``: ``settle_s`` exactly); its
     mean output (deg/h, S0 × native output), batch-means standard error (see module doc),
     sample count, and mean of the first temperature channel (degC). The earth-rate component
     along the IA (from ``log.site``; 0 without a site) is stored with each point so that the
     input is table rate + Ω_IA. ``stderr``: ``allan`` (default, :func:`allan_stderr`: σ_A at
     the plateau length from the run's pooled noise model) or ``batch`` (:func:`mean_stderr`).
-    Raises :class:`~gyrotest.errors.InputError` for a plateau left with fewer than 8 samples
-    after settling/trimming ("shorter than the settling time").
+    Raises :class:`~gyrotest.errors.InputError` naming the rate and the run for a plateau that
+    does not settle within its dwell or is left with fewer than 8 samples after
+    settling/trimming ("shorter than the settling time").
     """
     if detect not in ("auto", "table", "output"):
         raise InputError(f"unknown plateau detection {detect!r}; use auto, table or output")
@@ -601,24 +631,39 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 10.0,
     temp = next(iter(log.temperature.values())) if log.temperature else None
     rows = []
     windows = []
+    prev_level = math.nan
     for k, sg in enumerate(segs):
         t_change = float(t[sg.change])
         t_first = float(t[sg.start])
         t_stop = float(t[sg.stop - 1]) + tau0
-        w0 = max(t_change + settle_s, t_first)
+        lvl = (float(log.table_rate[sg.start]) if use_table and method == "table column"
+               else sg.level) / DPS
+        what = "commanded" if use_table else "output"
+        st = find_settling(y[sg.change:sg.stop], tau0)
+        st.from_rate_dps, st.to_rate_dps = prev_level, lvl
+        prev_level = lvl
+        if auto_settle and not st.settled:
+            raise InputError(
+                f"{src} (run {run}): the plateau at {what} {lvl:+.6g} deg/s (t = {t_change:.6g}…"
+                f"{t_stop:.6g} s) is still settling after {st.found_s:.3g} s of its "
+                f"{t_stop - t_change:.4g} s (transient above the plateau's noise floor); record "
+                "longer dwells, or force a settling time with --settle S --fixed-settle")
+        settle = max(settle_s, st.found_s) if auto_settle else settle_s
+        st.used_s = settle
+        w0 = max(t_change + settle, t_first)
         w1 = t_stop - trim_end_s
         i0 = int(np.searchsorted(t, w0 - 1e-9 * tau0, side="left"))
         i1 = int(np.searchsorted(t, w1 - 1e-9 * tau0, side="left"))
         i0, i1 = max(i0, sg.start), min(i1, sg.stop)
+        st.used_s = float(t[min(i0, len(t) - 1)]) - t_change
         if i1 - i0 < 8:
-            lvl = (float(log.table_rate[sg.start]) if use_table and method == "table column"
-                   else sg.level) / DPS
-            what = "commanded" if use_table else "output"
+            how = ("found in the data" if auto_settle and st.found_s >= settle_s
+                   else "--settle")
             raise InputError(
-                f"{src}: plateau {k + 1} ({what} {lvl:+.6g} deg/s, t = {t_change:.6g}…"
-                f"{t_stop:.6g} s) lasts {t_stop - t_change:.4g} s, not longer than the settling "
-                f"time {settle_s:g} s + end trim {trim_end_s:g} s; lower --settle/--trim-end or "
-                "record longer dwells")
+                f"{src} (run {run}): the plateau at {what} {lvl:+.6g} deg/s (plateau {k + 1}, "
+                f"t = {t_change:.6g}…{t_stop:.6g} s) lasts {t_stop - t_change:.4g} s, not "
+                f"longer than its settling time {settle:.3g} s ({how}) + end trim "
+                f"{trim_end_s:g} s; record longer dwells or lower --settle/--trim-end")
         mean, se, se_w = mean_stderr(y[i0:i1], n_batches)
         windows.append(y[i0:i1])
         tmean = float(np.mean(temp[i0:i1])) if temp is not None else math.nan
@@ -628,15 +673,16 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 10.0,
             table = math.nan
         rows.append(dict(index=k, table=table, out=mean, se=se, se_w=se_w, t0=float(t[i0]),
                          t1=float(t[i1 - 1]) + tau0, c0=t_change, c1=t_stop, n=i1 - i0,
-                         temp=tmean))
+                         temp=tmean, settling=st))
     if stderr == "allan":
         se_a, ainfo = allan_stderr(windows, tau0)
         for r, v in zip(rows, se_a):
             r["se"] = float(v)
         if ainfo.get("inflated"):
             notes.append(f"{ainfo['inflated']} plateau(s) noisier than the others at short τ "
-                         "(their standard errors scaled up); if that is unfinished settling, "
-                         "raise --settle")
+                         "(their standard errors scaled up)"
+                         + ("" if auto_settle else "; if that is unfinished settling, raise "
+                            "--settle or drop --fixed-settle"))
     if use_table:
         rate_source = method
     else:
@@ -656,11 +702,12 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 10.0,
                 output_dph=r["out"], stderr_dph=r["se"], t_start_s=r["t0"], t_end_s=r["t1"],
                 dwell_start_s=r["c0"], dwell_end_s=r["c1"], n_samples=r["n"],
                 temperature_degC=r["temp"], stderr_white_dph=r["se_w"], rate_source=rate_source,
-                sweep=int(sw))
+                sweep=int(sw), settling=r["settling"])
         for r, sw in zip(rows, sweeps)
     ]
     return RunPlateaus(run=run, source=src, plateaus=plateaus, method=method,
                        earth_rate_dph=er, settle_s=settle_s, trim_end_s=trim_end_s,
                        noise_block_dph=info.get("noise_block", math.nan),
                        block_s=info.get("block_s", math.nan), ignored_short=ignored, notes=notes,
-                       stderr_method=stderr)
+                       stderr_method=stderr, auto_settle=auto_settle,
+                       power_on=power_on_label(log))

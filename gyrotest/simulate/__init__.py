@@ -156,7 +156,7 @@ in the key names or listed here; durations accept seconds or strings like ``"40m
 
     [effects.scale_factor]        # eps_K in ppm: IEEE 952 §8.3
     offset_ppm = 0.0
-    asymmetry_ppm = 0.0           # +: SF for positive inputs larger
+    asymmetry_ppm = 0.0           # (SF+ − SF−)/SF̄, SF input per output: +: a pulse is worth more for positive inputs
     nonlinearity_ppm = [0.0, 5.0, -10.0]   # c_k (I/I_fs)^k, k = 1, 2, 3 ...
     full_scale_dps = 100.0        # I_fs (default: max |table rate|)
     periodic_ppm = 0.0            # rate-periodic component
@@ -166,6 +166,7 @@ in the key names or listed here; durations accept seconds or strings like ``"40m
     node = "core"
     t_ref_c = 21.0
     lock_in_dph = 0.0             # RLG dead band L: output sign(x) sqrt(x^2 - L^2)
+    saturation_dps = 450          # optional: output clipped at ± this input (input range)
 
     [rate_table]
     rates_dps = [0, 1, -1, 10, -10, 100, -100]

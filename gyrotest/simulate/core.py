@@ -206,7 +206,7 @@ def _eps_k(sc: Scenario, I: np.ndarray, node_T: dict[str, np.ndarray], sf_off: f
     sf = sc.effects.scale_factor
     eps: np.ndarray | float = sf.offset_ppm + sf_off
     if sf.asymmetry_ppm:
-        eps = eps - 0.5 * sf.asymmetry_ppm * np.sign(I)
+        eps = eps + 0.5 * sf.asymmetry_ppm * np.sign(I)
     for k, c in enumerate(sf.nonlinearity_ppm, start=1):
         if c:
             eps = eps + c * (I / i_fs) ** k
@@ -330,6 +330,10 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
     else:
         ideal = noise_free.copy()
     del rand
+    if sf.saturation_dps:  # the output stops following beyond the input range
+        lim = sf.saturation_dps * 3600.0
+        np.clip(noise_free, -lim, lim, out=noise_free)
+        np.clip(ideal, -lim, lim, out=ideal)
 
     # ---- output encoding
     out = _encode(sc, seed, run, ideal, tau0)
@@ -520,6 +524,14 @@ def _plateau_truth(sc: Scenario, table: env.TableSchedule, noise_free: np.ndarra
     x, y = np.array(xs), np.array(ys)
     out: dict[str, Any] = {"plateaus": rows, "exclude_s": spec.exclude_s,
                            "settle_tau_s": spec.settle_tau_s}
+    sat = sc.effects.scale_factor.saturation_dps
+    if sat:  # saturated plateaus are outside the input range: not on the SF line
+        inside = np.abs(x) < sat * 3600.0
+        for row, ok in zip(rows, inside):
+            row["saturated"] = not bool(ok)
+        rows = [r for r, ok in zip(rows, inside) if ok]
+        x, y = x[inside], y[inside]
+        out["saturation_dps"] = sat
     if np.unique(x).size < 2:
         out["note"] = "fewer than two distinct plateau rates: no scale-factor line"
         return out
@@ -548,7 +560,9 @@ def _plateau_truth(sc: Scenario, table: env.TableSchedule, noise_free: np.ndarra
         out["sf_dph_per_v"] = float(s0 / sf)
 
     def asym(sp: float, sm: float) -> float:
-        return float((abs(sp) - abs(sm)) / (0.5 * (abs(sp) + abs(sm))) * 1e6)
+        # (SF+ − SF−)/(½(SF+ + SF−)) with SF = input per output = 1/slope (the SF column's
+        # convention); from the output-per-input slopes sp, sm: (|sm| − |sp|)/(½(|sp| + |sm|))
+        return float((abs(sm) - abs(sp)) / (0.5 * (abs(sp) + abs(sm))) * 1e6)
 
     pos, neg = x > 0, x < 0
     if pos.any() and neg.any():
@@ -713,15 +727,17 @@ def _truth(sc, seed, run, n, tau0, tm, t_end, sf_off, bias_off, ntruth, pos, tab
                   "full_scale_dph": i_fs, "periodic_ppm": sf.periodic_ppm,
                   "periodic_period_dps": sf.periodic_period_dps,
                   "temp_ppm_per_c": sf.temp_ppm_per_c, "node": sf.node, "t_ref_c": sf.t_ref_c,
-                  "lock_in_dph": sf.lock_in_dph},
+                  "lock_in_dph": sf.lock_in_dph, "saturation_dps": sf.saturation_dps},
         "sf_nominal": 1.0 / (1.0 + 1e-6 * (sf.offset_ppm + sf_off)),
         "definitions": {
             "sf": "slope of the least-squares line of noise-free plateau means (deg/h) vs "
                   "commanded rate (deg/h); dimensionless (1 = nominal S0)",
             "linearity_ppm_fs": "residual from that line / (sf * max |input|) * 1e6; max of |.| "
                                 "and 1 sigma (RMS)",
-            "asymmetry_ppm": "(|SF+| - |SF-|)/(0.5(|SF+| + |SF-|)) * 1e6 (IEEE 952); SF+ and "
-                             "SF- are least-squares slopes of the positive (negative) plateaus "
+            "asymmetry_ppm": "(SF+ - SF-)/(0.5(SF+ + SF-)) * 1e6 (IEEE 952) with SF = input "
+                             "per unit output = 1/slope (the unit of the scale-factor column); "
+                             "the slopes sf_plus, sf_minus (output per input) are least-squares "
+                             "slopes of the positive (negative) plateaus "
                              "with the zero-rate plateaus (asymmetry_method 'separate lines'), or "
                              "through the intercept of the full fit ('common intercept') when a "
                              "side has fewer than two distinct rates",

@@ -329,6 +329,7 @@ class ScaleFactorSpec:
     node: str = "ambient"
     t_ref_c: float = 21.0
     lock_in_dph: float = 0.0
+    saturation_dps: float | None = None  # output clipped at ± this input rate (input range)
 
 
 @dataclass
@@ -798,6 +799,7 @@ def _parse_effects(s: _Sec | None) -> EffectsSpec:
         sf.node = f.get("node", "str", "ambient")
         sf.t_ref_c = f.get("t_ref_c", "float", 21.0)
         sf.lock_in_dph = f.get("lock_in_dph", "float", 0.0, nonneg=True)
+        sf.saturation_dps = f.get("saturation_dps", "float", None, positive=True)
         f.done()
     s.done()
     return e

@@ -56,7 +56,8 @@ def figure_bias(analysis, *, size: tuple[float, float] | None = None):
         ax.axvspan(0, skip_s / 3600.0, color="0.5", alpha=0.15, label="warm-up trim")
     ax.set_xlabel("time, h")
     ax.set_ylabel("indicated rate, deg/h")
-    ax.set_title("Static run(s): indicated rate and bias estimate")
+    ax.set_title("Static run(s): indicated rate and bias estimate"
+                 + (f", axis {runs[0].axis}" if runs else ""))
     ax.legend(loc="best")
     if multi:
         ax2 = axes[1]

@@ -6,7 +6,8 @@ import os
 
 import click
 
-from ..bias import analyse_bias, parse_positions
+from ..bias import parse_positions
+from ..bias_axes import analyse_bias_axes
 from ..units import format_duration, parse_duration
 from .common import (
     console,
@@ -20,13 +21,16 @@ from .common import (
     warn,
     with_ingest,
 )
+from .common_axes import axis_plot_path
 
 
 @click.command("bias")
 @click.argument("logs", nargs=-1, required=True)
 @click.option("--skip", default="0", show_default=True,
               help="Warm-up trim at the start of each run, e.g. 40min, 2h, 90s.")
-@click.option("--axis", default=None, help="Axis (rate column) to analyse; default the first.")
+@click.option("--axis", default=None,
+              help="Gyro axis (rate column) to analyse, comma-separated for several; default "
+                   "every axis (one IA: the earth rate is removed only with a single axis).")
 @click.option("--positions", default=None,
               help="IA direction of each file in order (multi-position test), e.g. up,down,north,south.")
 @click.option("--settle", default="0", show_default=True,
@@ -61,25 +65,30 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
         check_plot_path(plot_path)
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    ba = analyse_bias(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis, positions=pos_list,
-                      earth_rate=not no_earth_rate)
+    res = analyse_bias_axes(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis,
+                            positions=pos_list, earth_rate=not no_earth_rate)
     if plot_path:
         from ..bias_plot import plot_bias
 
-        plot_bias(ba, plot_path)
-        if not as_json:
-            note(f"plot written to {plot_path}")
+        for name, ba in res.per_axis.items():
+            path = axis_plot_path(plot_path, name, len(res.per_axis))
+            plot_bias(ba, path)
+            if not as_json:
+                note(f"plot of axis {name} written to {path}")
     if as_json:
-        emit_json(ba.to_dict())
+        emit_json(res.to_dict())
         return
-    _render(ba.runs, ba.repeatability, ba.multi)
+    for n in res.notes:
+        note(n)
+    for name, ba in res.per_axis.items():
+        _render(ba.runs, ba.repeatability, ba.multi, axis=name)
 
 
-def _render(runs, rep, multi):
+def _render(runs, rep, multi, axis: str = ""):
     from rich.table import Table
 
     c = console()
-    t = Table(title="Bias D_F (IEEE 952 §12.11.4.1.1), rates in deg/h",
+    t = Table(title=f"Bias D_F (IEEE 952 §12.11.4.1.1), axis {axis}, rates in deg/h",
               caption="±1σ: Allan deviation at the record length from a fitted noise model "
                       "(honest for correlated noise); σ/√n only for comparison")
     for col in ("run", "used", "mean output", "Ω_IA", "D_F", "±1σ", "σ/√n"):
@@ -95,7 +104,7 @@ def _render(runs, rep, multi):
         for n in r.notes:
             (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
     if rep:
-        c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs[/bold]: D_F mean "
+        c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs, axis {axis}[/bold]: D_F mean "
                 f"{fmt_num(rep.mean_dph, 6)} deg/h, 1σ {fmt_num(rep.sigma_1_dph, 3)} deg/h, "
                 f"max spread {fmt_num(rep.spread_dph, 3)} deg/h "
                 f"(within-run σ {fmt_num(rep.within_run_sigma_dph, 3)} deg/h)")
@@ -103,7 +112,7 @@ def _render(runs, rep, multi):
             warn(n)
     if multi:
         m = multi
-        c.print(f"\n[bold]Multi-position fit[/bold] ({len(m.positions)} positions): "
+        c.print(f"\n[bold]Multi-position fit, axis {axis}[/bold] ({len(m.positions)} positions): "
                 f"D_F = {fmt_num(m.bias_dph, 6)} ± {fmt_num(m.bias_sigma_dph, 3)} deg/h (1σ)")
         for k in ("north", "east", "up"):
             v = m.earth_rate_fit_dph[k]

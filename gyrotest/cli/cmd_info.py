@@ -4,16 +4,19 @@ from __future__ import annotations
 
 import click
 
+from ..axes import choose_axes
 from ..units import format_duration
 from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
 
 
 @click.command("info")
 @click.argument("log", type=str)
+@click.option("--axis", default=None,
+              help="Gyro axis (rate column) to list, comma-separated for several; default every axis.")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, as_json, ingest_opts):
+def command(log, axis, as_json, ingest_opts):
     """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps.
 
     LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
@@ -25,6 +28,10 @@ def command(log, as_json, ingest_opts):
     """
     g = load_log(log, ingest_opts, announce=not as_json)
     summary = g.summary()
+    axes = choose_axes([g], axis)
+    summary["axes"] = axes
+    summary["channels"] = {k: v for k, v in summary["channels"].items()
+                           if not k.startswith("rate:") or k[5:] in axes}
     if as_json:
         emit_json(summary)
         return
@@ -43,6 +50,8 @@ def command(log, as_json, ingest_opts):
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
             "voltage": "analog voltage"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
+    c.print(f"  gyro axes      {', '.join(axes)}"
+            + (f"  (of {', '.join(g.axes)})" if len(axes) < len(g.axes) else ""))
     if gy.scale_factor is not None:
         c.print(f"  scale factor   {gy.scale_factor:g} {gy.scale_factor_unit}"
                 + (f", offset {gy.offset_v:g} V" if gy.offset_v is not None else ""))

@@ -33,23 +33,16 @@ class BiasAxes:
     def to_dict(self) -> dict:
         """The JSON document of ``gyrotest bias --json``.
 
-        One axis: exactly :meth:`BiasAnalysis.to_dict` (the single-axis shape scripts rely
-        on; every run names its ``axis``) plus ``axes``. Several axes: ``axes`` (names),
-        ``per_axis`` (one single-axis document per axis, each with its ``axis``), ``runs``
-        (every run of every axis, each naming its axis) and the ``notes``.
+        The top level is the single-axis document (:meth:`BiasAnalysis.to_dict`) of the first
+        analysed axis, so scripts written for one axis keep working; every run names its
+        ``axis``. Added: ``axes`` (the analysed axis names), ``notes``, and with several axes
+        ``per_axis``: one single-axis document per axis (each with its ``axis``), in order.
         """
-        if len(self.per_axis) == 1:
-            (name, ba), = self.per_axis.items()
-            return {**ba.to_dict(), "axes": [name], "notes": self.notes}
-        per = [{"axis": a, **ba.to_dict()} for a, ba in self.per_axis.items()]
-        return {
-            "analysis": next(iter(self.per_axis.values())).analysis,
-            "axes": self.axes,
-            "per_axis": per,
-            "runs": [r for d in per for r in d["runs"]],
-            "units": {"bias": "deg/h", "time": "s"},
-            "notes": self.notes,
-        }
+        docs = [{"axis": a, **ba.to_dict()} for a, ba in self.per_axis.items()]
+        out = {**docs[0], "axes": self.axes, "notes": self.notes}
+        if len(docs) > 1:
+            out["per_axis"] = docs
+        return out
 
 
 def analyse_bias_axes(logs: list, *, axis: str | None = None, skip_s: float = 0.0,

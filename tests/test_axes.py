@@ -68,7 +68,8 @@ def test_bias_every_axis_by_default(xyz_csv):
     doc = json.loads(r.out)
     assert doc["axes"] == ["gx", "gy", "gz"]
     assert [d["axis"] for d in doc["per_axis"]] == ["gx", "gy", "gz"]
-    assert [run["axis"] for run in doc["runs"]] == ["gx", "gy", "gz"]
+    # the top level stays the single-axis document of the first axis (old scripts)
+    assert doc["axis"] == "gx" and [run["axis"] for run in doc["runs"]] == ["gx"]
     for d in doc["per_axis"]:
         run = d["runs"][0]
         assert run["axis"] == d["axis"]
@@ -82,7 +83,7 @@ def test_bias_single_axis_keeps_old_shape_and_earth_rate(xyz_csv):
     assert r.code == 0, r.err
     doc = json.loads(r.out)
     assert set(doc) >= {"analysis", "runs", "repeatability", "multi_position", "units"}
-    assert "per_axis" not in doc and doc["axes"] == ["gy"]
+    assert "per_axis" not in doc and doc["axes"] == ["gy"] and doc["axis"] == "gy"
     run = doc["runs"][0]
     assert run["axis"] == "gy"
     er = 15.041067 * np.sin(np.radians(45.0))  # Ω_E sin φ along an up IA, deg/h
@@ -95,7 +96,7 @@ def test_bias_several_axes_do_not_remove_one_ia_earth_rate(xyz_csv):
     r = run_cli(["bias", xyz_csv, *BASE, "--latitude", "45", "--ia", "up", "--json"])
     assert r.code == 0, r.err
     doc = json.loads(r.out)
-    assert all(run["earth_rate_ia_dph"] is None for run in doc["runs"])
+    assert all(run["earth_rate_ia_dph"] is None for d in doc["per_axis"] for run in d["runs"])
     assert any("earth rate is NOT removed" in n for n in doc["notes"])
 
 
@@ -173,3 +174,55 @@ def test_adis_allan_and_info_name_every_axis(adis_csv):
     assert r.code == 0, r.err
     for a in ("gyro_x_dps", "gyro_y_dps", "gyro_z_dps"):
         assert f"axis {a}" in r.out
+
+
+# ----------------------------------------------------------------------------- report
+def test_report_tables_every_axis_and_numbers_match_the_commands(xyz_csv, tmp_path):
+    import os
+    import shutil
+
+    from test_report import dig, numbers
+
+    shutil.copy(xyz_csv, tmp_path / "xyz.csv")
+    (tmp_path / "xyz.profile.toml").write_text(
+        '[columns]\ntime = "t_s"\nrate = ["gx", "gy", "gz"]\n[gyro]\nrate_unit = "deg/h"\n')
+    camp = tmp_path / "camp.toml"
+    camp.write_text('[campaign]\noperator = "T"\ndate = "2024-01-01"\n'
+                    '[gyro]\nmodel = "M"\nserial = "1"\nnominal_scale_factor = 1\n'
+                    'scale_factor_unit = "1"\n[site]\nlatitude_deg = 48.137\n'
+                    '[tests.bias]\nlogs = ["xyz.csv"]\nprofile = "xyz.profile.toml"\n'
+                    'skip = "5min"\n[tests.allan]\nlog = "xyz.csv"\n'
+                    'profile = "xyz.profile.toml"\nterms = "N,B,K"\n', encoding="utf-8")
+    md = tmp_path / "sheet.md"
+    r = run_cli(["-q", "report", camp, "--json", "--md", md])
+    assert r.code == 0, r.err
+    sheet = json.loads(r.out)
+    text = md.read_text(encoding="utf-8")
+    assert "Bias items (axis gx of gx, gy, gz)" in text
+    assert "Allan-variance coefficients of every gyro axis" in text
+    for a in ("gx", "gy", "gz"):
+        assert f"| {a} | xyz.csv |" in text
+    # every number of the sheet is the one `gyrotest bias/allan --json` prints ("—" cells,
+    # value None, carry no number to compare)
+    cmds = {c["key"]: c["argv"] for c in sheet["provenance"]["commands"]}
+    old = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        outputs = {k: json.loads(run_cli([*argv[1:], "--json"]).out) for k, argv in cmds.items()}
+    finally:
+        os.chdir(old)
+    checked = set()
+    for n in numbers(sheet):
+        if n["value"] is None:
+            continue
+        src = n["source"]
+        assert dig(outputs[src["analysis"]], src["path"]) == n["value"], src
+        checked.add(src["analysis"])
+    assert {"bias", "allan"} <= checked
+    paths = [n["source"]["path"] for n in numbers(sheet) if n.get("source")]
+    assert ["per_axis", 2, "runs", 0, "bias_D_F_dph"] in paths
+    assert any(p[:4] == ["logs", 0, "axes", 2] for p in paths)
+    by_path = {tuple(n["source"]["path"]): n["value"] for n in numbers(sheet) if n.get("source")}
+    for i, a in enumerate(("gx", "gy", "gz")):
+        assert by_path[("per_axis", i, "runs", 0, "bias_D_F_dph")] == pytest.approx(
+            TRUE_BIAS[a], abs=0.05)

@@ -100,6 +100,21 @@ def test_bias_several_axes_do_not_remove_one_ia_earth_rate(xyz_csv):
     assert any("earth rate is NOT removed" in n for n in doc["notes"])
 
 
+def test_bias_multi_position_uses_one_named_axis(xyz_csv):
+    r = run_cli(["bias", xyz_csv, xyz_csv, *BASE, "--positions", "up,down", "--latitude", "45",
+                 "--json"])
+    assert r.code == 0, r.err
+    doc = json.loads(r.out)
+    assert doc["axes"] == ["gx"] and "per_axis" not in doc
+    assert doc["multi_position"] is not None
+    assert any("multi-position test: analysing axis gx" in n for n in doc["notes"])
+    r = run_cli(["bias", xyz_csv, xyz_csv, *BASE, "--positions", "up,down", "--latitude", "45",
+                 "--axis", "gz", "--json"])
+    doc = json.loads(r.out)
+    assert doc["axes"] == ["gz"] and not doc["notes"]
+    assert {run["axis"] for run in doc["runs"]} == {"gz"}
+
+
 def test_bias_table_and_plots_name_each_axis(xyz_csv, tmp_path):
     plot = tmp_path / "b.png"
     r = run_cli(["bias", xyz_csv, *BASE, "--axis", "gx,gz", "--plot", plot])

@@ -30,6 +30,9 @@ options override it key by key. Example::
     latitude_deg = 48.137
     ia = "up"                      # up/down/north/south/east/west, or ia_azimuth_deg + ia_elevation_deg
 
+    [display]
+    unit = "deg/s"                 # tables, plots, sheet: deg/h (IEEE, default), deg/s, rad/s, mdps
+
 Role default units: time s, rate deg/h, temperature degC, field uT, supply V, table_rate deg/s.
 Unknown sections or keys are an error (a misspelt key would otherwise be silently ignored).
 """
@@ -77,6 +80,9 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
         "ia_azimuth_deg": (float, int),
         "ia_elevation_deg": (float, int),
     },
+    "display": {
+        "unit": str,  # display unit of tables, plots and the sheet (gyrotest.display)
+    },
 }
 
 LIST_KEYS = {"rate", "counts", "counter", "voltage", "temperature", "field", "extra"}
@@ -92,6 +98,7 @@ class Profile:
     gyro: dict[str, Any] = field(default_factory=dict)
     site: dict[str, Any] = field(default_factory=dict)
     source: str | None = None
+    display: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {"columns": self.columns, "units": self.units, "gyro": self.gyro,
@@ -151,6 +158,10 @@ def profile_from_dict(data: dict, source: str = "profile") -> Profile:
         for key, value in body.items():
             target[key] = _check(section, key, value, source)
     prof.output_kind()  # validates that at most one output kind is named
+    if "unit" in prof.display:
+        from .display import parse_display_unit
+
+        parse_display_unit(prof.display["unit"], what=f"{source}: [display] unit")
     if "field" in prof.columns and len(prof.columns["field"]) not in (1, 2, 3):
         raise InputError(f"{source}: [columns] field must list 1 to 3 columns (X, Y, Z)")
     if prof.columns.get("up") and not prof.columns.get("down") or (

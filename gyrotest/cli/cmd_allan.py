@@ -14,6 +14,7 @@ import math
 
 import click
 
+from ..display import DEFAULT as DEFAULT_UNIT
 from ..errors import InputError
 from ..noise.deviations import DEVIATION_KINDS
 from ..noise.fit import MIN_EDF
@@ -31,6 +32,7 @@ from .common import (
     warn,
     with_ingest,
 )
+from .common_display import resolve_display_unit, unit_option
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 
@@ -68,6 +70,7 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
               help="Write the deviation table(s) to this CSV file.")
 @plot_option("σ(τ) with fit, components and residuals (.png/.svg/.pdf).")
+@unit_option
 @click.option("--psd", "psd_path", type=click.Path(dir_okay=False), default=None,
               help="Welch PSD and autocorrelation figure (.png/.svg/.pdf).")
 @ingest_options
@@ -75,7 +78,7 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, detrend, skip,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, allow_irregular, csv_path,
-            plot_path, psd_path, as_json, ingest_opts):
+            plot_path, psd_path, display_unit, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
 
     Overlapping Allan deviation (or --dev) with χ² confidence intervals from the EDF (noise
@@ -83,7 +86,8 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
     (Q, N, B, K, R by default; markov, sine, blue on request), each coefficient identified or
     an upper bound ("≤"), residuals in CI units, the missing-term diagnosis, Krobka's warnings,
     and the platform vs strapdown attitude error. Units: σ deg/h, N deg/√h, B deg/h,
-    K deg/h/√h, R deg/h/h, Q arcsec.
+    K deg/h/√h, R deg/h/h, Q arcsec; --unit deg/s (or rad/s, mdps) shows σ and B in deg/s,
+    N in deg/s/√Hz, K in deg/s/√s, R in deg/s², Q in deg (JSON keeps the IEEE units).
 
     Pulse-output logs are analysed as angle increments, rate logs as rate samples (from the
     ingest layer). Several LOGS (or axes) overlay on one τ axis in --plot.
@@ -101,6 +105,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
     parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
+    unit = resolve_display_unit(display_unit, ingest_opts)
     horizon_s = parse_horizon(horizon)
     rates = [parse_vehicle_rate(v) for v in vehicle_rates]
     tau_spec = parse_taus(taus)
@@ -126,17 +131,17 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
     if plot_path:
         from ..noise.plots import plot_allan
 
-        plot_allan(items, plot_path)
+        plot_allan(items, plot_path, unit=unit)
     if psd_path:
         from ..noise.plots import plot_psd
 
-        plot_psd(items, psd_path)
+        plot_psd(items, psd_path, unit=unit)
     if as_json:
         _warnings(results, as_json)
         emit_json(allan_document(results, csv=csv_path, plot=plot_path, psd=psd_path))
         return
     for r in results:
-        _render(r)
+        _render(r, unit)
     _warnings(results, as_json)
     for p, what in ((csv_path, "table"), (plot_path, "plot"), (psd_path, "PSD plot")):
         if p:
@@ -187,22 +192,23 @@ def _write_csv(path, results) -> None:
         fh.write(buf.getvalue())
 
 
-def _render(r) -> None:
+def _render(r, unit=DEFAULT_UNIT) -> None:
     from rich.table import Table
 
+    f = unit.f  # σ: display rate per deg/h
     c = console()
     for a in r.axes:
         d = a.dev
         c.print(f"\n[bold]{r.source}[/bold] — axis {a.axis}: {len(a.dev.tau)} τ, "
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
         c.print(f"  input: {a.input_note}")
-        t = Table(title=f"{d.kind.upper()} (σ in {d.unit}); CI {100 * d.confidence:.1f} % from "
+        t = Table(title=f"{d.kind.upper()} (σ in {unit.rate}); CI {100 * d.confidence:.1f} % from "
                         f"the EDF: {d.ci_method}", title_justify="left")
         for col in ("tau s", "n", "alpha", "sigma_lo", "sigma", "sigma_hi", "model", "resid CI"):
             t.add_column(col, justify="right")
         tab = a.table()
         for i in range(len(tab["tau"])):
-            model = fmt_num(float(tab["model"][i])) if "model" in tab else ""
+            model = fmt_num(float(tab["model"][i]) * f) if "model" in tab else ""
             res = ""
             if "residual_ci" in tab:
                 rv = float(tab["residual_ci"][i])
@@ -210,14 +216,14 @@ def _render(r) -> None:
                 if not tab["fitted"][i]:
                     res += " nf"
             t.add_row(fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
-                      str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i])),
-                      fmt_num(float(tab["sigma"][i])), fmt_num(float(tab["sigma_hi"][i])),
+                      str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i]) * f),
+                      fmt_num(float(tab["sigma"][i]) * f), fmt_num(float(tab["sigma_hi"][i]) * f),
                       model, res)
         c.print(t)
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
-        _render_fit(a)
+        _render_fit(a, unit)
     if r.cross is not None:
         ct = Table(title="Axis cross-correlation ρ of τ-averaged rates (zero within ±b, 95 %)",
                    title_justify="left")
@@ -234,19 +240,21 @@ def _render(r) -> None:
         note(f"{r.source}: {n}")
 
 
-def _term_value(term) -> str:
-    """'0.005 ± 8.1e-06' or '≤ 0.035'; two-parameter terms list both."""
+def _term_value(term, unit=DEFAULT_UNIT) -> str:
+    """'0.005 ± 8.1e-06' or '≤ 0.035'; two-parameter terms list both (in the display unit)."""
     if term.status == "upper bound":
-        return "≤ " + fmt_num(term.upper, 3)
+        return "≤ " + fmt_num(unit.convert(term.upper, term.units[term.main])[0], 3)
     parts = []
     for k, v in term.params.items():
         sg = term.sigma.get(k)
+        v, lab = unit.convert(v, term.units[k])
+        sg = unit.convert(sg, term.units[k])[0]
         txt = fmt_num(v, 4) + (f" ± {fmt_num(sg, 2)}" if sg is not None else "")
-        parts.append(txt if len(term.params) == 1 else f"{k} {txt} {term.units[k]}")
+        parts.append(txt if len(term.params) == 1 else f"{k} {txt} {lab}")
     return "; ".join(parts)
 
 
-def _fit_table(f, title: str):
+def _fit_table(f, title: str, unit=DEFAULT_UNIT):
     from rich.table import Table
 
     lo, hi = f.fit_range
@@ -257,26 +265,29 @@ def _fit_table(f, title: str):
     for term in f.terms:
         dom = "" if not term.dominant_tau else (f"{fmt_num(term.dominant_tau[0])}–"
                                                 f"{fmt_num(term.dominant_tau[1])}")
-        unit = term.units[term.main] if len(term.params) == 1 else ""
-        t.add_row(f"{term.label} {term.title}", _term_value(term), unit, term.status, dom)
+        lab = unit.convert(1.0, term.units[term.main])[1] if len(term.params) == 1 else ""
+        t.add_row(f"{term.label} {term.title}", _term_value(term, unit), lab, term.status, dom)
     return t
 
 
-def _render_fit(a) -> None:
+def _render_fit(a, unit=DEFAULT_UNIT) -> None:
     c = console()
     f = a.fit
-    c.print(_fit_table(f, "Noise model, requested terms"))
+    c.print(_fit_table(f, "Noise model, requested terms", unit))
     c.print("  ≤: upper bound only (95 % profile likelihood); ±: 1σ (sandwich covariance); "
             "weights: χ²(EDF) likelihood of each σ̂²(τ)")
     if a.diagnosis is not None and a.diagnosis.final is not f:
-        c.print(_fit_table(a.diagnosis.final, "Diagnosed model"))
+        c.print(_fit_table(a.diagnosis.final, "Diagnosed model", unit))
     ro = a.readoffs
     if "N_upper" in ro:
-        c.print(f"  classic read-offs (for comparison): N slope-line {fmt_num(ro['N_slope'])} at "
+        u = unit
+        c.print(f"  classic read-offs (for comparison): N slope-line "
+                f"{fmt_num(u.n_value(ro['N_slope']))} at "
                 f"τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper = min σ√τ/60 = "
-                f"{fmt_num(ro['N_upper'])} deg/√h; K slope-line {fmt_num(ro['K_slope'])} "
-                f"deg/h/√h; B tangent σ_min/0.664 = {fmt_num(ro['B_tangent'])} deg/h "
-                f"(Allan floor {fmt_num(ro['allan_floor_dph'])} deg/h at τ "
+                f"{fmt_num(u.n_value(ro['N_upper']))} {u.n}; K slope-line "
+                f"{fmt_num(u.k_value(ro['K_slope']))} {u.k}; B tangent σ_min/0.664 = "
+                f"{fmt_num(u.rate_value(ro['B_tangent']))} {u.rate} (Allan floor "
+                f"{fmt_num(u.rate_value(ro['allan_floor_dph']))} {u.rate} at τ "
                 f"{fmt_num(ro['allan_floor_tau_s'])} s)")
     dg = a.diagnosis
     if dg is not None:

@@ -6,7 +6,8 @@ import os
 
 import click
 
-from ..bias import analyse_bias, parse_positions
+from ..bias import parse_positions
+from ..bias_axes import analyse_bias_axes
 from ..units import format_duration, parse_duration
 from .common import (
     console,
@@ -20,24 +21,30 @@ from .common import (
     warn,
     with_ingest,
 )
+from .common_axes import axis_plot_path
+from .common_display import resolve_display_unit, unit_option
 
 
 @click.command("bias")
 @click.argument("logs", nargs=-1, required=True)
 @click.option("--skip", default="0", show_default=True,
               help="Warm-up trim at the start of each run, e.g. 40min, 2h, 90s.")
-@click.option("--axis", default=None, help="Axis (rate column) to analyse; default the first.")
+@click.option("--axis", default=None,
+              help="Gyro axis (rate column) to analyse, comma-separated for several; default "
+                   "every axis (one IA: the earth rate is removed only with a single axis).")
 @click.option("--positions", default=None,
               help="IA direction of each file in order (multi-position test), e.g. up,down,north,south.")
 @click.option("--settle", default="0", show_default=True,
               help="Time dropped after every position change in a log with a position column.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
 @plot_option("Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
+@unit_option
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_json, ingest_opts):
-    """Bias D_F (deg/h) of static runs, with an uncertainty honest for correlated noise.
+def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, display_unit, as_json,
+            ingest_opts):
+    """Bias D_F (in --unit, default deg/h) of static runs, with an uncertainty honest for correlated noise.
 
     D_F = mean(rate) − earth-rate component along the IA (from --latitude and --ia or the
     profile's [site]), after the --skip warm-up trim. The 1σ uncertainty is the Allan
@@ -56,6 +63,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
       gyrotest bias up.csv down.csv --positions up,down --latitude 48.1 --rate-unit deg/h
     """
     skip_s = parse_duration(skip, what="--skip")
+    unit = resolve_display_unit(display_unit, ingest_opts)
     settle_s = parse_duration(settle, what="--settle")
     if plot_path:
         from ..plotting import check_plot_path
@@ -63,55 +71,64 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
         check_plot_path(plot_path)
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    ba = analyse_bias(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis, positions=pos_list,
-                      earth_rate=not no_earth_rate)
+    res = analyse_bias_axes(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis,
+                            positions=pos_list, earth_rate=not no_earth_rate)
     if plot_path:
         from ..bias_plot import plot_bias
 
-        plot_bias(ba, plot_path)
-        if not as_json:
-            note(f"plot written to {plot_path}")
+        for name, ba in res.per_axis.items():
+            path = axis_plot_path(plot_path, name, len(res.per_axis))
+            plot_bias(ba, path, unit=unit)
+            if not as_json:
+                note(f"plot of axis {name} written to {path}")
     if as_json:
-        emit_json(ba.to_dict())
+        emit_json(res.to_dict())
         return
-    _render(ba.runs, ba.repeatability, ba.multi)
+    for n in res.notes:
+        note(n)
+    for name, ba in res.per_axis.items():
+        _render(ba.runs, ba.repeatability, ba.multi, axis=name, unit=unit)
 
 
-def _render(runs, rep, multi):
+def _render(runs, rep, multi, axis: str = "", unit=None):
     from rich.table import Table
 
+    from ..display import DEFAULT
+
+    u = unit or DEFAULT
+    f = u.f  # display rate per deg/h
     c = console()
-    t = Table(title="Bias D_F (IEEE 952 §12.11.4.1.1), rates in deg/h",
+    t = Table(title=f"Bias D_F (IEEE 952 §12.11.4.1.1), axis {axis}, rates in {u.rate}",
               caption="±1σ: Allan deviation at the record length from a fitted noise model "
                       "(honest for correlated noise); σ/√n only for comparison")
     for col in ("run", "used", "mean output", "Ω_IA", "D_F", "±1σ", "σ/√n"):
         t.add_column(col, justify="left" if col == "run" else "right")
     for r in runs:
         label = os.path.basename(r.label) if not multi else r.label
-        t.add_row(label, format_duration(r.duration_s), fmt_num(r.mean_output_dph, 6),
-                  fmt_num(r.earth_rate_ia_dph, 6) if r.earth_rate_ia_dph is not None else "—",
-                  fmt_num(r.bias_dph, 6) if not multi else "(fit)",
-                  fmt_num(r.sigma_dph, 3), fmt_num(r.uncertainty.naive_sigma_dph, 2))
+        t.add_row(label, format_duration(r.duration_s), fmt_num(r.mean_output_dph * f, 6),
+                  fmt_num(r.earth_rate_ia_dph * f, 6) if r.earth_rate_ia_dph is not None else "—",
+                  fmt_num(r.bias_dph * f, 6) if not multi else "(fit)",
+                  fmt_num(r.sigma_dph * f, 3), fmt_num(r.uncertainty.naive_sigma_dph * f, 2))
     c.print(t)
     for r in runs:
         for n in r.notes:
             (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
     if rep:
-        c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs[/bold]: D_F mean "
-                f"{fmt_num(rep.mean_dph, 6)} deg/h, 1σ {fmt_num(rep.sigma_1_dph, 3)} deg/h, "
-                f"max spread {fmt_num(rep.spread_dph, 3)} deg/h "
-                f"(within-run σ {fmt_num(rep.within_run_sigma_dph, 3)} deg/h)")
+        c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs, axis {axis}[/bold]: D_F mean "
+                f"{fmt_num(rep.mean_dph * f, 6)} {u.rate}, 1σ {fmt_num(rep.sigma_1_dph * f, 3)} "
+                f"{u.rate}, max spread {fmt_num(rep.spread_dph * f, 3)} {u.rate} "
+                f"(within-run σ {fmt_num(rep.within_run_sigma_dph * f, 3)} {u.rate})")
         for n in rep.notes:
             warn(n)
     if multi:
         m = multi
-        c.print(f"\n[bold]Multi-position fit[/bold] ({len(m.positions)} positions): "
-                f"D_F = {fmt_num(m.bias_dph, 6)} ± {fmt_num(m.bias_sigma_dph, 3)} deg/h (1σ)")
+        c.print(f"\n[bold]Multi-position fit, axis {axis}[/bold] ({len(m.positions)} positions): "
+                f"D_F = {fmt_num(m.bias_dph * f, 6)} ± {fmt_num(m.bias_sigma_dph * f, 3)} {u.rate} (1σ)")
         for k in ("north", "east", "up"):
             v = m.earth_rate_fit_dph[k]
             if v is not None:
-                c.print(f"  earth rate {k:5s} fitted {fmt_num(v, 6)} ± "
-                        f"{fmt_num(m.earth_rate_fit_sigma_dph[k], 3)} deg/h")
+                c.print(f"  earth rate {k:5s} fitted {fmt_num(v * f, 6)} ± "
+                        f"{fmt_num(m.earth_rate_fit_sigma_dph[k] * f, 3)} {u.rate}")
         if m.latitude_est_deg is not None:
             c.print(f"  latitude check: {m.latitude_est_deg:.4f} ± {m.latitude_est_sigma_deg:.4f}° "
                     f"(given {m.latitude_deg if m.latitude_deg is not None else '—'}°)")

@@ -4,16 +4,21 @@ from __future__ import annotations
 
 import click
 
+from ..axes import choose_axes
 from ..units import format_duration
 from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
+from .common_display import resolve_display_unit, unit_option
 
 
 @click.command("info")
 @click.argument("log", type=str)
+@click.option("--axis", default=None,
+              help="Gyro axis (rate column) to list, comma-separated for several; default every axis.")
+@unit_option
 @ingest_options
 @json_option
 @with_ingest
-def command(log, as_json, ingest_opts):
+def command(log, axis, display_unit, as_json, ingest_opts):
     """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps.
 
     LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
@@ -23,8 +28,13 @@ def command(log, as_json, ingest_opts):
     Example:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
+    unit = resolve_display_unit(display_unit, ingest_opts)
     g = load_log(log, ingest_opts, announce=not as_json)
     summary = g.summary()
+    axes = choose_axes([g], axis)
+    summary["axes"] = axes
+    summary["channels"] = {k: v for k, v in summary["channels"].items()
+                           if not k.startswith("rate:") or k[5:] in axes}
     if as_json:
         emit_json(summary)
         return
@@ -43,13 +53,15 @@ def command(log, as_json, ingest_opts):
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
             "voltage": "analog voltage"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
+    c.print(f"  gyro axes      {', '.join(axes)}"
+            + (f"  (of {', '.join(g.axes)})" if len(axes) < len(g.axes) else ""))
     if gy.scale_factor is not None:
         c.print(f"  scale factor   {gy.scale_factor:g} {gy.scale_factor_unit}"
                 + (f", offset {gy.offset_v:g} V" if gy.offset_v is not None else ""))
     if g.site:
         s = g.site
         c.print(f"  site           latitude {s.latitude_deg:g}°, IA {s.ia_label} "
-                f"(earth rate along IA {s.earth_rate_dph():+.4f} deg/h)")
+                f"(earth rate along IA {fmt_num(s.earth_rate_dph() * unit.f, 5)} {unit.rate})")
     if tm.gaps:
         c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
             f"at {gp.time_s:.6g} s for {gp.duration_s:.4g} s" for gp in tm.gaps[:5])
@@ -62,8 +74,9 @@ def command(log, as_json, ingest_opts):
     for col in ("channel", "unit", "min", "mean", "max", "std"):
         t.add_column(col, justify="right" if col not in ("channel", "unit") else "left")
     for name, st in summary["channels"].items():
-        t.add_row(name, st["unit"], fmt_num(st["min"]), fmt_num(st["mean"]), fmt_num(st["max"]),
-                  fmt_num(st["std"]))
+        f, u = (unit.f, unit.rate) if name.startswith("rate:") else (1.0, st["unit"])
+        t.add_row(name, u, fmt_num(st["min"] * f), fmt_num(st["mean"] * f),
+                  fmt_num(st["max"] * f), fmt_num(st["std"] * f))
     c.print(t)
     if summary.get("positions"):
         c.print("  positions      " + ", ".join(f"{k}: {v}" for k, v in summary["positions"].items()))

@@ -61,45 +61,55 @@ def _slope_fan(ax) -> None:
     ax.text(x0, y0 * 10 ** (0.06 * yr), "slope guides", fontsize=7, color="0.35", ha="left")
 
 
-def _components(ax, fit, tf) -> None:
+def _components(ax, fit, tf, unit=None) -> None:
+    from ..display import DEFAULT, term_text
     from .fit import _basis
     from .impact import _coef_from_value
+
+    u = unit or DEFAULT
 
     k = 0
     for t in fit.terms:
         cc = _COMP_COLORS[k % len(_COMP_COLORS)]
         if t.coef > 0:
-            ax.plot(tf, np.sqrt(t.avar(tf)), ls="--", lw=1.2, color=cc,
-                    label=f"{t.label} ({t.title}): {t.text()}"
+            ax.plot(tf, np.sqrt(t.avar(tf)) * u.f, ls="--", lw=1.2, color=cc,
+                    label=f"{t.label} ({t.title}): {term_text(t, u)}"
                     + ("" if t.identified else " — not identified"), zorder=2)
             k += 1
         elif t.upper is not None and t.key in ("Q", "N", "B", "K", "R"):
             cu = _coef_from_value(t.key, t.upper, t.shape)
-            ax.plot(tf, np.sqrt(cu * _basis(t.key, tf, None, t.bi_f0)), ls=":", lw=1.0,
-                    color=cc, alpha=0.8, label=f"{t.label} ({t.title}) bound: {t.text()}",
+            ax.plot(tf, np.sqrt(cu * _basis(t.key, tf, None, t.bi_f0)) * u.f, ls=":", lw=1.0,
+                    color=cc, alpha=0.8, label=f"{t.label} ({t.title}) bound: {term_text(t, u)}",
                     zorder=2)
             k += 1
 
 
 def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
                title: str | None = None, show_components: bool | None = None,
-               size: tuple[float, float] = ALLAN_SIZE):
+               size: tuple[float, float] = ALLAN_SIZE, unit=None):
     """Write :func:`figure_allan` to ``path`` (.png/.svg/.pdf); returns the path."""
     return save_figure(figure_allan(items, labels=labels, title=title,
-                                    show_components=show_components, size=size), path)
+                                    show_components=show_components, size=size, unit=unit),
+                       path)
 
 
 def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
                  title: str | None = None, show_components: bool | None = None,
-                 size: tuple[float, float] = ALLAN_SIZE):
+                 size: tuple[float, float] = ALLAN_SIZE, unit=None):
     """Allan deviation figure (module docstring), ``size`` inches. ``items`` = [(source,
     AxisAnalysis), …]; ``labels`` overrides the legend label of each item. With one item, the
     components of the fitted model are drawn; when the diagnosis added terms, the diagnosed
     model is the main curve and the requested model is shown thin and grey with its
     residuals. Returns the matplotlib figure (close it, or save it with
-    :func:`gyrotest.plotting.save_figure`).
+    :func:`gyrotest.plotting.save_figure`). ``unit``: a :class:`~gyrotest.display.DisplayUnit`
+    for the σ axis and the term labels (default deg/h).
     """
     from pathlib import Path
+
+    from ..display import DEFAULT
+
+    u = unit or DEFAULT
+    fu = u.f
 
     items = list(items)
     many_sources = len({s for s, _ in items}) > 1
@@ -113,8 +123,8 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
                          labels[i] if labels else None)
         req = a.fit
         fit = getattr(a, "best_fit", req)
-        tau, sig = req.tau, req.sigma
-        lo, hi = req.sigma_lo, req.sigma_hi
+        tau, sig = req.tau, req.sigma * fu
+        lo, hi = req.sigma_lo * fu, req.sigma_hi * fu
         ok = np.isfinite(sig) & (sig > 0)
         used = req.used & ok
         yerr = np.vstack([np.where(np.isfinite(lo), sig - lo, 0),
@@ -130,15 +140,15 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
         tf = np.geomspace(tau[ok].min(), tau[ok].max(), 300)
         diag = fit is not req
         if diag and single:
-            ax.plot(tf, req.model_sigma(tf), color="0.55", lw=1.3,
+            ax.plot(tf, req.model_sigma(tf) * fu, color="0.55", lw=1.3,
                     label=f"requested model {','.join(req.requested)}: χ²/dof "
                           f"{req.chi2_dof:.3g} (misfits)", zorder=2)
         name = ("diagnosed model " + ",".join(fit.requested)) if diag else "fitted model"
-        ax.plot(tf, fit.model_sigma(tf), color=col, lw=2.0, alpha=0.85,
+        ax.plot(tf, fit.model_sigma(tf) * fu, color=col, lw=2.0, alpha=0.85,
                 label=(f"{lab}: {name}, χ²/dof {fit.chi2_dof:.2f}" if not single
                        else f"{name}, χ²/dof = {fit.chi2_dof:.2f}"), zorder=4)
         if single:
-            _components(ax, fit, tf)
+            _components(ax, fit, tf, u)
         for f_, c_, alpha in ([(req, "0.55", 0.8)] if (diag and single) else []) + [
                 (fit, col, 1.0)]:
             r = f_.residuals()
@@ -159,7 +169,7 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     ax.set_ylim(s_lo / 1.8, s_hi * 2.5)
     ax.set_xlim(min(all_tau) / 1.4, max(all_tau) * 1.4)
     _slope_fan(ax)
-    ax.set_ylabel("Allan deviation σ(τ), deg/h")
+    ax.set_ylabel(f"Allan deviation σ(τ), {u.rate}")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7.5, framealpha=0.9,
               borderaxespad=0.0)
     if title is None:
@@ -181,16 +191,21 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
 
 
 def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
-             size: tuple[float, float] = PSD_SIZE):
+             size: tuple[float, float] = PSD_SIZE, unit=None):
     """Write :func:`figure_psd` to ``path`` (.png/.svg/.pdf); returns the path."""
-    return save_figure(figure_psd(items, labels=labels, size=size), path)
+    return save_figure(figure_psd(items, labels=labels, size=size, unit=unit), path)
 
 
 def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
-               size: tuple[float, float] = PSD_SIZE):
+               size: tuple[float, float] = PSD_SIZE, unit=None):
     """Welch PSD with the fitted model PSD and detected lines, plus the autocorrelation
     (module docstring), ``size`` inches. ``items`` = [(source, AxisAnalysis), …]. Returns the
-    matplotlib figure."""
+    matplotlib figure. ``unit``: a :class:`~gyrotest.display.DisplayUnit` for the PSD axis
+    (default deg/h)."""
+    from ..display import DEFAULT
+
+    u = unit or DEFAULT
+    f2 = u.f * u.f
     items = list(items)
     many_sources = len({s for s, _ in items}) > 1
     many_axes = len({a.axis for _, a in items}) > 1
@@ -199,21 +214,22 @@ def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | N
         col = COLORS[i % len(COLORS)]
         lab = _label_for((src, a), many_sources, many_axes, labels[i] if labels else None)
         if a.psd is not None:
-            f, p = a.psd.f, a.psd.psd
+            f, p = a.psd.f, a.psd.psd * f2
             if f.size > 4000:
                 step = max(1, f.size // 4000)
                 ax.plot(f[::step], p[::step], color=col, lw=0.4, alpha=0.25)
             fb, pb = a.psd.log_binned(30)
+            pb = pb * f2
             ax.plot(fb, pb, color=col, lw=1.4, label=f"{lab}: Welch PSD (log-binned)")
             bf = getattr(a, "best_fit", a.fit)
-            mp = bf.psd(fb)
+            mp = bf.psd(fb) * f2
             if np.any(mp > 0):
                 ax.plot(fb, np.where(mp > 0, mp, np.nan), "--", color=col, lw=1.2, alpha=0.9,
                         label=f"{lab}: model PSD, terms {','.join(bf.requested)} "
                               "(sinusoid/ramp not shown)")
             for ln in a.lines:
                 ax.axvline(ln.f_hz, color=col, ls=":", lw=1.0)
-                ax.annotate(f"line {ln.f_hz:.4g} Hz\nΩ0 ≈ {ln.amplitude_dph:.3g} deg/h",
+                ax.annotate(f"line {ln.f_hz:.4g} Hz\nΩ0 ≈ {ln.amplitude_dph * u.f:.3g} {u.rate}",
                             xy=(ln.f_hz, float(np.interp(ln.f_hz, f, p))), xytext=(6, 6),
                             textcoords="offset points", fontsize=7.5, color=col)
         if a.acf is not None:
@@ -223,7 +239,7 @@ def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | N
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("frequency f, Hz")
-    ax.set_ylabel("rate PSD S(f), (deg/h)²/Hz\n(two-sided, IEEE 952)")
+    ax.set_ylabel(f"rate PSD S(f), {u.psd}\n(two-sided, IEEE 952)")
     ax.set_title("Rate power spectral density (lines: sinusoids; knee: Markov 1/(2πT_c))")
     ax.legend(loc="best", fontsize=7.5)
     axc.set_xscale("log")

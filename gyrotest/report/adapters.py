@@ -134,8 +134,10 @@ def _timed(fn: Callable[[], tuple[dict, Any, list]]) -> tuple[dict, Any, list, f
 # ----------------------------------------------------------------------------- bias
 def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias") -> Analysis:
     """``gyrotest bias LOGS --skip ...`` (static runs: D_F, repeatability) or, for the
-    multi-position test, ``gyrotest bias LOG --settle ...``: :func:`gyrotest.bias.analyse_bias`."""
-    from ..bias import analyse_bias
+    multi-position test, ``gyrotest bias LOG --settle ...``: every gyro axis (or the test's
+    ``axis``) with :func:`gyrotest.bias_axes.analyse_bias_axes`, as the command does; the
+    object kept is the first axis' :class:`~gyrotest.bias.BiasAnalysis`."""
+    from ..bias_axes import analyse_bias_axes
     from ..units import parse_duration
 
     opts, iargv = ingest_opts(test, campaign)
@@ -146,9 +148,9 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
         skip_s = parse_duration(test.opt("skip", "0"), what="--skip")
         settle_s = parse_duration(test.opt("settle", "0"), what="--settle")
         logs = [cache.get(p, opts) for p in paths]
-        ba = analyse_bias(logs, skip_s=skip_s, settle_s=settle_s, axis=test.opt("axis"),
-                          earth_rate=not test.opt("no_earth_rate", False))
-        return ba.to_dict(), ba, logs
+        res = analyse_bias_axes(logs, skip_s=skip_s, settle_s=settle_s, axis=test.opt("axis"),
+                                earth_rate=not test.opt("no_earth_rate", False))
+        return res.to_dict(), next(iter(res.per_axis.values())), logs
 
     res, obj, logs, dt = _timed(go)
     argv = ["bias", *[campaign.rel(p) for p in paths], *iargv, *option_argv(test)]

@@ -19,6 +19,7 @@ from .layout import (
     _unit,
     dig,
 )
+from .sec_axes import allan_axes_table, allan_axis_names, axis_note, bias_axes_table
 from .sheet import NOT_TESTED, VERDICT_RULE, Check, Num, Section, fmt_number  # noqa: F401
 
 
@@ -82,7 +83,7 @@ class DriftSections:
                        sec.number)
             self.checks.append(ch)
             items.append(ch)
-        sec.add(_check_table(items, "Bias items"))
+        sec.add(_check_table(items, "Bias items" + axis_note(r.get("axes") or [])))
         rows = []
         for i, run in enumerate(runs):
             rows.append([Path(run["source"]).name,
@@ -95,8 +96,14 @@ class DriftSections:
                          s.num(["runs", i, "mean_temperature_c"], "°C", digits=3)])
         sec.add(T(["run", "used, s", "mean output, °/h", "earth rate along IA, °/h",
                        "D_F ± 1σ, °/h", "σ/√n, °/h (for comparison)", "temperature, °C"],
-                      rows, title="Per run (after the warm-up trim)", unit_in_header=True,
+                      rows, title="Per run (after the warm-up trim)"
+                      + axis_note(r.get("axes") or []), unit_in_header=True,
                       widths=[2.3, 1.0, 1.4, 1.5, 1.8, 1.6, 1.5], key="bias_runs"))
+        tab = bias_axes_table(s, r)
+        if tab is not None:
+            sec.add(tab)
+        for n in r.get("notes", []):
+            self.warn("bias", n)
         t = self.c.tests["bias"]
         skip = t.opt("skip", "0")
         if not self.eng:
@@ -152,7 +159,11 @@ class DriftSections:
             self.coef[k] = n
             items.append(self.check("allan", k, lab, ieee, n, sec.number, u))
         sec.add(_check_table(items, "Allan-variance coefficients (joint fit; ≤: upper bound "
-                                    "only, 95 % profile likelihood; ±: 1σ)"))
+                                    "only, 95 % profile likelihood; ±: 1σ)"
+                             + axis_note(allan_axis_names(a.result))))
+        tab = allan_axes_table(s, a.result)
+        if tab is not None:
+            sec.add(tab)
         rr = dig(a.result, ["logs", 0])
         fp = base + ["fit"]
         txt = (f"Joint fit of {','.join(fit['terms_requested'])} to the overlapping Allan "

@@ -61,3 +61,30 @@ def test_bound_only_two_parameter_term_does_not_break_the_impact(extra):
     if t.shape is None:
         assert extra in unshaped_bounds(f)
         assert any("left out" in a for a in imp.assumptions)
+
+
+# ----------------------------------------------------------------------------- plain table
+def test_plain_table_for_a_short_tau_list(krobka_log, tmp_path):
+    """`--taus 1,10,100` (the Stable32/AllanTools habit): the table, a note, no fit."""
+    png = tmp_path / "t.png"
+    r = run_cli(["allan", krobka_log, *RATE, "--taus", "1,10,100", "--plot", png])
+    assert r.code == 0, r.err
+    assert "sigma_lo" in r.out and "Noise model" not in r.out
+    assert "noise model not fitted" in r.err and "only 3 τ" in r.err
+    assert png.exists()
+    r = run_cli(["allan", krobka_log, *RATE, "--taus", "1,10,100", "--json"])
+    ax = json.loads(r.out)["logs"][0]["axes"][0]
+    assert [row["tau"] for row in ax["table"]] == [1.0, 10.0, 100.0]
+    assert ax["fit"] is None and ax["impact"] is None and ax["warnings"] == []
+    # white-rate σ ∝ τ^-1/2 above the hump: the table carries real numbers with intervals
+    assert all(row["sigma_lo"] < row["sigma"] < row["sigma_hi"] for row in ax["table"])
+
+
+def test_no_fit_flag(krobka_log):
+    r = run_cli(["allan", krobka_log, *RATE, "--taus", "decade", "--no-fit", "--json"])
+    assert r.code == 0, r.err
+    doc = json.loads(r.out)["logs"][0]
+    assert doc["settings"]["fit"] is False
+    ax = doc["axes"][0]
+    assert ax["fit"] is None and ax["diagnosis"] is None and len(ax["table"]) >= 5
+    assert "model" not in ax["table"][0]

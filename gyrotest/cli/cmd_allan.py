@@ -63,6 +63,9 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @click.option("--bi-cutoff", type=float, default=None,
               help="Fit the full bias-instability template with this cut-off f0 (Hz).")
 @click.option("--no-diagnose", is_flag=True, help="Skip the search for missing terms.")
+@click.option("--no-fit", is_flag=True,
+              help="Plain deviation table only (no noise model, diagnosis, warnings or impact). "
+                   "Without it the fit is skipped with a note when the τ list is too short.")
 @click.option("--allow-irregular", is_flag=True,
               help="Analyse on the nominal τ0 even if the sample interval jitters > 10 %.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
@@ -74,7 +77,7 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, detrend, skip,
-            vehicle_rates, horizon, bi_cutoff, no_diagnose, allow_irregular, csv_path,
+            vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
 
@@ -93,6 +96,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
       gyrotest allan static.csv --profile bench.toml --plot allan.png
       gyrotest allan static.csv --terms +markov --vehicle-rate 10deg/s --json
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
+      gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
     """
     from ..noise.analysis import allan_document, analyse_allan, parse_taus
     from ..noise.fit import parse_terms
@@ -116,7 +120,8 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
         g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
-        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
+        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
+        fit_model=not no_fit)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
@@ -196,26 +201,32 @@ def _render(r) -> None:
         c.print(f"  input: {a.input_note}")
         t = Table(title=f"{d.kind.upper()} (σ in {d.unit}); CI {100 * d.confidence:.1f} % from "
                         f"the EDF: {d.ci_method}", title_justify="left")
-        for col in ("tau s", "n", "alpha", "sigma_lo", "sigma", "sigma_hi", "model", "resid CI"):
-            t.add_column(col, justify="right")
         tab = a.table()
+        cols = ["tau s", "n", "alpha", "sigma_lo", "sigma", "sigma_hi"]
+        if "model" in tab:
+            cols += ["model", "resid CI"]
+        for col in cols:
+            t.add_column(col, justify="right")
         for i in range(len(tab["tau"])):
-            model = fmt_num(float(tab["model"][i])) if "model" in tab else ""
-            res = ""
-            if "residual_ci" in tab:
+            row = [fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
+                   str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i])),
+                   fmt_num(float(tab["sigma"][i])), fmt_num(float(tab["sigma_hi"][i]))]
+            if "model" in tab:
                 rv = float(tab["residual_ci"][i])
                 res = "—" if not math.isfinite(rv) else f"{rv:+.1f}"
                 if not tab["fitted"][i]:
                     res += " nf"
-            t.add_row(fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
-                      str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i])),
-                      fmt_num(float(tab["sigma"][i])), fmt_num(float(tab["sigma_hi"][i])),
-                      model, res)
+                row += [fmt_num(float(tab["model"][i])), res]
+            t.add_row(*row)
         c.print(t)
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
-        _render_fit(a)
+        if a.fit is not None:
+            _render_fit(a)
+        else:
+            for n in a.notes:
+                note(n)
     if r.cross is not None:
         ct = Table(title="Axis cross-correlation ρ of τ-averaged rates (zero within ±b, 95 %)",
                    title_justify="left")

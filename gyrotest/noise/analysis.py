@@ -119,7 +119,7 @@ class AxisAnalysis:
     edf: np.ndarray
     sigma_lo: np.ndarray
     sigma_hi: np.ndarray
-    fit: NoiseFit
+    fit: NoiseFit | None
     readoffs: dict[str, Any]
     conversions: dict[str, Any]
     diagnosis: Diagnosis | None
@@ -134,8 +134,9 @@ class AxisAnalysis:
     notes: list[str] = field(default_factory=list)
 
     @property
-    def best_fit(self) -> NoiseFit:
-        """The diagnosed model when the diagnosis added terms, else the requested fit."""
+    def best_fit(self) -> NoiseFit | None:
+        """The diagnosed model when the diagnosis added terms, else the requested fit (None
+        when no model was fitted: --no-fit, or too few τ for the terms)."""
         return self.diagnosis.final if self.diagnosis is not None else self.fit
 
     def table(self) -> dict[str, np.ndarray]:
@@ -146,7 +147,7 @@ class AxisAnalysis:
         out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),
                "alpha": np.asarray(d.alpha), "edf": self.edf, "sigma_lo": self.sigma_lo,
                "sigma": np.asarray(d.sigma, float), "sigma_hi": self.sigma_hi}
-        if self.dev is self.fit_dev:
+        if self.dev is self.fit_dev and self.fit is not None:
             out["model"] = self.fit.model_sigma()
             out["residual_ci"] = self.fit.residuals()
             out["fitted"] = self.fit.used
@@ -175,7 +176,7 @@ class AxisAnalysis:
                           "notes": list(d.notes)},
             "table": rows,
             "fit_deviation": self.fit_dev.kind,
-            "fit": self.fit.to_dict(),
+            "fit": None if self.fit is None else self.fit.to_dict(),
             "slope_readoffs": self.readoffs,
             "conversions": self.conversions,
             "diagnosis": None if self.diagnosis is None else self.diagnosis.to_dict(),
@@ -259,6 +260,14 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                          "longest τ)"}
 
 
+def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
+    """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
+    try:
+        return slope_readoffs(dev.tau, dev.sigma, edf)
+    except (ValueError, IndexError, AnalysisError):
+        return {}
+
+
 def _long_taus(tau: np.ndarray, count: int = 8) -> list[float]:
     t = np.asarray(tau, float)
     sel = t[t >= t.max() / 30.0]
@@ -308,6 +317,7 @@ def analyse_allan(
     bi_cutoff_hz: float | None = None,
     max_steps: int = 3,
     allow_irregular: bool = False,
+    fit_model: bool = True,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -335,6 +345,9 @@ def analyse_allan(
     max_steps : at most this many terms added by the diagnosis ladder.
     allow_irregular : analyse on the nominal τ0 even when the sample interval jitters by more
         than 10 % (otherwise an InputError).
+    fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
+        impact). With True the model is still skipped, with a note, when the τ grid has too
+        few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
 
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
@@ -383,7 +396,7 @@ def analyse_allan(
             stop_ratio=stop_ratio, min_edf=min_edf, run_diagnosis=run_diagnosis,
             spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
             bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
-            det_info=det_info, source=log.source))
+            det_info=det_info, source=log.source, fit_model=fit_model))
     cross = None
     if len(names) > 1:
         cross = cross_correlation(rates_used, log.tau0, segments=segs)
@@ -392,7 +405,7 @@ def analyse_allan(
         "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
         "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
-        "diagnosis": run_diagnosis,
+        "diagnosis": run_diagnosis, "fit": fit_model,
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
@@ -402,7 +415,7 @@ def analyse_allan(
 def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau_spec, keys,
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
-                  source) -> AxisAnalysis:
+                  source, fit_model=True) -> AxisAnalysis:
     notes: list[str] = []
     data = rate * tau0 if in_kind == "increment" else rate
 
@@ -446,8 +459,21 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         acf = autocorrelation(rate[longest[0]:longest[1]], tau0, max_samples=1 << 20,
                               max_lag=min(100_000, (longest[1] - longest[0]) // 10))
     hints = [ln.f_hz for ln in lines]
-    fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
-                        line_hints=hints)
+    fit = None
+    if fit_model:
+        try:
+            fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
+                                line_hints=hints)
+        except AnalysisError as e:
+            notes.append(f"noise model not fitted: {e}; the deviation table is complete")
+    if fit is None:
+        return AxisAnalysis(
+            axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
+            edf=edf, sigma_lo=lo, sigma_hi=hi, fit=None,
+            readoffs=_plain_readoffs(fit_dev, edf if fit_dev is table_dev
+                                     else np.asarray(fit_dev.edf, float)),
+            conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
+            acf=acf, detrend=det_info, notes=notes)
     readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None

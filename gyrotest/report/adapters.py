@@ -179,6 +179,13 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             detrend=test.opt("detrend", "none"),
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
             bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False)
+        for ax in r.axes:  # the report needs the noise model (the CLI may print a bare table)
+            if ax.fit is None:
+                from ..errors import AnalysisError
+
+                raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
+                    (n for n in ax.notes if n.startswith("noise model not fitted")),
+                    "noise model not fitted"))
         return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)

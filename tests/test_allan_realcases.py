@@ -88,3 +88,27 @@ def test_no_fit_flag(krobka_log):
     ax = doc["axes"][0]
     assert ax["fit"] is None and ax["diagnosis"] is None and len(ax["table"]) >= 5
     assert "model" not in ax["table"][0]
+
+
+# ----------------------------------------------------------------------------- intervals
+def test_default_interval_is_stable32s_and_conservative_is_opt_in(krobka_log):
+    r = run_cli(["allan", krobka_log, *RATE, "--taus", "octave", "--no-fit", "--json"])
+    ax = json.loads(r.out)["logs"][0]["axes"][0]
+    assert "Stable32" in ax["deviation"]["ci"] and "alpha_ci" not in ax["table"][0]
+    r2 = run_cli(["allan", krobka_log, *RATE, "--taus", "octave", "--no-fit", "--json",
+                  "--ci", "conservative"])
+    ax2 = json.loads(r2.out)["logs"][0]["axes"][0]
+    for a, b in zip(ax["table"], ax2["table"]):
+        assert a["sigma_lo"] == b["sigma_lo"] and a["sigma_hi"] == b["sigma_hi"]
+        assert b["edf_ci"] <= b["edf"] * (1 + 1e-12)
+        assert b["sigma_hi_ci"] >= b["sigma_hi"] * (1 - 1e-12)
+        if b["edf_ci_rule"] == "white-rate cap":
+            assert b["alpha_ci"] == 0 and b["alpha"] > 0
+    r3 = run_cli(["allan", krobka_log, *RATE, "--taus", "octave", "--ci", "wide"])
+    assert r3.code == 2
+
+
+def test_fit_states_its_weights(krobka_log):
+    r = run_cli(["allan", krobka_log, *RATE, "--no-diagnose"])
+    assert r.code == 0, r.err
+    assert "conservative EDF" in r.out

@@ -15,6 +15,7 @@ import math
 import click
 
 from ..errors import InputError
+from ..noise.analysis import FIT_WEIGHTS
 from ..noise.deviations import DEVIATION_KINDS
 from ..noise.fit import MIN_EDF
 from ..output import atomic_open
@@ -33,6 +34,7 @@ from .common import (
 )
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
+_CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 
 
 @click.command("allan")
@@ -51,6 +53,12 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
               help="Rate axes to analyse (comma-separated); default all.")
 @click.option("--confidence", type=float, default=0.683, show_default=True,
               help="Confidence of the χ² intervals.")
+@click.option("--ci", "ci_kind", type=click.Choice(["stable32", "conservative"]),
+              default="stable32", show_default=True,
+              help="Interval columns: Stable32's (identified α and its EDF, as printed by "
+                   "Stable32), or also a conservative one (EDF capped at the white-rate value "
+                   "where α > 0 came from few averages, non-increasing in τ) in its own "
+                   "alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns.")
 @click.option("--min-edf", type=float, default=MIN_EDF, show_default=True,
               help="Do not fit τ with fewer equivalent degrees of freedom.")
 @click.option("--detrend", type=click.Choice(["none", "linear"]), default="none",
@@ -76,7 +84,8 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, detrend, skip,
+def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
+            skip,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
@@ -121,7 +130,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
         impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-        fit_model=not no_fit)
+        fit_model=not no_fit, ci=ci_kind)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
@@ -164,6 +173,9 @@ def _table_rows(r):
             row = {"source": r.source, "axis": a.axis, "deviation": a.dev.kind}
             row.update({k: tab[k][i] for k in _TABLE_COLS})
             row["edf"] = tab["edf"][i]
+            for k in _CI_COLS:
+                if k in tab:
+                    row[k] = tab[k][i]
             if "model" in tab:
                 row["model"] = tab["model"][i]
                 row["residual_ci"] = tab["residual_ci"][i]
@@ -173,7 +185,8 @@ def _table_rows(r):
 
 def _write_csv(path, results) -> None:
     buf = io.StringIO()
-    cols = ["source", "axis", "deviation", *_TABLE_COLS, "edf", "model", "residual_ci", "fitted"]
+    cols = ["source", "axis", "deviation", *_TABLE_COLS, "edf", *_CI_COLS, "model",
+            "residual_ci", "fitted"]
     w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     w.writeheader()
     for r in results:
@@ -200,17 +213,28 @@ def _render(r) -> None:
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
         c.print(f"  input: {a.input_note}")
         t = Table(title=f"{d.kind.upper()} (σ in {d.unit}); CI {100 * d.confidence:.1f} % from "
-                        f"the EDF: {d.ci_method}", title_justify="left")
+                        f"the EDF of the identified α (as Stable32): {d.ci_method}",
+                  title_justify="left")
         tab = a.table()
-        cols = ["tau s", "n", "alpha", "sigma_lo", "sigma", "sigma_hi"]
+        cols = ["tau s", "n", "alpha", "edf", "sigma_lo", "sigma", "sigma_hi"]
+        cons = "edf_ci" in tab
+        if cons:
+            cols += ["alpha_ci", "edf_ci", "lo_ci", "hi_ci"]
         if "model" in tab:
             cols += ["model", "resid CI"]
         for col in cols:
             t.add_column(col, justify="right")
         for i in range(len(tab["tau"])):
             row = [fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
-                   str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i])),
+                   str(int(tab["alpha"][i])), fmt_num(float(tab["edf"][i]), 4),
+                   fmt_num(float(tab["sigma_lo"][i])),
                    fmt_num(float(tab["sigma"][i])), fmt_num(float(tab["sigma_hi"][i]))]
+            if cons:
+                rule = {"white-rate cap": " cap", "running minimum": " min"}.get(
+                    tab["edf_ci_rule"][i], "")
+                row += [str(int(tab["alpha_ci"][i])), fmt_num(float(tab["edf_ci"][i]), 4) + rule,
+                        fmt_num(float(tab["sigma_lo_ci"][i])),
+                        fmt_num(float(tab["sigma_hi_ci"][i]))]
             if "model" in tab:
                 rv = float(tab["residual_ci"][i])
                 res = "—" if not math.isfinite(rv) else f"{rv:+.1f}"
@@ -222,6 +246,9 @@ def _render(r) -> None:
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
+        if cons:
+            c.print("  *_ci: conservative interval (--ci conservative): cap = EDF capped at the "
+                    "white-rate value (α > 0 from few averages), min = running minimum in τ")
         if a.fit is not None:
             _render_fit(a)
         else:
@@ -276,7 +303,7 @@ def _render_fit(a) -> None:
     f = a.fit
     c.print(_fit_table(f, "Noise model, requested terms"))
     c.print("  ≤: upper bound only (95 % profile likelihood); ±: 1σ (sandwich covariance); "
-            "weights: χ²(EDF) likelihood of each σ̂²(τ)")
+            "weights: " + FIT_WEIGHTS)
     if a.diagnosis is not None and a.diagnosis.final is not f:
         c.print(_fit_table(a.diagnosis.final, "Diagnosed model"))
     ro = a.readoffs

@@ -43,7 +43,7 @@ from .fit import (
     conversions,
     fit_deviation,
     parse_terms,
-    robust_edf,
+    robust_edf_rules,
     slope_readoffs,
 )
 from .impact import ImpactResult, attitude_impact
@@ -67,6 +67,18 @@ PULSE_KINDS = ("counts", "updown", "counter")
 ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
 #: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
 MAX_JITTER = 0.1
+#: what the interval columns mean (``--ci``)
+CI_TEXT = {
+    "stable32": "Stable32's: χ² interval from the EDF of the noise type identified at that τ "
+                "(the alpha column), no capping",
+    "conservative": "Stable32's in sigma_lo/sigma_hi; sigma_lo_ci/sigma_hi_ci from an EDF capped "
+                    "at the white-rate value where α > 0 came from few averages and made "
+                    "non-increasing in τ (alpha_ci/edf_ci)",
+}
+#: how the fit weights the τ (always the conservative EDF), stated with every fit
+FIT_WEIGHTS = ("the fit weights each σ̂²(τ) by a χ² likelihood with a conservative EDF (capped at "
+               "the white-rate value where α > 0 came from few averages, non-increasing in τ); "
+               "the table's interval is Stable32's")
 _PER_DECADE = re.compile(r"^\s*(\d+)\s*/\s*decade\s*$")
 
 
@@ -132,6 +144,7 @@ class AxisAnalysis:
     ohdev: DeviationResult | None = None
     detrend: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
+    ci_conservative: dict[str, Any] | None = None
 
     @property
     def best_fit(self) -> NoiseFit | None:
@@ -141,12 +154,16 @@ class AxisAnalysis:
 
     def table(self) -> dict[str, np.ndarray]:
         """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
-        sigma, sigma_hi (EDF and interval after :func:`sanitize_edf`), plus model σ and the
-        residual in CI units when the table is the fitted one."""
+        sigma, sigma_hi (Stable32's interval: the identified α and its EDF), with --ci
+        conservative also alpha_ci, edf_ci, edf_ci_rule, sigma_lo_ci, sigma_hi_ci
+        (:func:`gyrotest.noise.fit.robust_edf_rules`), plus model σ and the residual in CI
+        units when the table is the fitted one."""
         d = self.dev
         out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),
                "alpha": np.asarray(d.alpha), "edf": self.edf, "sigma_lo": self.sigma_lo,
                "sigma": np.asarray(d.sigma, float), "sigma_hi": self.sigma_hi}
+        if self.ci_conservative is not None:
+            out.update(self.ci_conservative)
         if self.dev is self.fit_dev and self.fit is not None:
             out["model"] = self.fit.model_sigma()
             out["residual_ci"] = self.fit.residuals()
@@ -161,6 +178,11 @@ class AxisAnalysis:
                    "alpha": int(tab["alpha"][i]), "edf": _num(tab["edf"][i]),
                    "sigma_lo": _num(tab["sigma_lo"][i]), "sigma": _num(tab["sigma"][i]),
                    "sigma_hi": _num(tab["sigma_hi"][i])}
+            if "edf_ci" in tab:
+                row.update({"alpha_ci": int(tab["alpha_ci"][i]), "edf_ci": _num(tab["edf_ci"][i]),
+                            "edf_ci_rule": tab["edf_ci_rule"][i],
+                            "sigma_lo_ci": _num(tab["sigma_lo_ci"][i]),
+                            "sigma_hi_ci": _num(tab["sigma_hi_ci"][i])})
             if "model" in tab:
                 row["model"] = _num(tab["model"][i])
                 row["residual_ci"] = _num(tab["residual_ci"][i])
@@ -172,7 +194,10 @@ class AxisAnalysis:
             "input_kind": self.input_kind,
             "input": self.input_note,
             "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
-                          "ci_method": d.ci_method, "alpha_method": list(d.alpha_method),
+                          "ci_method": d.ci_method,
+                          "ci": CI_TEXT["stable32" if self.ci_conservative is None
+                                        else "conservative"],
+                          "fit_weights": FIT_WEIGHTS, "alpha_method": list(d.alpha_method),
                           "notes": list(d.notes)},
             "table": rows,
             "fit_deviation": self.fit_dev.kind,
@@ -318,6 +343,7 @@ def analyse_allan(
     max_steps: int = 3,
     allow_irregular: bool = False,
     fit_model: bool = True,
+    ci: str = "stable32",
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -345,6 +371,8 @@ def analyse_allan(
     max_steps : at most this many terms added by the diagnosis ladder.
     allow_irregular : analyse on the nominal τ0 even when the sample interval jitters by more
         than 10 % (otherwise an InputError).
+    ci : "stable32" (default: the interval of the identified α's EDF, as Stable32 prints it)
+        or "conservative" (adds alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns).
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
         few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
@@ -361,6 +389,8 @@ def analyse_allan(
         raise InputError(f"unknown --detrend {detrend!r}; use none or linear")
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
+    if ci not in CI_TEXT:
+        raise InputError(f"unknown --ci {ci!r}; use stable32 or conservative")
     notes: list[str] = []
     tim = log.timing
     if tim.irregular:
@@ -396,7 +426,7 @@ def analyse_allan(
             stop_ratio=stop_ratio, min_edf=min_edf, run_diagnosis=run_diagnosis,
             spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
             bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
-            det_info=det_info, source=log.source, fit_model=fit_model))
+            det_info=det_info, source=log.source, fit_model=fit_model, ci=ci))
     cross = None
     if len(names) > 1:
         cross = cross_correlation(rates_used, log.tau0, segments=segs)
@@ -405,7 +435,7 @@ def analyse_allan(
         "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
         "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
-        "diagnosis": run_diagnosis, "fit": fit_model,
+        "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci,
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
@@ -415,7 +445,7 @@ def analyse_allan(
 def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau_spec, keys,
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
-                  source, fit_model=True) -> AxisAnalysis:
+                  source, fit_model=True, ci="stable32") -> AxisAnalysis:
     notes: list[str] = []
     data = rate * tau0 if in_kind == "increment" else rate
 
@@ -434,17 +464,24 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         fit_dev = deviation("oadev", [float(t) for t in table_dev.tau])
         notes.append(f"the IEEE 952 noise model is the Allan variance: fitted to an OADEV on the "
                      f"same τ; the table shows {dev.upper()}")
-    edf, edf_notes = robust_edf(table_dev)
+    edf = np.asarray(table_dev.edf, float).copy()
     lo, hi = np.asarray(table_dev.sigma_lo, float).copy(), np.asarray(table_dev.sigma_hi,
                                                                       float).copy()
-    changed = np.flatnonzero(edf != np.asarray(table_dev.edf, float))
-    if changed.size:
-        from .edf import chi2_interval
+    ci_cols = None
+    if ci == "conservative":
+        edf_c, rules, edf_notes = robust_edf_rules(table_dev)
+        lo_c, hi_c = lo.copy(), hi.copy()
+        changed = np.flatnonzero(edf_c != edf)
+        if changed.size:
+            from .edf import chi2_interval
 
-        lo[changed], hi[changed] = chi2_interval(table_dev.sigma[changed], edf[changed],
-                                                 confidence)
-        if table_dev is not fit_dev:
+            lo_c[changed], hi_c[changed] = chi2_interval(table_dev.sigma[changed],
+                                                         edf_c[changed], confidence)
             notes.extend(edf_notes)
+        alpha_c = np.where(np.array([r == "white-rate cap" for r in rules]), 0,
+                           np.asarray(table_dev.alpha, int))
+        ci_cols = {"alpha_ci": alpha_c, "edf_ci": edf_c, "edf_ci_rule": rules,
+                   "sigma_lo_ci": lo_c, "sigma_hi_ci": hi_c}
     psd = None
     lines: list[SpectralLine] = []
     acf = None
@@ -473,7 +510,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
             readoffs=_plain_readoffs(fit_dev, edf if fit_dev is table_dev
                                      else np.asarray(fit_dev.edf, float)),
             conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
-            acf=acf, detrend=det_info, notes=notes)
+            acf=acf, detrend=det_info, notes=notes, ci_conservative=ci_cols)
     readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None
@@ -499,4 +536,5 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
         conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
         lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
-        notes=notes + list(fit.notes))
+        notes=notes + [f"{n} (fit weights only)" if n.startswith("EDF ") else n
+                       for n in fit.notes], ci_conservative=ci_cols)

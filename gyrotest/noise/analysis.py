@@ -285,6 +285,26 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                          "longest τ)"}
 
 
+def _fold_filters(fit, diag, warns, tau0):
+    """Markov terms with T_c < τ0 are the sensor's output filter: fold them into N (N_eq, see
+    :mod:`gyrotest.noise.filtered`) in the requested and the diagnosed model, and drop the
+    warnings about a hump screening the white noise (KROBKA-M1, -M5), which the filter note
+    replaces. Returns (fit, diagnosis, warnings, info or None)."""
+    from .filtered import fold_filter
+
+    final_is_fit = diag is not None and diag.final is fit
+    fit, info = fold_filter(fit, tau0)
+    if diag is not None:
+        if final_is_fit:
+            diag.final = fit
+        else:
+            diag.final, info_d = fold_filter(diag.final, tau0)
+            info = info_d or info
+    if info is not None:
+        warns = [w for w in warns if w.code not in ("KROBKA-M1", "KROBKA-M5")]
+    return fit, diag, warns, info
+
+
 def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
     """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
     try:
@@ -524,6 +544,9 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                 notes.append(f"trend check skipped: {e}")
     warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
                           diagnosis=diag, record_s=record_s)
+    fit, diag, warns, filt = _fold_filters(fit, diag, warns, tau0)
+    if filt is not None:
+        notes.append(filt["note"])
     best = diag.final if diag is not None else fit
     impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
                              record_s=record_s)

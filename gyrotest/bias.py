@@ -141,6 +141,7 @@ class BiasResult:
     site: Site | None
     mean_temperature_c: float | None = None
     notes: list[str] = field(default_factory=list)
+    outliers: dict | None = None
 
     @property
     def sigma_dph(self) -> float:
@@ -162,6 +163,7 @@ class BiasResult:
             "uncertainty": self.uncertainty.to_dict(),
             "site": self.site.to_dict() if self.site else None,
             "mean_temperature_c": self.mean_temperature_c,
+            "outliers": self.outliers,
             "notes": self.notes,
         }
 
@@ -173,10 +175,13 @@ def _mean_over_segments(x: np.ndarray, segs: list[tuple[int, int]]) -> float:
 
 
 def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
-                  earth_rate: bool = True, label: str | None = None) -> BiasResult:
+                  earth_rate: bool = True, label: str | None = None,
+                  outliers: str = "flag") -> BiasResult:
     """D_F of a static run: mean rate after ``skip_s`` minus the earth-rate component along
     the IA (from ``log.site``; without a site the earth rate is not removed and a note says
-    so). Uncertainty from :func:`mean_uncertainty`.
+    so). Uncertainty from :func:`mean_uncertainty`. Spikes are detected
+    (:mod:`gyrotest.noise.outliers`) and, by ``outliers``, flagged in a note ("flag"), replaced
+    by their running median ("remove") or clipped ("robust").
     """
     axis = axis or log.axes[0]
     if axis not in log.rates:
@@ -190,8 +195,9 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
                             f"need at least {MIN_RECORD_SAMPLES}")
     rate = part.rates[axis]
     segs = part.segments
-    mean = _mean_over_segments(rate, segs)
     notes: list[str] = []
+    rate, out_info = _treat_outliers(rate, part, segs, axis, outliers, notes)
+    mean = _mean_over_segments(rate, segs)
     if len(segs) > 1:
         notes.append(f"{len(segs)} contiguous segments (gaps not bridged); mean and Allan "
                      "deviation pooled over segments")
@@ -212,7 +218,30 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
         skip_s=skip_s, duration_s=part.duration_s, mean_output_dph=mean,
         earth_rate_ia_dph=er, bias_dph=mean - (er or 0.0), uncertainty=unc, site=log.site,
         mean_temperature_c=float(np.mean(temps)) if temps else None, notes=notes,
+        outliers=out_info,
     )
+
+
+def _treat_outliers(rate, part: GyroLog, segs, axis: str, mode: str, notes: list[str]):
+    """Spike detection for the bias (never silent): (rate after ``mode``, report dict)."""
+    from .noise.outliers import apply_outliers, detect_outliers
+
+    rep = detect_outliers(rate, part.tau0, t0=float(part.t[0]) if part.n else 0.0,
+                          channel=axis, segments=segs)
+    info = rep.to_dict()
+    info["mode"] = mode
+    if rep.found:
+        raw_mean = _mean_over_segments(rate, segs)
+        rate = apply_outliers(rate, rep, mode, segments=segs)
+        shift = _mean_over_segments(rate, segs) - raw_mean if mode != "flag" else None
+        what = {"flag": "the mean includes them (--outliers remove or robust to treat them)",
+                "remove": f"each replaced by its running median (--outliers remove): the mean "
+                          f"moved by {shift:+.4g} deg/h" if shift is not None else "",
+                "robust": f"each clipped to the threshold (--outliers robust): the mean moved "
+                          f"by {shift:+.4g} deg/h" if shift is not None else ""}[mode]
+        notes.append(f"spikes: {rep.summary()}; {what}")
+        info["mean_shift_dph"] = shift
+    return rate, info
 
 
 # ----------------------------------------------------------------------------- repeatability
@@ -485,7 +514,7 @@ def parse_positions(positions: str | list[str] | None, n_logs: int) -> list[str]
 
 def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 0.0,
                  axis: str | None = None, positions: str | list[str] | None = None,
-                 earth_rate: bool = True) -> BiasAnalysis:
+                 earth_rate: bool = True, outliers: str = "flag") -> BiasAnalysis:
     """The whole bias analysis of ``gyrotest bias`` (no printing, no files).
 
     * ``positions`` (one IA direction per log, :func:`parse_positions`) sets each log's IA;
@@ -522,11 +551,12 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
             for label, part in split_positions(g.skip(skip_s), settle_s):
                 parts.append(part)
                 runs.append(estimate_bias(part, axis=axis, earth_rate=False,
-                                          label=f"{label} ({g.source})"))
+                                          label=f"{label} ({g.source})", outliers=outliers))
     else:
         for g in logs:
             parts.append(g)
-            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate))
+            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate,
+                                      outliers=outliers))
     sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
              for r in runs if r.site is not None}
     multi = rep = None

@@ -64,6 +64,11 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @click.option("--detrend", type=click.Choice(["none", "linear"]), default="none",
               show_default=True, help="Remove a least-squares rate ramp first.")
 @click.option("--skip", default="0", show_default=True, help="Warm-up trim, e.g. 30min.")
+@click.option("--outliers", "outliers", type=click.Choice(["flag", "remove", "robust"]),
+              default="flag", show_default=True,
+              help="Spikes (Hampel filter, robust scale): flag = warn with their times and "
+                   "analyse as recorded; remove = replace each by its running median; robust = "
+                   "clip each to the threshold.")
 @click.option("--vehicle-rate", "vehicle_rates", multiple=True,
               help="Strapdown vehicle rate for the impact prediction, e.g. 10deg/s (repeatable).")
 @click.option("--horizon", default="1h", show_default=True,
@@ -85,7 +90,7 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
-            skip,
+            skip, outliers,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
@@ -130,7 +135,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
         impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-        fit_model=not no_fit, ci=ci_kind)
+        fit_model=not no_fit, ci=ci_kind, outliers=outliers)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:

@@ -32,11 +32,16 @@ from .common import (
 @click.option("--settle", default="0", show_default=True,
               help="Time dropped after every position change in a log with a position column.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
+@click.option("--outliers", type=click.Choice(["flag", "remove", "robust"]), default="flag",
+              show_default=True,
+              help="Spikes (Hampel filter): flag = warn with their times, mean as recorded; "
+                   "remove = replace each by its running median; robust = clip each.")
 @plot_option("Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_json, ingest_opts):
+def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_path, as_json,
+            ingest_opts):
     """Bias D_F (deg/h) of static runs, with an uncertainty honest for correlated noise.
 
     D_F = mean(rate) − earth-rate component along the IA (from --latitude and --ia or the
@@ -62,7 +67,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, as_js
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
     ba = analyse_bias(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis, positions=pos_list,
-                      earth_rate=not no_earth_rate)
+                      earth_rate=not no_earth_rate, outliers=outliers)
     if plot_path:
         from ..bias_plot import plot_bias
 

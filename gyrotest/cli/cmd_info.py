@@ -5,7 +5,16 @@ from __future__ import annotations
 import click
 
 from ..units import format_duration
-from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    load_log,
+    warn,
+    with_ingest,
+)
 
 
 @click.command("info")
@@ -14,7 +23,10 @@ from .common import console, emit_json, fmt_num, ingest_options, json_option, lo
 @json_option
 @with_ingest
 def command(log, as_json, ingest_opts):
-    """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps.
+    """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps, spikes.
+
+    Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
+    reported with their times (warning on stderr; "outliers" in --json).
 
     LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
     for CSV on stdin. Shows which column was used for what.
@@ -23,8 +35,17 @@ def command(log, as_json, ingest_opts):
     Example:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
+    from ..noise.outliers import detect_outliers
+
     g = load_log(log, ingest_opts, announce=not as_json)
     summary = g.summary()
+    reps = [detect_outliers(g.rates[a], g.tau0, t0=float(g.t[0]) if g.n else 0.0, channel=a,
+                            segments=g.segments, unit="deg/h") for a in g.axes if g.n >= 3]
+    summary["outliers"] = {r.channel: r.to_dict() for r in reps}
+    for r in reps:
+        if r.found:
+            warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
+                 "robust to treat them)")
     if as_json:
         emit_json(summary)
         return

@@ -145,6 +145,7 @@ class AxisAnalysis:
     detrend: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
     ci_conservative: dict[str, Any] | None = None
+    outliers: dict[str, Any] | None = None
 
     @property
     def best_fit(self) -> NoiseFit | None:
@@ -217,6 +218,7 @@ class AxisAnalysis:
                     "tau": self.ohdev.tau.tolist(), "sigma": self.ohdev.sigma.tolist()},
             },
             "detrend": self.detrend,
+            "outliers": self.outliers,
             "notes": list(self.notes),
         }
 
@@ -283,6 +285,35 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                  "note": "a least-squares straight line was removed from the rate before the "
                          "analysis (it also removes part of any rate random walk at the "
                          "longest τ)"}
+
+
+def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
+    """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
+    None, the rate after the ``mode`` treatment)."""
+    from .outliers import apply_outliers, detect_outliers
+
+    rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
+                          segments=segs)
+    info = rep.to_dict()
+    info["mode"] = mode
+    warn = None
+    if rep.found:
+        what = {"flag": "analysed as recorded (--outliers remove or robust to treat them)",
+                "remove": "each replaced by its running median before the analysis "
+                          "(--outliers remove)",
+                "robust": "each clipped to the threshold before the analysis "
+                          "(--outliers robust)"}[mode]
+        warn = KrobkaWarning(
+            code="OUTLIERS", title="spikes in the rate",
+            message=f"{rep.summary()}; {what}",
+            reason="isolated spikes (data link, ADC, shock) are not gyro noise: one 40σ sample "
+                   "in 10^6 raises the short-τ Allan deviation and N; detected with a Hampel "
+                   "filter (running median, robust scale; Pearson, IEEE Trans. Control Syst. "
+                   "Technol. 10, 2002)",
+            evidence={"n_outliers": rep.n_outliers, "n_events": len(rep.events),
+                      "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
+        rate = apply_outliers(rate, rep, mode, segments=segs)
+    return info, warn, rate
 
 
 def _fold_filters(fit, diag, warns, tau0):
@@ -364,6 +395,7 @@ def analyse_allan(
     allow_irregular: bool = False,
     fit_model: bool = True,
     ci: str = "stable32",
+    outliers: str = "flag",
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -393,6 +425,9 @@ def analyse_allan(
         than 10 % (otherwise an InputError).
     ci : "stable32" (default: the interval of the identified α's EDF, as Stable32 prints it)
         or "conservative" (adds alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns).
+    outliers : spike handling (:mod:`gyrotest.noise.outliers`): "flag" (default: detect and
+        warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
+        its running median) or "robust" (each spike clipped to the threshold). Never silent.
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
         few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
@@ -411,6 +446,10 @@ def analyse_allan(
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
     if ci not in CI_TEXT:
         raise InputError(f"unknown --ci {ci!r}; use stable32 or conservative")
+    from .outliers import OUTLIER_MODES
+
+    if outliers not in OUTLIER_MODES:
+        raise InputError(f"unknown --outliers {outliers!r}; use flag, remove or robust")
     notes: list[str] = []
     tim = log.timing
     if tim.irregular:
@@ -437,6 +476,7 @@ def analyse_allan(
     for name in names:
         rate = np.asarray(log.rates[name], dtype=np.float64)
         det_info = None
+        out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
         if detrend == "linear":
             rate, det_info = _detrend_linear(rate, log.t, segs)
         rates_used[name] = rate
@@ -447,6 +487,9 @@ def analyse_allan(
             spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
             bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
             det_info=det_info, source=log.source, fit_model=fit_model, ci=ci))
+        results[-1].outliers = out_info
+        if out_warn is not None:
+            results[-1].warnings.insert(0, out_warn)
     cross = None
     if len(names) > 1:
         cross = cross_correlation(rates_used, log.tau0, segments=segs)
@@ -455,7 +498,7 @@ def analyse_allan(
         "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
         "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
-        "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci,
+        "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci, "outliers": outliers,
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,

@@ -112,3 +112,86 @@ def test_fit_states_its_weights(krobka_log):
     r = run_cli(["allan", krobka_log, *RATE, "--no-diagnose"])
     assert r.code == 0, r.err
     assert "conservative EDF" in r.out
+
+
+# ----------------------------------------------------------------------------- environment
+@pytest.fixture(scope="module")
+def diurnal(tmp_path_factory):
+    """3 days at 1 Hz: N = 0.005 deg/√h, flicker B = 0.003 deg/h, no RRW, and a 24 h sinusoid
+    of 0.03 deg/h; the drift model from 'gyrotest model fit --terms sin'."""
+    d = tmp_path_factory.mktemp("diurnal")
+    sc = {"record": {"sample_rate_hz": 1.0, "duration_s": 3 * 86400},
+          "gyro": {"output": "rate", "rate_unit": "deg/h",
+                   "noise": {"N": 0.005, "B": 0.003,
+                             "sinusoid": [{"amplitude_dph": 0.03, "freq_hz": 1 / 86400}]}}}
+    log = str(write_log(simulate(sc, seed=3), d / "diurnal.csv").logs[0])
+    m = d / "m.json"
+    r = run_cli(["model", "fit", log, *RATE, "--terms", "sin", "-o", m])
+    assert r.code == 0, r.err
+    return log, str(m)
+
+
+def _terms(ax):
+    f = (ax["diagnosis"] or {}).get("final_fit") or ax["fit"]
+    return {t["key"]: t for t in f["terms"]}
+
+
+def test_diurnal_without_model_gets_the_long_period_advice(diurnal):
+    log, _ = diurnal
+    r = run_cli(["allan", log, *RATE, "--json"])
+    assert r.code == 0, r.err
+    ax = json.loads(r.out)["logs"][0]["axes"][0]
+    w = {x["code"]: x for x in ax["warnings"]}
+    assert "KROBKA-M5" in w
+    m5 = w["KROBKA-M5"]["message"]
+    assert "higher output rate cannot move it" in m5 and "--model m.json" in m5
+    assert "slow hump" in w["KROBKA-M5"]["title"]
+
+
+@pytest.mark.parametrize("how", [["--model"], ["--detrend", "sine:24h"]])
+def test_diurnal_removed_first_gives_K_as_a_bound(diurnal, how):
+    log, m = diurnal
+    args = how + [m] if how == ["--model"] else how
+    r = run_cli(["allan", log, *RATE, "--json", *args])
+    assert r.code == 0, r.err
+    doc = json.loads(r.out)["logs"][0]
+    ax = doc["axes"][0]
+    t = _terms(ax)
+    assert t["K"]["status"] == "upper bound"  # the truth K = 0 lies inside the bound
+    assert t["N"]["status"] == "identified"
+    assert t["N"]["params"]["N"] == pytest.approx(0.005, rel=0.03)
+    b = t["B"]  # flicker B = 0.003 deg/h is near the white-noise floor: a bound or a value
+    assert (b["upper_95"] >= 0.003 * 0.9 if b["status"] == "upper bound"
+            else b["params"]["B"] == pytest.approx(0.003, rel=0.5))
+    assert "KROBKA-M5" not in {w["code"] for w in ax["warnings"]}
+    if how == ["--model"]:
+        assert doc["settings"]["model"]["terms"] == ["sin"]
+        assert any("deterministic model removed" in n for n in doc["notes"])
+    else:
+        assert ax["detrend"]["amplitude_dph"] == pytest.approx(0.03, rel=0.15)
+
+
+@pytest.mark.parametrize("spec,frag", [("sine:", "--detrend"), ("cubic", "unknown --detrend"),
+                                       ("sine:-2h", "--detrend")])
+def test_bad_detrend(krobka_log, spec, frag):
+    run_cli(["allan", krobka_log, *RATE, "--detrend", spec]).assert_clean_error(frag)
+
+
+def test_missing_model_file(krobka_log):
+    run_cli(["allan", krobka_log, *RATE, "--model", "nope.json"]).assert_clean_error("nope.json")
+
+
+def test_quadratic_detrend_removes_a_parabola(tmp_path):
+    import numpy as np
+
+    rng = np.random.default_rng(8)
+    n = 36_000
+    t = np.arange(n) * 0.1
+    rate = 0.6 / np.sqrt(0.1) * rng.standard_normal(n) + 40.0 * ((t - t.mean()) / 1800) ** 2
+    f = tmp_path / "q.csv"
+    np.savetxt(f, np.column_stack([t, rate]), delimiter=",", header="t,rate", comments="")
+    r = run_cli(["allan", str(f), *RATE, "--json", "--no-diagnose", "--detrend", "quadratic"])
+    ax = json.loads(r.out)["logs"][0]["axes"][0]
+    assert ax["detrend"]["method"] == "quadratic"
+    assert ax["detrend"]["coefficients_dph"]["quadratic"] == pytest.approx(40.0, rel=0.05)
+    assert "KROBKA-M7" not in {w["code"] for w in ax["warnings"]}

@@ -26,6 +26,7 @@ from .common import (
     fmt_num,
     ingest_options,
     json_option,
+    load_for_terms,
     load_logs,
     note,
     plot_option,
@@ -61,8 +62,13 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
                    "alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns.")
 @click.option("--min-edf", type=float, default=MIN_EDF, show_default=True,
               help="Do not fit τ with fewer equivalent degrees of freedom.")
-@click.option("--detrend", type=click.Choice(["none", "linear"]), default="none",
-              show_default=True, help="Remove a least-squares rate ramp first.")
+@click.option("--detrend", default="none", show_default=True,
+              help="Remove a least-squares trend first: none, linear, quadratic, or sine:PERIOD "
+                   "(e.g. sine:24h for a diurnal term).")
+@click.option("--model", "model_path", type=click.Path(dir_okay=False), default=None,
+              help="Drift model from 'gyrotest model fit -o m.json' (or thermal-fit/mag-fit): "
+                   "its deterministic drift is removed before the noise analysis, as "
+                   "'gyrotest compensate' does.")
 @click.option("--skip", default="0", show_default=True, help="Warm-up trim, e.g. 30min.")
 @click.option("--outliers", "outliers", type=click.Choice(["flag", "remove", "robust"]),
               default="flag", show_default=True,
@@ -90,7 +96,7 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
-            skip, outliers,
+            skip, outliers, model_path,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
@@ -112,7 +118,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
       gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
     """
-    from ..noise.analysis import allan_document, analyse_allan, parse_taus
+    from ..noise.analysis import allan_document, analyse_allan, parse_detrend, parse_taus
     from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
@@ -129,13 +135,22 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
-    glogs = load_logs(logs, ingest_opts, announce=not as_json)
+    parse_detrend(detrend)
+    env_model = None
+    if model_path:
+        from ..envmodel.model import EnvModel
+
+        env_model = EnvModel.load(model_path)
+        glogs = [load_for_terms(p, ingest_opts, env_model.specs, announce=not as_json)
+                 for p in logs]
+    else:
+        glogs = load_logs(logs, ingest_opts, announce=not as_json)
     results = [analyse_allan(
         g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
         impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-        fit_model=not no_fit, ci=ci_kind, outliers=outliers)
+        fit_model=not no_fit, ci=ci_kind, outliers=outliers, env_model=env_model)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:

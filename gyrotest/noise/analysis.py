@@ -272,6 +272,59 @@ class AllanAnalysis:
         }
 
 
+def parse_detrend(spec: str | None) -> tuple[str, float | None]:
+    """``none``, ``linear``, ``quadratic`` or ``sine:PERIOD`` (e.g. ``sine:24h``) →
+    (method, period s or None)."""
+    if spec is None:
+        return "none", None
+    s = str(spec).strip().lower()
+    if s in ("none", "linear", "quadratic"):
+        return s, None
+    if s.startswith("sine:"):
+        period = parse_duration(s[5:], what="--detrend sine:PERIOD")
+        if period <= 0:
+            raise InputError(f"--detrend {spec}: the period must be > 0, e.g. sine:24h")
+        return "sine", float(period)
+    raise InputError(f"unknown --detrend {spec!r}; use none, linear, quadratic or sine:PERIOD "
+                     "(e.g. sine:24h)")
+
+
+def _detrend(rate: np.ndarray, t: np.ndarray, segs, spec: str) -> tuple[np.ndarray, dict]:
+    """Remove a least-squares trend (:func:`parse_detrend`) over all gap-free samples; the
+    mean is kept."""
+    method, period = parse_detrend(spec)
+    if method == "linear":
+        return _detrend_linear(rate, t, segs)
+    idx = np.concatenate([np.arange(a, b) for a, b in segs])
+    tt = t[idx]
+    tm = float(tt.mean())
+    half = max(float(tt.max() - tt.min()) / 2.0, 1e-12)
+    u = (t - tm) / half
+    if method == "quadratic":
+        cols = [u, u * u]
+        names = ["linear", "quadratic"]
+        note = ("a least-squares quadratic a + b·t + c·t² was removed from the rate before the "
+                "analysis (it also removes part of any rate random walk at the longest τ)")
+    else:
+        w = 2 * np.pi / period
+        cols = [np.cos(w * (t - tm)), np.sin(w * (t - tm))]
+        names = ["cos", "sin"]
+        note = (f"a least-squares sinusoid of period {format_duration(period)} was removed from "
+                "the rate before the analysis")
+    X = np.column_stack([np.ones(t.size)] + cols)
+    coef, *_ = np.linalg.lstsq(X[idx], rate[idx], rcond=None)
+    trend = X[:, 1:] @ coef[1:]
+    info: dict[str, Any] = {"method": method, "note": note,
+                            "coefficients_dph": dict(zip(names, map(float, coef[1:])))}
+    if method == "sine":
+        info["period_s"] = period
+        info["amplitude_dph"] = float(np.hypot(coef[1], coef[2]))
+    else:
+        info["slope_dph_per_s"] = float(coef[1] / half)
+        info["R_removed_deg_h_per_h"] = float(coef[1] / half * 3600.0)
+    return rate - trend, info
+
+
 def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, dict[str, Any]]:
     """Remove the least-squares line a + b·t (over all gap-free samples; the mean is kept)."""
     idx = np.concatenate([np.arange(a, b) for a, b in segs])
@@ -396,6 +449,7 @@ def analyse_allan(
     fit_model: bool = True,
     ci: str = "stable32",
     outliers: str = "flag",
+    env_model=None,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -415,7 +469,11 @@ def analyse_allan(
     confidence : of the χ² intervals (0.683 as Stable32).
     stop_ratio : max τ = T/stop_ratio for generated grids (default Stable32's per deviation).
     min_edf : fit floor (τ with fewer EDF are shown, not fitted).
-    detrend : None/"none" or "linear" (remove a least-squares ramp first).
+    detrend : None/"none", "linear", "quadratic" or "sine:PERIOD" (remove a least-squares
+        trend or sinusoid first; :func:`parse_detrend`).
+    env_model : a :class:`gyrotest.envmodel.model.EnvModel` (from ``gyrotest model fit -o``):
+        its drift (without the constant bias) is subtracted from its axis before everything
+        else, as ``gyrotest compensate`` does, so the noise fit sees noise only.
     run_diagnosis, spectral, trend_check : switch the diagnosis, the PSD/ACF and the
         Allan–Krobka/Hadamard trend comparison.
     impact_horizon_s : time at which σ_att is reported (default 1 h).
@@ -440,8 +498,7 @@ def analyse_allan(
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)
     keys = parse_terms(terms)
-    if detrend not in (None, "none", "linear"):
-        raise InputError(f"unknown --detrend {detrend!r}; use none or linear")
+    parse_detrend(detrend)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
     if ci not in CI_TEXT:
@@ -473,12 +530,27 @@ def analyse_allan(
             raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
     results: list[AxisAnalysis] = []
     rates_used: dict[str, np.ndarray] = {}
+    model_info = model_pred = None
+    if env_model is not None:
+        model_pred = np.asarray(env_model.predict(log, include_bias=False), float)
+        m_axis = env_model.axis if env_model.axis in log.rates else log.axes[0]
+        labels = [sp.label for sp in env_model.specs if sp.key != "bias"]
+        model_info = {"axis": m_axis, "terms": labels,
+                      "drift_rms_dph": float(np.sqrt(np.mean((model_pred - model_pred.mean())
+                                                             ** 2))),
+                      "drift_p2p_dph": float(np.ptp(model_pred))}
+        notes.append(f"deterministic model removed from axis {m_axis} before the analysis "
+                     f"({', '.join(labels) or 'bias only'}; drift RMS "
+                     f"{model_info['drift_rms_dph']:.4g} deg/h, peak-to-peak "
+                     f"{model_info['drift_p2p_dph']:.4g} deg/h)")
     for name in names:
         rate = np.asarray(log.rates[name], dtype=np.float64)
         det_info = None
         out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
-        if detrend == "linear":
-            rate, det_info = _detrend_linear(rate, log.t, segs)
+        if model_info is not None and name == model_info["axis"]:
+            rate = rate - model_pred
+        if detrend not in (None, "none"):
+            rate, det_info = _detrend(rate, log.t, segs, detrend)
         rates_used[name] = rate
         results.append(_analyse_axis(
             name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev, tau_spec=tau_spec,
@@ -496,7 +568,7 @@ def analyse_allan(
     settings = {
         "deviation": dev, "taus": tau_spec if isinstance(tau_spec, str) else list(tau_spec),
         "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
-        "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
+        "detrend": detrend or "none", "model": model_info, "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
         "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci, "outliers": outliers,
     }

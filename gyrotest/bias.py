@@ -47,9 +47,16 @@ class MeanUncertainty:
     N_dph_rt_s: float = 0.0  # fitted white-rate coefficient, (deg/h)·√s
     flicker_level_dph: float = 0.0  # fitted flat Allan level, deg/h
     K_dph_per_rt_s: float = 0.0  # fitted rate-random-walk coefficient, (deg/h)/√s
+    model_terms: list[str] = field(default_factory=list)  # terms of the model used for ±1σ
+    model_chi2_dof: float = math.nan
+    default_rejected: str | None = None  # why the default Q,N,B,K model was not used
 
     def to_dict(self) -> dict:
         return {
+            "model_terms": list(self.model_terms),
+            "model_chi2_per_dof": None if not math.isfinite(self.model_chi2_dof)
+            else self.model_chi2_dof,
+            "default_model_rejected": self.default_rejected,
             "sigma_mean_dph": self.sigma_dph,
             "record_s": self.record_s,
             "method": self.method,
@@ -96,6 +103,25 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
         raise AnalysisError("the rate is constant: the bias uncertainty cannot be estimated "
                             "(quantised to a single level? check the scale factor)")
     fit = fit_deviation(dev, terms="Q,N,B,K")
+    rejected = None
+    if not fit.consistent:
+        # the default model misfits: take the model the diagnosis accepts (as gyrotest allan
+        # does), not coefficients that absorbed the missing noise
+        from .noise.diagnose import diagnose
+
+        try:
+            final = diagnose(fit).final
+        except AnalysisError:
+            final = fit
+        if final is not fit and final.chi2_dof < fit.chi2_dof:
+            rejected = (f"the default noise model Q,N,B,K does not fit this record (χ²/dof "
+                        f"{fit.chi2_dof:.3g}); ±1σ from the diagnosed model "
+                        f"{','.join(final.requested)} (χ²/dof {final.chi2_dof:.3g})")
+            fit = final
+        else:
+            rejected = (f"the noise model Q,N,B,K does not fit this record (χ²/dof "
+                        f"{fit.chi2_dof:.3g}) and the diagnosis found no better one: treat ±1σ "
+                        "as approximate")
     var_T = float(fit.predict_avar([T])[0][0])
     var_bound = float(fit.predict_avar([T], conservative=True)[0][0])
     white_floor = float(dev.sigma[ok][0] ** 2 * dev.tau[ok][0] / T)
@@ -112,14 +138,17 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     par = {t.key: t.params.get(t.key, 0.0) for t in fit.terms}
     return MeanUncertainty(
         sigma_dph=math.sqrt(var_T), record_s=T,
-        method="Allan variance at the record length, σ_A(T), from the joint Q/N/B/K noise-model "
-               "fit of the overlapping Allan deviation (10 τ per decade up to T/4)",
+        method="Allan variance at the record length, σ_A(T), from the joint noise-model fit "
+               f"({','.join(fit.requested)}; Q,N,B,K unless it misfits, then the diagnosed "
+               "model) of the overlapping Allan deviation (10 τ per decade up to T/4)",
         naive_sigma_dph=naive,
         bound_sigma_dph=math.sqrt(var_bound),
         bounded_terms=[t.key for t in fit.terms if t.status != "identified"],
         N_dph_rt_s=par.get("N", 0.0) * 60.0,
         flicker_level_dph=par.get("B", 0.0) * math.sqrt(2 * math.log(2) / math.pi),
         K_dph_per_rt_s=par.get("K", 0.0) / 60.0,
+        model_terms=list(fit.requested), model_chi2_dof=float(fit.chi2_dof),
+        default_rejected=rejected,
     )
 
 
@@ -142,6 +171,7 @@ class BiasResult:
     mean_temperature_c: float | None = None
     notes: list[str] = field(default_factory=list)
     outliers: dict | None = None
+    warmup: dict | None = None
 
     @property
     def sigma_dph(self) -> float:
@@ -164,6 +194,7 @@ class BiasResult:
             "site": self.site.to_dict() if self.site else None,
             "mean_temperature_c": self.mean_temperature_c,
             "outliers": self.outliers,
+            "warmup": self.warmup,
             "notes": self.notes,
         }
 
@@ -207,6 +238,15 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
     elif earth_rate:
         notes.append("no site given (--latitude/--ia): earth rate NOT removed; D_F includes it")
     unc = mean_uncertainty(rate, part.tau0, segs)
+    if unc.default_rejected:
+        notes.append(unc.default_rejected)
+    warm = None
+    if skip_s <= 0 and len(segs) == 1:
+        from .warmup import detect_warmup
+
+        warm = detect_warmup(rate, part.tau0)
+        if warm is not None and warm.detected:
+            notes.append(warm.message())
     if unc.bound_sigma_dph > 3 * unc.sigma_dph and unc.bounded_terms:
         notes.append(
             f"noise term(s) {', '.join(unc.bounded_terms)} only bounded by this record: if they "
@@ -218,7 +258,7 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
         skip_s=skip_s, duration_s=part.duration_s, mean_output_dph=mean,
         earth_rate_ia_dph=er, bias_dph=mean - (er or 0.0), uncertainty=unc, site=log.site,
         mean_temperature_c=float(np.mean(temps)) if temps else None, notes=notes,
-        outliers=out_info,
+        outliers=out_info, warmup=None if warm is None else warm.to_dict(),
     )
 
 

@@ -47,9 +47,16 @@ class MeanUncertainty:
     N_dph_rt_s: float = 0.0  # fitted white-rate coefficient, (deg/h)·√s
     flicker_level_dph: float = 0.0  # fitted flat Allan level, deg/h
     K_dph_per_rt_s: float = 0.0  # fitted rate-random-walk coefficient, (deg/h)/√s
+    model_terms: list[str] = field(default_factory=list)  # terms of the model used for ±1σ
+    model_chi2_dof: float = math.nan
+    default_rejected: str | None = None  # why the default Q,N,B,K model was not used
 
     def to_dict(self) -> dict:
         return {
+            "model_terms": list(self.model_terms),
+            "model_chi2_per_dof": None if not math.isfinite(self.model_chi2_dof)
+            else self.model_chi2_dof,
+            "default_model_rejected": self.default_rejected,
             "sigma_mean_dph": self.sigma_dph,
             "record_s": self.record_s,
             "method": self.method,
@@ -96,6 +103,25 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
         raise AnalysisError("the rate is constant: the bias uncertainty cannot be estimated "
                             "(quantised to a single level? check the scale factor)")
     fit = fit_deviation(dev, terms="Q,N,B,K")
+    rejected = None
+    if not fit.consistent:
+        # the default model misfits: take the model the diagnosis accepts (as gyrotest allan
+        # does), not coefficients that absorbed the missing noise
+        from .noise.diagnose import diagnose
+
+        try:
+            final = diagnose(fit).final
+        except AnalysisError:
+            final = fit
+        if final is not fit and final.chi2_dof < fit.chi2_dof:
+            rejected = (f"the default noise model Q,N,B,K does not fit this record (χ²/dof "
+                        f"{fit.chi2_dof:.3g}); ±1σ from the diagnosed model "
+                        f"{','.join(final.requested)} (χ²/dof {final.chi2_dof:.3g})")
+            fit = final
+        else:
+            rejected = (f"the noise model Q,N,B,K does not fit this record (χ²/dof "
+                        f"{fit.chi2_dof:.3g}) and the diagnosis found no better one: treat ±1σ "
+                        "as approximate")
     var_T = float(fit.predict_avar([T])[0][0])
     var_bound = float(fit.predict_avar([T], conservative=True)[0][0])
     white_floor = float(dev.sigma[ok][0] ** 2 * dev.tau[ok][0] / T)
@@ -112,14 +138,17 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     par = {t.key: t.params.get(t.key, 0.0) for t in fit.terms}
     return MeanUncertainty(
         sigma_dph=math.sqrt(var_T), record_s=T,
-        method="Allan variance at the record length, σ_A(T), from the joint Q/N/B/K noise-model "
-               "fit of the overlapping Allan deviation (10 τ per decade up to T/4)",
+        method="Allan variance at the record length, σ_A(T), from the joint noise-model fit "
+               f"({','.join(fit.requested)}; Q,N,B,K unless it misfits, then the diagnosed "
+               "model) of the overlapping Allan deviation (10 τ per decade up to T/4)",
         naive_sigma_dph=naive,
         bound_sigma_dph=math.sqrt(var_bound),
         bounded_terms=[t.key for t in fit.terms if t.status != "identified"],
         N_dph_rt_s=par.get("N", 0.0) * 60.0,
         flicker_level_dph=par.get("B", 0.0) * math.sqrt(2 * math.log(2) / math.pi),
         K_dph_per_rt_s=par.get("K", 0.0) / 60.0,
+        model_terms=list(fit.requested), model_chi2_dof=float(fit.chi2_dof),
+        default_rejected=rejected,
     )
 
 
@@ -141,6 +170,8 @@ class BiasResult:
     site: Site | None
     mean_temperature_c: float | None = None
     notes: list[str] = field(default_factory=list)
+    outliers: dict | None = None
+    warmup: dict | None = None
 
     @property
     def sigma_dph(self) -> float:
@@ -162,6 +193,8 @@ class BiasResult:
             "uncertainty": self.uncertainty.to_dict(),
             "site": self.site.to_dict() if self.site else None,
             "mean_temperature_c": self.mean_temperature_c,
+            "outliers": self.outliers,
+            "warmup": self.warmup,
             "notes": self.notes,
         }
 
@@ -173,10 +206,13 @@ def _mean_over_segments(x: np.ndarray, segs: list[tuple[int, int]]) -> float:
 
 
 def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
-                  earth_rate: bool = True, label: str | None = None) -> BiasResult:
+                  earth_rate: bool = True, label: str | None = None,
+                  outliers: str = "flag") -> BiasResult:
     """D_F of a static run: mean rate after ``skip_s`` minus the earth-rate component along
     the IA (from ``log.site``; without a site the earth rate is not removed and a note says
-    so). Uncertainty from :func:`mean_uncertainty`.
+    so). Uncertainty from :func:`mean_uncertainty`. Spikes are detected
+    (:mod:`gyrotest.noise.outliers`) and, by ``outliers``, flagged in a note ("flag"), replaced
+    by their running median ("remove") or clipped ("robust").
     """
     axis = axis or log.axes[0]
     if axis not in log.rates:
@@ -190,8 +226,9 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
                             f"need at least {MIN_RECORD_SAMPLES}")
     rate = part.rates[axis]
     segs = part.segments
-    mean = _mean_over_segments(rate, segs)
     notes: list[str] = []
+    rate, out_info = _treat_outliers(rate, part, segs, axis, outliers, notes)
+    mean = _mean_over_segments(rate, segs)
     if len(segs) > 1:
         notes.append(f"{len(segs)} contiguous segments (gaps not bridged); mean and Allan "
                      "deviation pooled over segments")
@@ -201,6 +238,15 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
     elif earth_rate:
         notes.append("no site given (--latitude/--ia): earth rate NOT removed; D_F includes it")
     unc = mean_uncertainty(rate, part.tau0, segs)
+    if unc.default_rejected:
+        notes.append(unc.default_rejected)
+    warm = None
+    if skip_s <= 0 and len(segs) == 1:
+        from .warmup import detect_warmup
+
+        warm = detect_warmup(rate, part.tau0)
+        if warm is not None and warm.detected:
+            notes.append(warm.message())
     if unc.bound_sigma_dph > 3 * unc.sigma_dph and unc.bounded_terms:
         notes.append(
             f"noise term(s) {', '.join(unc.bounded_terms)} only bounded by this record: if they "
@@ -212,7 +258,30 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
         skip_s=skip_s, duration_s=part.duration_s, mean_output_dph=mean,
         earth_rate_ia_dph=er, bias_dph=mean - (er or 0.0), uncertainty=unc, site=log.site,
         mean_temperature_c=float(np.mean(temps)) if temps else None, notes=notes,
+        outliers=out_info, warmup=None if warm is None else warm.to_dict(),
     )
+
+
+def _treat_outliers(rate, part: GyroLog, segs, axis: str, mode: str, notes: list[str]):
+    """Spike detection for the bias (never silent): (rate after ``mode``, report dict)."""
+    from .noise.outliers import apply_outliers, detect_outliers
+
+    rep = detect_outliers(rate, part.tau0, t0=float(part.t[0]) if part.n else 0.0,
+                          channel=axis, segments=segs)
+    info = rep.to_dict()
+    info["mode"] = mode
+    if rep.found:
+        raw_mean = _mean_over_segments(rate, segs)
+        rate = apply_outliers(rate, rep, mode, segments=segs)
+        shift = _mean_over_segments(rate, segs) - raw_mean if mode != "flag" else None
+        what = {"flag": "the mean includes them (--outliers remove or robust to treat them)",
+                "remove": f"each replaced by its running median (--outliers remove): the mean "
+                          f"moved by {shift:+.4g} deg/h" if shift is not None else "",
+                "robust": f"each clipped to the threshold (--outliers robust): the mean moved "
+                          f"by {shift:+.4g} deg/h" if shift is not None else ""}[mode]
+        notes.append(f"spikes: {rep.summary()}; {what}")
+        info["mean_shift_dph"] = shift
+    return rate, info
 
 
 # ----------------------------------------------------------------------------- repeatability
@@ -485,7 +554,7 @@ def parse_positions(positions: str | list[str] | None, n_logs: int) -> list[str]
 
 def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 0.0,
                  axis: str | None = None, positions: str | list[str] | None = None,
-                 earth_rate: bool = True) -> BiasAnalysis:
+                 earth_rate: bool = True, outliers: str = "flag") -> BiasAnalysis:
     """The whole bias analysis of ``gyrotest bias`` (no printing, no files).
 
     * ``positions`` (one IA direction per log, :func:`parse_positions`) sets each log's IA;
@@ -522,11 +591,12 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
             for label, part in split_positions(g.skip(skip_s), settle_s):
                 parts.append(part)
                 runs.append(estimate_bias(part, axis=axis, earth_rate=False,
-                                          label=f"{label} ({g.source})"))
+                                          label=f"{label} ({g.source})", outliers=outliers))
     else:
         for g in logs:
             parts.append(g)
-            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate))
+            runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate,
+                                      outliers=outliers))
     sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
              for r in runs if r.site is not None}
     multi = rep = None

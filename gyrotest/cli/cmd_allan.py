@@ -16,6 +16,7 @@ import click
 
 from ..display import DEFAULT as DEFAULT_UNIT
 from ..errors import InputError
+from ..noise.analysis import FIT_WEIGHTS
 from ..noise.deviations import DEVIATION_KINDS
 from ..noise.fit import MIN_EDF
 from ..output import atomic_open
@@ -26,6 +27,7 @@ from .common import (
     fmt_num,
     ingest_options,
     json_option,
+    load_for_terms,
     load_logs,
     note,
     plot_option,
@@ -35,6 +37,7 @@ from .common import (
 from .common_display import resolve_display_unit, unit_option
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
+_CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 
 
 @click.command("allan")
@@ -53,11 +56,27 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
               help="Rate axes to analyse (comma-separated); default all.")
 @click.option("--confidence", type=float, default=0.683, show_default=True,
               help="Confidence of the χ² intervals.")
+@click.option("--ci", "ci_kind", type=click.Choice(["stable32", "conservative"]),
+              default="stable32", show_default=True,
+              help="Interval columns: Stable32's (identified α and its EDF, as printed by "
+                   "Stable32), or also a conservative one (EDF capped at the white-rate value "
+                   "where α > 0 came from few averages, non-increasing in τ) in its own "
+                   "alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns.")
 @click.option("--min-edf", type=float, default=MIN_EDF, show_default=True,
               help="Do not fit τ with fewer equivalent degrees of freedom.")
-@click.option("--detrend", type=click.Choice(["none", "linear"]), default="none",
-              show_default=True, help="Remove a least-squares rate ramp first.")
+@click.option("--detrend", default="none", show_default=True,
+              help="Remove a least-squares trend first: none, linear, quadratic, or sine:PERIOD "
+                   "(e.g. sine:24h for a diurnal term).")
+@click.option("--model", "model_path", type=click.Path(dir_okay=False), default=None,
+              help="Drift model from 'gyrotest model fit -o m.json' (or thermal-fit/mag-fit): "
+                   "its deterministic drift is removed before the noise analysis, as "
+                   "'gyrotest compensate' does.")
 @click.option("--skip", default="0", show_default=True, help="Warm-up trim, e.g. 30min.")
+@click.option("--outliers", "outliers", type=click.Choice(["flag", "remove", "robust"]),
+              default="flag", show_default=True,
+              help="Spikes (Hampel filter, robust scale): flag = warn with their times and "
+                   "analyse as recorded; remove = replace each by its running median; robust = "
+                   "clip each to the threshold.")
 @click.option("--vehicle-rate", "vehicle_rates", multiple=True,
               help="Strapdown vehicle rate for the impact prediction, e.g. 10deg/s (repeatable).")
 @click.option("--horizon", default="1h", show_default=True,
@@ -65,6 +84,9 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @click.option("--bi-cutoff", type=float, default=None,
               help="Fit the full bias-instability template with this cut-off f0 (Hz).")
 @click.option("--no-diagnose", is_flag=True, help="Skip the search for missing terms.")
+@click.option("--no-fit", is_flag=True,
+              help="Plain deviation table only (no noise model, diagnosis, warnings or impact). "
+                   "Without it the fit is skipped with a note when the τ list is too short.")
 @click.option("--allow-irregular", is_flag=True,
               help="Analyse on the nominal τ0 even if the sample interval jitters > 10 %.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
@@ -76,8 +98,9 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, detrend, skip,
-            vehicle_rates, horizon, bi_cutoff, no_diagnose, allow_irregular, csv_path,
+def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
+            skip, outliers, model_path,
+            vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, display_unit, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
 
@@ -99,8 +122,9 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
       gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
           --terms +markov --vehicle-rate 10deg/s --json
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
+      gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
     """
-    from ..noise.analysis import allan_document, analyse_allan, parse_taus
+    from ..noise.analysis import allan_document, analyse_allan, parse_detrend, parse_taus
     from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
@@ -118,12 +142,22 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
-    glogs = load_logs(logs, ingest_opts, announce=not as_json)
+    parse_detrend(detrend)
+    env_model = None
+    if model_path:
+        from ..envmodel.model import EnvModel
+
+        env_model = EnvModel.load(model_path)
+        glogs = [load_for_terms(p, ingest_opts, env_model.specs, announce=not as_json)
+                 for p in logs]
+    else:
+        glogs = load_logs(logs, ingest_opts, announce=not as_json)
     results = [analyse_allan(
         g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
-        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
+        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
+        fit_model=not no_fit, ci=ci_kind, outliers=outliers, env_model=env_model)
         for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
@@ -166,6 +200,9 @@ def _table_rows(r):
             row = {"source": r.source, "axis": a.axis, "deviation": a.dev.kind}
             row.update({k: tab[k][i] for k in _TABLE_COLS})
             row["edf"] = tab["edf"][i]
+            for k in _CI_COLS:
+                if k in tab:
+                    row[k] = tab[k][i]
             if "model" in tab:
                 row["model"] = tab["model"][i]
                 row["residual_ci"] = tab["residual_ci"][i]
@@ -175,7 +212,8 @@ def _table_rows(r):
 
 def _write_csv(path, results) -> None:
     buf = io.StringIO()
-    cols = ["source", "axis", "deviation", *_TABLE_COLS, "edf", "model", "residual_ci", "fitted"]
+    cols = ["source", "axis", "deviation", *_TABLE_COLS, "edf", *_CI_COLS, "model",
+            "residual_ci", "fitted"]
     w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     w.writeheader()
     for r in results:
@@ -203,27 +241,47 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
         c.print(f"  input: {a.input_note}")
         t = Table(title=f"{d.kind.upper()} (σ in {unit.rate}); CI {100 * d.confidence:.1f} % from "
-                        f"the EDF: {d.ci_method}", title_justify="left")
-        for col in ("tau s", "n", "alpha", "sigma_lo", "sigma", "sigma_hi", "model", "resid CI"):
-            t.add_column(col, justify="right")
+                        f"the EDF of the identified α (as Stable32): {d.ci_method}",
+                  title_justify="left")
         tab = a.table()
+        cols = ["tau s", "n", "alpha", "edf", "sigma_lo", "sigma", "sigma_hi"]
+        cons = "edf_ci" in tab
+        if cons:
+            cols += ["alpha_ci", "edf_ci", "lo_ci", "hi_ci"]
+        if "model" in tab:
+            cols += ["model", "resid CI"]
+        for col in cols:
+            t.add_column(col, justify="right")
         for i in range(len(tab["tau"])):
-            model = fmt_num(float(tab["model"][i]) * f) if "model" in tab else ""
-            res = ""
-            if "residual_ci" in tab:
+            row = [fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
+                   str(int(tab["alpha"][i])), fmt_num(float(tab["edf"][i]), 4),
+                   fmt_num(float(tab["sigma_lo"][i]) * f),
+                   fmt_num(float(tab["sigma"][i]) * f), fmt_num(float(tab["sigma_hi"][i]) * f)]
+            if cons:
+                rule = {"white-rate cap": " cap", "running minimum": " min"}.get(
+                    tab["edf_ci_rule"][i], "")
+                row += [str(int(tab["alpha_ci"][i])), fmt_num(float(tab["edf_ci"][i]), 4) + rule,
+                        fmt_num(float(tab["sigma_lo_ci"][i]) * f),
+                        fmt_num(float(tab["sigma_hi_ci"][i]) * f)]
+            if "model" in tab:
                 rv = float(tab["residual_ci"][i])
                 res = "—" if not math.isfinite(rv) else f"{rv:+.1f}"
                 if not tab["fitted"][i]:
                     res += " nf"
-            t.add_row(fmt_num(float(tab["tau"][i])), str(int(tab["n"][i])),
-                      str(int(tab["alpha"][i])), fmt_num(float(tab["sigma_lo"][i]) * f),
-                      fmt_num(float(tab["sigma"][i]) * f), fmt_num(float(tab["sigma_hi"][i]) * f),
-                      model, res)
+                row += [fmt_num(float(tab["model"][i]) * f), res]
+            t.add_row(*row)
         c.print(t)
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
-        _render_fit(a, unit)
+        if cons:
+            c.print("  *_ci: conservative interval (--ci conservative): cap = EDF capped at the "
+                    "white-rate value (α > 0 from few averages), min = running minimum in τ")
+        if a.fit is not None:
+            _render_fit(a, unit)
+        else:
+            for n in a.notes:
+                note(n)
     if r.cross is not None:
         ct = Table(title="Axis cross-correlation ρ of τ-averaged rates (zero within ±b, 95 %)",
                    title_justify="left")
@@ -275,7 +333,7 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
     f = a.fit
     c.print(_fit_table(f, "Noise model, requested terms", unit))
     c.print("  ≤: upper bound only (95 % profile likelihood); ±: 1σ (sandwich covariance); "
-            "weights: χ²(EDF) likelihood of each σ̂²(τ)")
+            "weights: " + FIT_WEIGHTS)
     if a.diagnosis is not None and a.diagnosis.final is not f:
         c.print(_fit_table(a.diagnosis.final, "Diagnosed model", unit))
     ro = a.readoffs

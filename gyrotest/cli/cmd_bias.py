@@ -37,13 +37,17 @@ from .common_display import resolve_display_unit, unit_option
 @click.option("--settle", default="0", show_default=True,
               help="Time dropped after every position change in a log with a position column.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
+@click.option("--outliers", type=click.Choice(["flag", "remove", "robust"]), default="flag",
+              show_default=True,
+              help="Spikes (Hampel filter): flag = warn with their times, mean as recorded; "
+                   "remove = replace each by its running median; robust = clip each.")
 @plot_option("Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
 @unit_option
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, display_unit, as_json,
-            ingest_opts):
+def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_path, display_unit,
+            as_json, ingest_opts):
     """Bias D_F (in --unit, default deg/h) of static runs, with an uncertainty honest for correlated noise.
 
     D_F = mean(rate) − earth-rate component along the IA (from --latitude and --ia or the
@@ -72,7 +76,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, plot_path, displ
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
     res = analyse_bias_axes(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis,
-                            positions=pos_list, earth_rate=not no_earth_rate)
+                            positions=pos_list, earth_rate=not no_earth_rate, outliers=outliers)
     if plot_path:
         from ..bias_plot import plot_bias
 

@@ -6,7 +6,16 @@ import click
 
 from ..axes import choose_axes
 from ..units import format_duration
-from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
+from .common import (
+    console,
+    emit_json,
+    fmt_num,
+    ingest_options,
+    json_option,
+    load_log,
+    warn,
+    with_ingest,
+)
 from .common_display import resolve_display_unit, unit_option
 
 
@@ -19,7 +28,10 @@ from .common_display import resolve_display_unit, unit_option
 @json_option
 @with_ingest
 def command(log, axis, display_unit, as_json, ingest_opts):
-    """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps.
+    """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps, spikes.
+
+    Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
+    reported with their times (warning on stderr; "outliers" in --json).
 
     LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
     for CSV on stdin. Shows which column was used for what.
@@ -28,6 +40,8 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     Example:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
+    from ..noise.outliers import detect_outliers
+
     unit = resolve_display_unit(display_unit, ingest_opts)
     g = load_log(log, ingest_opts, announce=not as_json)
     summary = g.summary()
@@ -35,6 +49,13 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     summary["axes"] = axes
     summary["channels"] = {k: v for k, v in summary["channels"].items()
                            if not k.startswith("rate:") or k[5:] in axes}
+    reps = [detect_outliers(g.rates[a], g.tau0, t0=float(g.t[0]) if g.n else 0.0, channel=a,
+                            segments=g.segments, unit="deg/h") for a in axes if g.n >= 3]
+    summary["outliers"] = {r.channel: r.to_dict() for r in reps}
+    for r in reps:
+        if r.found:
+            warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
+                 "robust to treat them)")
     if as_json:
         emit_json(summary)
         return

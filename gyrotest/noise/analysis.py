@@ -43,7 +43,7 @@ from .fit import (
     conversions,
     fit_deviation,
     parse_terms,
-    robust_edf,
+    robust_edf_rules,
     slope_readoffs,
 )
 from .impact import ImpactResult, attitude_impact
@@ -67,6 +67,18 @@ PULSE_KINDS = ("counts", "updown", "counter")
 ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
 #: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
 MAX_JITTER = 0.1
+#: what the interval columns mean (``--ci``)
+CI_TEXT = {
+    "stable32": "Stable32's: χ² interval from the EDF of the noise type identified at that τ "
+                "(the alpha column), no capping",
+    "conservative": "Stable32's in sigma_lo/sigma_hi; sigma_lo_ci/sigma_hi_ci from an EDF capped "
+                    "at the white-rate value where α > 0 came from few averages and made "
+                    "non-increasing in τ (alpha_ci/edf_ci)",
+}
+#: how the fit weights the τ (always the conservative EDF), stated with every fit
+FIT_WEIGHTS = ("the fit weights each σ̂²(τ) by a χ² likelihood with a conservative EDF (capped at "
+               "the white-rate value where α > 0 came from few averages, non-increasing in τ); "
+               "the table's interval is Stable32's")
 _PER_DECADE = re.compile(r"^\s*(\d+)\s*/\s*decade\s*$")
 
 
@@ -119,7 +131,7 @@ class AxisAnalysis:
     edf: np.ndarray
     sigma_lo: np.ndarray
     sigma_hi: np.ndarray
-    fit: NoiseFit
+    fit: NoiseFit | None
     readoffs: dict[str, Any]
     conversions: dict[str, Any]
     diagnosis: Diagnosis | None
@@ -132,21 +144,28 @@ class AxisAnalysis:
     ohdev: DeviationResult | None = None
     detrend: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
+    ci_conservative: dict[str, Any] | None = None
+    outliers: dict[str, Any] | None = None
 
     @property
-    def best_fit(self) -> NoiseFit:
-        """The diagnosed model when the diagnosis added terms, else the requested fit."""
+    def best_fit(self) -> NoiseFit | None:
+        """The diagnosed model when the diagnosis added terms, else the requested fit (None
+        when no model was fitted: --no-fit, or too few τ for the terms)."""
         return self.diagnosis.final if self.diagnosis is not None else self.fit
 
     def table(self) -> dict[str, np.ndarray]:
         """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
-        sigma, sigma_hi (EDF and interval after :func:`sanitize_edf`), plus model σ and the
-        residual in CI units when the table is the fitted one."""
+        sigma, sigma_hi (Stable32's interval: the identified α and its EDF), with --ci
+        conservative also alpha_ci, edf_ci, edf_ci_rule, sigma_lo_ci, sigma_hi_ci
+        (:func:`gyrotest.noise.fit.robust_edf_rules`), plus model σ and the residual in CI
+        units when the table is the fitted one."""
         d = self.dev
         out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),
                "alpha": np.asarray(d.alpha), "edf": self.edf, "sigma_lo": self.sigma_lo,
                "sigma": np.asarray(d.sigma, float), "sigma_hi": self.sigma_hi}
-        if self.dev is self.fit_dev:
+        if self.ci_conservative is not None:
+            out.update(self.ci_conservative)
+        if self.dev is self.fit_dev and self.fit is not None:
             out["model"] = self.fit.model_sigma()
             out["residual_ci"] = self.fit.residuals()
             out["fitted"] = self.fit.used
@@ -160,6 +179,11 @@ class AxisAnalysis:
                    "alpha": int(tab["alpha"][i]), "edf": _num(tab["edf"][i]),
                    "sigma_lo": _num(tab["sigma_lo"][i]), "sigma": _num(tab["sigma"][i]),
                    "sigma_hi": _num(tab["sigma_hi"][i])}
+            if "edf_ci" in tab:
+                row.update({"alpha_ci": int(tab["alpha_ci"][i]), "edf_ci": _num(tab["edf_ci"][i]),
+                            "edf_ci_rule": tab["edf_ci_rule"][i],
+                            "sigma_lo_ci": _num(tab["sigma_lo_ci"][i]),
+                            "sigma_hi_ci": _num(tab["sigma_hi_ci"][i])})
             if "model" in tab:
                 row["model"] = _num(tab["model"][i])
                 row["residual_ci"] = _num(tab["residual_ci"][i])
@@ -171,11 +195,14 @@ class AxisAnalysis:
             "input_kind": self.input_kind,
             "input": self.input_note,
             "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
-                          "ci_method": d.ci_method, "alpha_method": list(d.alpha_method),
+                          "ci_method": d.ci_method,
+                          "ci": CI_TEXT["stable32" if self.ci_conservative is None
+                                        else "conservative"],
+                          "fit_weights": FIT_WEIGHTS, "alpha_method": list(d.alpha_method),
                           "notes": list(d.notes)},
             "table": rows,
             "fit_deviation": self.fit_dev.kind,
-            "fit": self.fit.to_dict(),
+            "fit": None if self.fit is None else self.fit.to_dict(),
             "slope_readoffs": self.readoffs,
             "conversions": self.conversions,
             "diagnosis": None if self.diagnosis is None else self.diagnosis.to_dict(),
@@ -191,6 +218,7 @@ class AxisAnalysis:
                     "tau": self.ohdev.tau.tolist(), "sigma": self.ohdev.sigma.tolist()},
             },
             "detrend": self.detrend,
+            "outliers": self.outliers,
             "notes": list(self.notes),
         }
 
@@ -244,6 +272,59 @@ class AllanAnalysis:
         }
 
 
+def parse_detrend(spec: str | None) -> tuple[str, float | None]:
+    """``none``, ``linear``, ``quadratic`` or ``sine:PERIOD`` (e.g. ``sine:24h``) →
+    (method, period s or None)."""
+    if spec is None:
+        return "none", None
+    s = str(spec).strip().lower()
+    if s in ("none", "linear", "quadratic"):
+        return s, None
+    if s.startswith("sine:"):
+        period = parse_duration(s[5:], what="--detrend sine:PERIOD")
+        if period <= 0:
+            raise InputError(f"--detrend {spec}: the period must be > 0, e.g. sine:24h")
+        return "sine", float(period)
+    raise InputError(f"unknown --detrend {spec!r}; use none, linear, quadratic or sine:PERIOD "
+                     "(e.g. sine:24h)")
+
+
+def _detrend(rate: np.ndarray, t: np.ndarray, segs, spec: str) -> tuple[np.ndarray, dict]:
+    """Remove a least-squares trend (:func:`parse_detrend`) over all gap-free samples; the
+    mean is kept."""
+    method, period = parse_detrend(spec)
+    if method == "linear":
+        return _detrend_linear(rate, t, segs)
+    idx = np.concatenate([np.arange(a, b) for a, b in segs])
+    tt = t[idx]
+    tm = float(tt.mean())
+    half = max(float(tt.max() - tt.min()) / 2.0, 1e-12)
+    u = (t - tm) / half
+    if method == "quadratic":
+        cols = [u, u * u]
+        names = ["linear", "quadratic"]
+        note = ("a least-squares quadratic a + b·t + c·t² was removed from the rate before the "
+                "analysis (it also removes part of any rate random walk at the longest τ)")
+    else:
+        w = 2 * np.pi / period
+        cols = [np.cos(w * (t - tm)), np.sin(w * (t - tm))]
+        names = ["cos", "sin"]
+        note = (f"a least-squares sinusoid of period {format_duration(period)} was removed from "
+                "the rate before the analysis")
+    X = np.column_stack([np.ones(t.size)] + cols)
+    coef, *_ = np.linalg.lstsq(X[idx], rate[idx], rcond=None)
+    trend = X[:, 1:] @ coef[1:]
+    info: dict[str, Any] = {"method": method, "note": note,
+                            "coefficients_dph": dict(zip(names, map(float, coef[1:])))}
+    if method == "sine":
+        info["period_s"] = period
+        info["amplitude_dph"] = float(np.hypot(coef[1], coef[2]))
+    else:
+        info["slope_dph_per_s"] = float(coef[1] / half)
+        info["R_removed_deg_h_per_h"] = float(coef[1] / half * 3600.0)
+    return rate - trend, info
+
+
 def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, dict[str, Any]]:
     """Remove the least-squares line a + b·t (over all gap-free samples; the mean is kept)."""
     idx = np.concatenate([np.arange(a, b) for a, b in segs])
@@ -257,6 +338,63 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                  "note": "a least-squares straight line was removed from the rate before the "
                          "analysis (it also removes part of any rate random walk at the "
                          "longest τ)"}
+
+
+def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
+    """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
+    None, the rate after the ``mode`` treatment)."""
+    from .outliers import apply_outliers, detect_outliers
+
+    rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
+                          segments=segs)
+    info = rep.to_dict()
+    info["mode"] = mode
+    warn = None
+    if rep.found:
+        what = {"flag": "analysed as recorded (--outliers remove or robust to treat them)",
+                "remove": "each replaced by its running median before the analysis "
+                          "(--outliers remove)",
+                "robust": "each clipped to the threshold before the analysis "
+                          "(--outliers robust)"}[mode]
+        warn = KrobkaWarning(
+            code="OUTLIERS", title="spikes in the rate",
+            message=f"{rep.summary()}; {what}",
+            reason="isolated spikes (data link, ADC, shock) are not gyro noise: one 40σ sample "
+                   "in 10^6 raises the short-τ Allan deviation and N; detected with a Hampel "
+                   "filter (running median, robust scale; Pearson, IEEE Trans. Control Syst. "
+                   "Technol. 10, 2002)",
+            evidence={"n_outliers": rep.n_outliers, "n_events": len(rep.events),
+                      "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
+        rate = apply_outliers(rate, rep, mode, segments=segs)
+    return info, warn, rate
+
+
+def _fold_filters(fit, diag, warns, tau0):
+    """Markov terms with T_c < τ0 are the sensor's output filter: fold them into N (N_eq, see
+    :mod:`gyrotest.noise.filtered`) in the requested and the diagnosed model, and drop the
+    warnings about a hump screening the white noise (KROBKA-M1, -M5), which the filter note
+    replaces. Returns (fit, diagnosis, warnings, info or None)."""
+    from .filtered import fold_filter
+
+    final_is_fit = diag is not None and diag.final is fit
+    fit, info = fold_filter(fit, tau0)
+    if diag is not None:
+        if final_is_fit:
+            diag.final = fit
+        else:
+            diag.final, info_d = fold_filter(diag.final, tau0)
+            info = info_d or info
+    if info is not None:
+        warns = [w for w in warns if w.code not in ("KROBKA-M1", "KROBKA-M5")]
+    return fit, diag, warns, info
+
+
+def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
+    """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
+    try:
+        return slope_readoffs(dev.tau, dev.sigma, edf)
+    except (ValueError, IndexError, AnalysisError):
+        return {}
 
 
 def _long_taus(tau: np.ndarray, count: int = 8) -> list[float]:
@@ -308,6 +446,10 @@ def analyse_allan(
     bi_cutoff_hz: float | None = None,
     max_steps: int = 3,
     allow_irregular: bool = False,
+    fit_model: bool = True,
+    ci: str = "stable32",
+    outliers: str = "flag",
+    env_model=None,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -327,7 +469,11 @@ def analyse_allan(
     confidence : of the χ² intervals (0.683 as Stable32).
     stop_ratio : max τ = T/stop_ratio for generated grids (default Stable32's per deviation).
     min_edf : fit floor (τ with fewer EDF are shown, not fitted).
-    detrend : None/"none" or "linear" (remove a least-squares ramp first).
+    detrend : None/"none", "linear", "quadratic" or "sine:PERIOD" (remove a least-squares
+        trend or sinusoid first; :func:`parse_detrend`).
+    env_model : a :class:`gyrotest.envmodel.model.EnvModel` (from ``gyrotest model fit -o``):
+        its drift (without the constant bias) is subtracted from its axis before everything
+        else, as ``gyrotest compensate`` does, so the noise fit sees noise only.
     run_diagnosis, spectral, trend_check : switch the diagnosis, the PSD/ACF and the
         Allan–Krobka/Hadamard trend comparison.
     impact_horizon_s : time at which σ_att is reported (default 1 h).
@@ -335,6 +481,14 @@ def analyse_allan(
     max_steps : at most this many terms added by the diagnosis ladder.
     allow_irregular : analyse on the nominal τ0 even when the sample interval jitters by more
         than 10 % (otherwise an InputError).
+    ci : "stable32" (default: the interval of the identified α's EDF, as Stable32 prints it)
+        or "conservative" (adds alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns).
+    outliers : spike handling (:mod:`gyrotest.noise.outliers`): "flag" (default: detect and
+        warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
+        its running median) or "robust" (each spike clipped to the threshold). Never silent.
+    fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
+        impact). With True the model is still skipped, with a note, when the τ grid has too
+        few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
 
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
@@ -344,10 +498,15 @@ def analyse_allan(
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)
     keys = parse_terms(terms)
-    if detrend not in (None, "none", "linear"):
-        raise InputError(f"unknown --detrend {detrend!r}; use none or linear")
+    parse_detrend(detrend)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
+    if ci not in CI_TEXT:
+        raise InputError(f"unknown --ci {ci!r}; use stable32 or conservative")
+    from .outliers import OUTLIER_MODES
+
+    if outliers not in OUTLIER_MODES:
+        raise InputError(f"unknown --outliers {outliers!r}; use flag, remove or robust")
     notes: list[str] = []
     tim = log.timing
     if tim.irregular:
@@ -371,11 +530,27 @@ def analyse_allan(
             raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
     results: list[AxisAnalysis] = []
     rates_used: dict[str, np.ndarray] = {}
+    model_info = model_pred = None
+    if env_model is not None:
+        model_pred = np.asarray(env_model.predict(log, include_bias=False), float)
+        m_axis = env_model.axis if env_model.axis in log.rates else log.axes[0]
+        labels = [sp.label for sp in env_model.specs if sp.key != "bias"]
+        model_info = {"axis": m_axis, "terms": labels,
+                      "drift_rms_dph": float(np.sqrt(np.mean((model_pred - model_pred.mean())
+                                                             ** 2))),
+                      "drift_p2p_dph": float(np.ptp(model_pred))}
+        notes.append(f"deterministic model removed from axis {m_axis} before the analysis "
+                     f"({', '.join(labels) or 'bias only'}; drift RMS "
+                     f"{model_info['drift_rms_dph']:.4g} deg/h, peak-to-peak "
+                     f"{model_info['drift_p2p_dph']:.4g} deg/h)")
     for name in names:
         rate = np.asarray(log.rates[name], dtype=np.float64)
         det_info = None
-        if detrend == "linear":
-            rate, det_info = _detrend_linear(rate, log.t, segs)
+        out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
+        if model_info is not None and name == model_info["axis"]:
+            rate = rate - model_pred
+        if detrend not in (None, "none"):
+            rate, det_info = _detrend(rate, log.t, segs, detrend)
         rates_used[name] = rate
         results.append(_analyse_axis(
             name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev, tau_spec=tau_spec,
@@ -383,16 +558,19 @@ def analyse_allan(
             stop_ratio=stop_ratio, min_edf=min_edf, run_diagnosis=run_diagnosis,
             spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
             bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
-            det_info=det_info, source=log.source))
+            det_info=det_info, source=log.source, fit_model=fit_model, ci=ci))
+        results[-1].outliers = out_info
+        if out_warn is not None:
+            results[-1].warnings.insert(0, out_warn)
     cross = None
     if len(names) > 1:
         cross = cross_correlation(rates_used, log.tau0, segments=segs)
     settings = {
         "deviation": dev, "taus": tau_spec if isinstance(tau_spec, str) else list(tau_spec),
         "terms": keys, "confidence": confidence, "stop_ratio": stop_ratio, "min_edf": min_edf,
-        "detrend": detrend or "none", "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
+        "detrend": detrend or "none", "model": model_info, "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
-        "diagnosis": run_diagnosis,
+        "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci, "outliers": outliers,
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
@@ -402,7 +580,7 @@ def analyse_allan(
 def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau_spec, keys,
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
-                  source) -> AxisAnalysis:
+                  source, fit_model=True, ci="stable32") -> AxisAnalysis:
     notes: list[str] = []
     data = rate * tau0 if in_kind == "increment" else rate
 
@@ -423,17 +601,24 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                                       if dev not in ("theo1", "theoh") or t <= span / 4])
         notes.append(f"the IEEE 952 noise model is the Allan variance: fitted to an OADEV on the "
                      f"same τ; the table shows {dev.upper()}")
-    edf, edf_notes = robust_edf(table_dev)
+    edf = np.asarray(table_dev.edf, float).copy()
     lo, hi = np.asarray(table_dev.sigma_lo, float).copy(), np.asarray(table_dev.sigma_hi,
                                                                       float).copy()
-    changed = np.flatnonzero(edf != np.asarray(table_dev.edf, float))
-    if changed.size:
-        from .edf import chi2_interval
+    ci_cols = None
+    if ci == "conservative":
+        edf_c, rules, edf_notes = robust_edf_rules(table_dev)
+        lo_c, hi_c = lo.copy(), hi.copy()
+        changed = np.flatnonzero(edf_c != edf)
+        if changed.size:
+            from .edf import chi2_interval
 
-        lo[changed], hi[changed] = chi2_interval(table_dev.sigma[changed], edf[changed],
-                                                 confidence)
-        if table_dev is not fit_dev:
+            lo_c[changed], hi_c[changed] = chi2_interval(table_dev.sigma[changed],
+                                                         edf_c[changed], confidence)
             notes.extend(edf_notes)
+        alpha_c = np.where(np.array([r == "white-rate cap" for r in rules]), 0,
+                           np.asarray(table_dev.alpha, int))
+        ci_cols = {"alpha_ci": alpha_c, "edf_ci": edf_c, "edf_ci_rule": rules,
+                   "sigma_lo_ci": lo_c, "sigma_hi_ci": hi_c}
     psd = None
     lines: list[SpectralLine] = []
     acf = None
@@ -448,8 +633,21 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         acf = autocorrelation(rate[longest[0]:longest[1]], tau0, max_samples=1 << 20,
                               max_lag=min(100_000, (longest[1] - longest[0]) // 10))
     hints = [ln.f_hz for ln in lines]
-    fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
-                        line_hints=hints)
+    fit = None
+    if fit_model:
+        try:
+            fit = fit_deviation(fit_dev, terms=keys, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
+                                line_hints=hints)
+        except AnalysisError as e:
+            notes.append(f"noise model not fitted: {e}; the deviation table is complete")
+    if fit is None:
+        return AxisAnalysis(
+            axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
+            edf=edf, sigma_lo=lo, sigma_hi=hi, fit=None,
+            readoffs=_plain_readoffs(fit_dev, edf if fit_dev is table_dev
+                                     else np.asarray(fit_dev.edf, float)),
+            conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
+            acf=acf, detrend=det_info, notes=notes, ci_conservative=ci_cols)
     readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None
@@ -463,6 +661,9 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                 notes.append(f"trend check skipped: {e}")
     warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
                           diagnosis=diag, record_s=record_s)
+    fit, diag, warns, filt = _fold_filters(fit, diag, warns, tau0)
+    if filt is not None:
+        notes.append(filt["note"])
     best = diag.final if diag is not None else fit
     impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
                              record_s=record_s)
@@ -475,4 +676,5 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
         conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
         lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
-        notes=notes + list(fit.notes))
+        notes=notes + [f"{n} (fit weights only)" if n.startswith("EDF ") else n
+                       for n in fit.notes], ci_conservative=ci_cols)

@@ -100,6 +100,7 @@ __all__ = [
     "log_chi2_objective",
     "parse_terms",
     "robust_edf",
+    "robust_edf_rules",
     "sanitize_edf",
     "slope_readoffs",
 ]
@@ -1289,6 +1290,12 @@ _WEAK_ID = ("b1", "b1+rn", "reused")
 
 
 def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
+    """(edf, notes) of :func:`robust_edf_rules`."""
+    e, _, notes = robust_edf_rules(dev)
+    return e, notes
+
+
+def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     """The EDF of a deviation table made safe for fitting and for the residuals.
 
     1. Where the noise type was identified from few averages (B1 ratio or reused, typically the
@@ -1297,7 +1304,8 @@ def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
        large when the estimate is really a scattered rate-random-walk point.
     2. :func:`sanitize_edf`: non-increasing in τ.
 
-    Returns (edf, notes)."""
+    Returns (edf, rules, notes): ``rules[i]`` is "" (the identified α's EDF, as Stable32),
+    "white-rate cap" or "running minimum"."""
     from .edf import edf_for
 
     e = np.asarray(dev.edf, float).copy()
@@ -1324,7 +1332,10 @@ def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
     if changed:
         notes.append("EDF lowered to the running minimum at τ = "
                      + ", ".join(f"{dev.tau[i]:.4g}" for i in changed) + " s")
-    return e2, notes
+    rules = ["white-rate cap" if float(t) in capped else "" for t in np.asarray(dev.tau)]
+    for i in changed:
+        rules[i] = "running minimum"
+    return e2, rules, notes
 
 
 def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=None,

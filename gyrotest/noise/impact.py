@@ -295,11 +295,27 @@ def components_from_fit(fit, *, conservative: bool = False) -> list[Component]:
     out = []
     for t in fit.terms:
         c = t.coef
+        shape = t.shape
+        if t.key in _SHAPED and shape is None:
+            # a two-parameter term that was never found: its bound has no shape (T_c or β), so
+            # it cannot enter the prediction at all (see unshaped_bounds)
+            out.append(Component(t.key, 0.0, 1.0, None, t.label))
+            continue
         if conservative and not t.identified and t.upper is not None:
-            c = _coef_from_value(t.key, t.upper, t.shape)
+            c = _coef_from_value(t.key, t.upper, shape)
         f_hi = (t.bi_f0 if t.bi_f0 is not None else 0.5 / fit.tau0) if t.key == "B" else None
-        out.append(Component(t.key, float(c), t.shape, f_hi, t.label))
+        out.append(Component(t.key, float(c), shape, f_hi, t.label))
     return out
+
+
+_SHAPED = ("markov", "sine", "blue")
+
+
+def unshaped_bounds(fit) -> list[str]:
+    """Labels of the two-parameter terms that are bounds without a shape (T_c, f0 or β was
+    never identified): they are left out of the attitude prediction, also the conservative
+    one."""
+    return [t.label for t in fit.terms if t.key in _SHAPED and t.shape is None]
 
 
 def _coef_from_value(key: str, v: float, shape: float | None) -> float:
@@ -356,7 +372,10 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
                                        for pr in per_rate]}
         comp_rows.append(row)
     flags = []
+    unshaped = unshaped_bounds(fit)
     for comp, ccomp, t in zip(comps, cons, fit.terms):
+        if t.label in unshaped:
+            continue
         if comp.zero_dc_psd:
             use = comp if comp.c > 0 else ccomp  # a bound-only term: its diffusion at the bound
             diff = [2.0 * use.psd(w / (2 * math.pi), tau0) * RAD_PER_ARCSEC**2 for w in rates]
@@ -387,7 +406,8 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
             "their bound)",
             f"bias instability (flicker) integrated from 1/T_record = {1 / rec:.3g} Hz; rate "
             "random walk and ramp start at t = 0",
-        ])
+        ] + ([f"left out (bounds whose T_c/f0/β was never identified, so they have no "
+              f"spectrum): {', '.join(unshaped)}"] if unshaped else []))
 
 
 # ---------------------------------------------------------------------------------------------

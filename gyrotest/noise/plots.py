@@ -123,6 +123,19 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
                          labels[i] if labels else None)
         req = a.fit
         fit = getattr(a, "best_fit", req)
+        if req is None:  # plain table (no model): the deviation with its interval
+            tau, sig = np.asarray(a.dev.tau, float), np.asarray(a.dev.sigma, float) * fu
+            lo, hi = np.asarray(a.sigma_lo, float) * fu, np.asarray(a.sigma_hi, float) * fu
+            ok = np.isfinite(sig) & (sig > 0)
+            yerr = np.vstack([np.where(np.isfinite(lo), sig - lo, 0),
+                              np.where(np.isfinite(hi), hi - sig, 0)])
+            ax.errorbar(tau[ok], sig[ok], yerr=yerr[:, ok], fmt="o-", ms=3.2, color=col,
+                        ecolor=col, elinewidth=0.8, capsize=1.5, lw=0.8,
+                        label=f"{lab}: {a.dev.kind.upper()} ± CI (no model fitted)", zorder=3)
+            all_tau.extend(tau[ok].tolist())
+            all_sig.extend(list(sig[ok]) + list(lo[ok & np.isfinite(lo)])
+                           + list(hi[ok & np.isfinite(hi)]))
+            continue
         tau, sig = req.tau, req.sigma * fu
         lo, hi = req.sigma_lo * fu, req.sigma_hi * fu
         ok = np.isfinite(sig) & (sig > 0)
@@ -174,7 +187,8 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
               borderaxespad=0.0)
     if title is None:
         src, a = items[0]
-        title = (f"{Path(src).name} — {a.axis}: {a.fit_dev.kind.upper()} and noise model"
+        what = "and noise model" if a.fit is not None else "(no noise model fitted)"
+        title = (f"{Path(src).name} — {a.axis}: {a.fit_dev.kind.upper()} {what}"
                  if len(items) == 1
                  else f"{a.fit_dev.kind.upper()} of {len(items)} runs/axes on one τ axis")
     ax.set_title(title)
@@ -222,7 +236,7 @@ def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | N
             pb = pb * f2
             ax.plot(fb, pb, color=col, lw=1.4, label=f"{lab}: Welch PSD (log-binned)")
             bf = getattr(a, "best_fit", a.fit)
-            mp = bf.psd(fb) * f2
+            mp = bf.psd(fb) * f2 if bf is not None else np.zeros_like(fb)
             if np.any(mp > 0):
                 ax.plot(fb, np.where(mp > 0, mp, np.nan), "--", color=col, lw=1.2, alpha=0.9,
                         label=f"{lab}: model PSD, terms {','.join(bf.requested)} "

@@ -171,6 +171,11 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
         """The command body: returns (result, objects, logs)."""
         horizon_s = parse_horizon(test.opt("horizon", "1h"))
         rates = [parse_vehicle_rate(v) for v in test.opt("vehicle_rates", [])]
+        env_model = None
+        if test.opt("model"):
+            from ..envmodel.model import EnvModel
+
+            env_model = EnvModel.load(test.opt("model"))
         g = cache.get(test.logs[0], opts)
         axes = [test.opt("axis")] if test.opt("axis") else None
         r = analyse_allan(
@@ -180,11 +185,20 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
             detrend=test.opt("detrend", "none"),
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
-            bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False)
+            bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False, env_model=env_model)
+        for ax in r.axes:  # the report needs the noise model (the CLI may print a bare table)
+            if ax.fit is None:
+                from ..errors import AnalysisError
+
+                raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
+                    (n for n in ax.notes if n.startswith("noise model not fitted")),
+                    "noise model not fitted"))
         return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)
     argv = ["allan", campaign.rel(test.logs[0]), *iargv, *option_argv(test)]
+    if test.opt("model"):
+        argv += ["--model", campaign.rel(test.opt("model"))]
     return Analysis("allan", test.name, "allan", argv, res, obj, logs, dt)
 
 

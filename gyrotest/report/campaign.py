@@ -120,7 +120,8 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
         "vehicle_rates": ("strs", "--vehicle-rate", "vehicle rates for the application note"),
         "horizon": ("duration", "--horizon", "time of the attitude-error prediction"),
         "taus": ("str", "--taus", "tau grid: octave, decade, N/decade, all or a list"),
-        "detrend": ("str", "--detrend", "none or linear"),
+        "detrend": ("str", "--detrend", "none, linear, quadratic or sine:PERIOD"),
+        "model": ("path", "--model", "drift model (gyrotest model fit -o) removed first"),
         "bi_cutoff_hz": ("float", "--bi-cutoff", "bias-instability cut-off f0, Hz"),
         "no_diagnose": ("bool", "--no-diagnose", "skip the search for missing terms"),
     },
@@ -395,8 +396,13 @@ def _check_option(err: _Err, where: str, test: str, key: str, typ: str, value: A
             parse_taus(v)
         except InputError as e:
             raise err(where, str(e)) from None
-    if test == "allan" and key == "detrend" and v not in ("none", "linear"):
-        raise err(where, f"must be none or linear, got {v!r}")
+    if test == "allan" and key == "detrend":
+        from ..noise.analysis import parse_detrend
+
+        try:
+            parse_detrend(v)
+        except InputError as e:
+            raise err(where, str(e)) from None
     if test == "scale_factor" and key == "detect" and v not in ("auto", "table", "output"):
         raise err(where, f"must be auto, table or output, got {v!r}")
     if test in ("supply", "magnetic") and key in ("terms", "with"):

@@ -1,0 +1,96 @@
+"""Spike detection (Hampel filter, robust scale) as a classifier, and its use in info, allan and
+bias: quick randomized check (the long one is benchmarks/bench_outliers.py), the real XSens log's
+spikes reported, and the treatments."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gyrotest.noise.outliers import apply_outliers, detect_outliers, threshold_k
+
+from cliutil import run_cli
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import bench_outliers as bo  # noqa: E402
+
+XSENS = bo.ADIS.parent / "cont_imu1.csv.gz"
+
+
+def test_randomized_recall_and_false_alarms():
+    """40 cases outside the tuning range (seeds 0–99) over every base noise incl. nulls."""
+    cases = [bo.run_case(s) for s in range(2000, 2040)]
+    s = bo.summarise(cases)
+    assert s["null_cases"] >= 10
+    assert s["null_cases_flagged"] == 0
+    assert s["false_alarms_per_1e6"] < 5
+    for b in ("12-20σ", "20-60σ"):
+        r, n = s["recall"][b]
+        assert n >= 20 and r >= 0.98, (b, r, n)
+    r, n = s["recall"]["8-12σ"]
+    assert r >= 0.8, r
+    # the final answer: N from σ(1 s) after --outliers remove within 2 % of the clean record
+    assert s["N_err_clean_max"] < 0.02 and s["N_err_clean_median"] < s["N_err_raw_median"]
+
+
+def test_threshold_and_treatments():
+    assert threshold_k(100) == 6.0 and threshold_k(10**12) > 7.0
+    rng = np.random.default_rng(1)
+    x = rng.standard_normal(20_000)
+    x[[500, 9000]] += [30.0, -25.0]
+    rep = detect_outliers(x, 0.01, t0=100.0)
+    assert [e.start for e in rep.events] == [500, 9000]
+    assert rep.events[0].t_s == pytest.approx(105.0) and rep.events[1].peak_z < -20
+    assert np.array_equal(apply_outliers(x, rep, "flag"), x)
+    rem = apply_outliers(x, rep, "remove")
+    assert abs(rem[500]) < 3 and abs(rem[9000]) < 3
+    rob = apply_outliers(x, rep, "robust")
+    assert 3 < rob[500] <= rep.k * rep.scale + 3
+    assert np.array_equal(rem[rep.mask == 0], x[rep.mask == 0])
+    # coarse quantization (MAD = 0) and constants do not raise false alarms
+    q = np.round(rng.standard_normal(50_000) / 3.0) * 3.0
+    assert not detect_outliers(q, 0.01).found
+    assert not detect_outliers(np.zeros(100), 0.01).found
+
+
+@pytest.fixture(scope="module")
+def xsens_csv(tmp_path_factory):
+    if not XSENS.is_file():
+        pytest.skip(f"real XSens log not found at {XSENS}")
+    import gzip
+
+    p = tmp_path_factory.mktemp("xsens") / "xsens.csv"
+    with gzip.open(XSENS, "rt") as fh:
+        p.write_text(fh.read())
+    return str(p)
+
+
+XS = ["--rate-col", "gyro_x_rps", "--rate-unit", "rad/s"]
+
+
+def test_xsens_spikes_are_reported_everywhere(xsens_csv):
+    r = run_cli(["info", xsens_csv, *XS])
+    assert r.code == 0, r.err
+    assert "spike event(s)" in r.err and "t = 12.97 s" in r.err
+    r = run_cli(["allan", xsens_csv, *XS, "--json", "--no-diagnose", "--taus", "decade"])
+    assert r.code == 0, r.err
+    ax = json.loads(r.out)["logs"][0]["axes"][0]
+    assert ax["outliers"]["n_events"] >= 50 and ax["outliers"]["mode"] == "flag"
+    assert "OUTLIERS" in {w["code"] for w in ax["warnings"]}
+    assert "OUTLIERS" in r.err
+    r2 = run_cli(["allan", xsens_csv, *XS, "--json", "--no-diagnose", "--taus", "decade",
+                  "--outliers", "remove"])
+    ax2 = json.loads(r2.out)["logs"][0]["axes"][0]
+    # removing 0.03 % of the samples lowers σ at τ0 noticeably
+    assert ax2["table"][0]["sigma"] < 0.97 * ax["table"][0]["sigma"]
+    r3 = run_cli(["bias", xsens_csv, *XS, "--json"])
+    assert r3.code == 0, r3.err
+    assert json.loads(r3.out)["runs"][0]["outliers"]["n_events"] >= 50
+
+
+def test_bad_outliers_value(xsens_csv):
+    run_cli(["allan", xsens_csv, *XS, "--outliers", "drop"]).assert_clean_error("--outliers")

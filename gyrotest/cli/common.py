@@ -54,9 +54,15 @@ def console():
     from rich.console import Console
 
     if _console is None or _console.file is not sys.stdout:
-        # piped or captured: plain text at a comfortable width (COLUMNS wins), long lines are
-        # not broken (paths, notes), so that logs and `grep` see whole lines
-        width = None if sys.stdout.isatty() else int(os.environ.get("COLUMNS", 120))
+        # piped or captured: plain text at least 120 wide (a wider COLUMNS wins: an 80-column
+        # terminal's COLUMNS would truncate table headers in a file), long lines are not broken
+        # (paths, notes), so that logs and `grep` see whole lines
+        width = None
+        if not sys.stdout.isatty():
+            try:
+                width = max(120, int(os.environ.get("COLUMNS", 120)))
+            except ValueError:
+                width = 120
         _console = Console(file=sys.stdout, highlight=False, soft_wrap=not sys.stdout.isatty(),
                            width=width)
     return _console

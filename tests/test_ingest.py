@@ -373,7 +373,7 @@ def test_streaming_reader_matches_whole_file_reader(tmp_path, rng, monkeypatch):
     """Large text files are read block by block into float64 arrays: same values, NaN for
     empty cells, mid-file comments skipped; text in a column falls back to the whole-file reader
     (and its row-naming errors)."""
-    import gyrotest.ingest as ing
+    import gyrotest.io.tables as tables
 
     n = 20_000
     d = pd.DataFrame({"t": np.arange(n) * 0.01, "rate": rng.normal(size=n),
@@ -385,7 +385,7 @@ def test_streaming_reader_matches_whole_file_reader(tmp_path, rng, monkeypatch):
     p.write_text("".join(lines))
     ov_ = ov(rate_unit="deg/h", supply="vsupply")
     whole = read_log(p, overrides=ov_)
-    monkeypatch.setattr(ing, "STREAM_MIN_BYTES", 0)
+    monkeypatch.setattr(tables, "STREAM_MIN_BYTES", 0)
     streamed = read_log(p, overrides=ov_)
     np.testing.assert_array_equal(streamed.rate, whole.rate)
     np.testing.assert_array_equal(streamed.temperature["temp"], whole.temperature["temp"])

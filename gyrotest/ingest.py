@@ -24,6 +24,7 @@ are dropped with a note.
 from __future__ import annotations
 
 import json
+import math
 import os
 from typing import Any
 
@@ -33,7 +34,14 @@ import pyarrow as pa
 from .data import GyroConstants, GyroLog
 from .errors import InputError
 from .io.columns import _SUFFIX_UNITS, _ci, _unit_from_name, resolve_columns
-from .io.meta import META_KEY, _from_gyrotest, log_to_table, write_log
+from .io.meta import (
+    META_KEY,
+    _from_gyrotest,
+    log_to_table,
+    read_gyrotest_table,
+    validate_meta,
+    write_log,
+)
 from .io.site import site_from_profile
 from .io.tables import (
     NULL_VALUES,
@@ -45,7 +53,14 @@ from .io.tables import (
     column_names,
     read_table,
 )
-from .io.timeaxis import GAP_FACTOR, JITTER_WARN, _time_seconds, analyse_timing
+from .io.timeaxis import (
+    GAP_FACTOR,
+    JITTER_WARN,
+    TIME_UNIT_FIX,
+    _time_seconds,
+    analyse_timing,
+    check_rate,
+)
 from .profile import Profile, merge
 from .units import factor, to_internal
 
@@ -105,6 +120,11 @@ def _wanted(roles: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
+def _time_unit_from_name(col: str) -> str | None:
+    u = _unit_from_name(col)
+    return u if u in ("ms", "us", "ns") else None
+
+
 def _unit_for(col: str, prof: Profile, default: str) -> str:
     if col in prof.units:
         return prof.units[col]
@@ -125,23 +145,25 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     units: dict[str, str] = {}
     # ---- time
     start_iso = None
+    fs = g.get("sample_rate_hz")
+    if fs is not None and not (isinstance(fs, (int, float)) and math.isfinite(fs) and fs > 0):
+        raise InputError(f"{source}: sample rate must be a positive number of Hz, got {fs}")
     if roles.get("time"):
-        tunit = _unit_for(roles["time"], prof, "s")
-        if tunit not in ("ms", "us", "µs", "ns", "s", "min", "h"):
-            tunit = prof.units.get(roles["time"], "s")
-        t, start_iso = _time_seconds(raw, roles["time"], tunit)
-        units[roles["time"]] = tunit if start_iso is None else "ISO-8601"
-        time_source = f"time column {roles['time']!r}"
+        tcol = roles["time"]
+        tunit = prof.units.get(tcol) or g.get("time_unit") or _time_unit_from_name(tcol)
+        if tunit is not None:
+            factor(tunit, "time", what=f"time column {tcol!r}")  # an unknown unit: clean error
+        ax = _time_seconds(raw, tcol, tunit, sample_rate_hz=fs)
+        t, start_iso = ax.t, ax.start
+        notes.extend(ax.notes)
+        units[tcol] = ax.unit
+        time_source = f"time column {tcol!r}" + (f" ({ax.unit})" if ax.unit != "s" else "")
         tau0_given = None
-        if g.get("sample_rate_hz"):
-            notes.append("sample_rate_hz ignored: the log has a time column")
     else:
-        fs = g.get("sample_rate_hz")
         if not fs:
             raise InputError(f"{source}: no time column and no sample rate; name the time column "
                              "with --time-col or give --sample-rate HZ (or [gyro] sample_rate_hz)")
-        if fs <= 0:
-            raise InputError(f"{source}: sample rate must be positive, got {fs}")
+        check_rate(1.0 / fs, source, f"--sample-rate {fs:g}")
         t = None
         tau0_given = 1.0 / float(fs)
         time_source = f"sample rate {fs:g} Hz (no time column)"
@@ -180,17 +202,18 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     gyro_cols = {f"gyro output {c!r}": v for c, v in arrays.items()}
     drop = np.zeros(n_rows, dtype=bool)
     for label, v in {**gyro_cols, **aux}.items():
-        miss = np.isnan(v)
+        miss = ~np.isfinite(v)  # ±inf is a missing value too (an overflowed logger cell)
         if not miss.any():
             continue
+        v[miss] = np.nan
         first, run, total = _nan_runs(miss)
         if total == n_rows:
-            raise InputError(f"{source}: {label} has no values (all empty/NaN); check the column "
+            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf); check the column "
                              "or leave it out")
         if nan_policy == "error":
             rng = raw.where(first) if run == 1 else f"{raw.where(first)} to {raw.where(first + run - 1)}"
             raise InputError(
-                f"{source}: {label} has {total} missing/NaN value(s), first at {rng}; fix the data, "
+                f"{source}: {label} has {total} missing/NaN/±inf value(s), first at {rng}; fix the data, "
                 "or pass --nan gap (drop those rows as gaps) or --nan interpolate"
             )
         if nan_policy == "interpolate" and label in aux:
@@ -201,9 +224,10 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
             drop |= miss
             notes.append(f"{label}: {total} row(s) with missing values dropped and treated as gaps")
     for c, v in extra.items():
-        if np.isnan(v).any():
+        miss = ~np.isfinite(v)
+        if miss.any():
             idx = np.arange(n_rows)
-            miss = np.isnan(v)
+            v[miss] = np.nan
             if (~miss).any():
                 v[miss] = np.interp(idx[miss], idx[~miss], v[~miss])
             notes.append(f"extra column {c!r}: missing values interpolated")
@@ -253,6 +277,15 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     timing.source = time_source
     timing.start = start_iso
     tau0 = timing.tau0
+    if roles.get("time"):
+        check_rate(tau0, source, f"time column {roles['time']!r} read in {units[roles['time']]}")
+        if fs:
+            if abs(1.0 / tau0 - fs) > 0.01 * fs:
+                raise InputError(
+                    f"{source}: the sample rate {fs:g} Hz (--sample-rate or [gyro] sample_rate_hz) "
+                    f"conflicts with time column {roles['time']!r} ({1.0 / tau0:.6g} Hz read in "
+                    f"{units[roles['time']]}); drop the sample rate, or {TIME_UNIT_FIX}")
+            notes.append(f"sample rate {fs:g} Hz agrees with the time column")
     if timing.gaps:
         tot = sum(gp.duration_s for gp in timing.gaps)
         notes.append(f"{len(timing.gaps)} gap(s) in the time axis ({tot:.4g} s in all); analyses "
@@ -406,15 +439,26 @@ def _from_binary(head: RawTable, prof: Profile, nan_policy: str) -> GyroLog:
             raise InputError(f"{head.source}: not a readable Feather/Arrow file "
                              f"({type(e).__name__}: {str(e).splitlines()[0][:120]})") from None
     meta = schema.metadata or {}
+    damaged = None
     if META_KEY in meta:
         try:
             gmeta = json.loads(meta[META_KEY])
-        except ValueError:
-            gmeta = None
-        if gmeta:
-            return _from_gyrotest(path, head.source, head.fmt, gmeta, prof)
-    roles, notes = resolve_columns(schema.names, prof, head.source)
-    raw = read_table(path, columns=_wanted(roles))
-    return build_log(raw, roles, prof, notes, nan_policy)
+            raw = read_gyrotest_table(path, head.source, head.fmt)
+            validate_meta(gmeta, raw.table.column_names, raw.table.num_rows)
+            return _from_gyrotest(raw, head.source, head.fmt, gmeta, prof)
+        except (ValueError, RecursionError) as e:  # MetaError, JSON errors
+            damaged = (f"its gyrotest metadata is damaged ({str(e)[:120]}); ignored, the "
+                       "columns are read by name")
+    try:
+        roles, notes = resolve_columns(schema.names, prof, head.source)
+        if damaged:
+            notes.insert(0, damaged)
+        raw = read_table(path, columns=_wanted(roles))
+        return build_log(raw, roles, prof, notes, nan_policy)
+    except InputError as e:
+        if not damaged:
+            raise
+        raise InputError(f"{e} ({head.source}: {damaged}; re-create it with 'gyrotest ingest')"
+                         ) from None
 
 

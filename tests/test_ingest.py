@@ -263,7 +263,7 @@ def test_nan_policies(tmp_path, rng):
     temp[30] = np.nan
     d = pd.DataFrame({"t": np.arange(50.0), "rate": r, "temp": temp})
     p = write_csv(tmp_path / "n.csv", d)
-    with pytest.raises(InputError, match=r"3 missing/NaN value\(s\), first at row 11 \(line 12\) to row 13 \(line 14\)"):
+    with pytest.raises(InputError, match=r"3 missing/NaN/±inf value\(s\), first at row 11 \(line 12\) to row 13 \(line 14\)"):
         read_log(p, overrides=ov(rate_unit="deg/h"))
     log = read_log(p, overrides=ov(rate_unit="deg/h"), nan_policy="gap")
     assert log.n == 46 and len(log.timing.gaps) == 2

@@ -47,6 +47,7 @@ _SUFFIX_UNITS = [
     (re.compile(r"_mv$", re.I), "mV"),
     (re.compile(r"_ms$", re.I), "ms"),
     (re.compile(r"_us$", re.I), "us"),
+    (re.compile(r"_ns$", re.I), "ns"),
 ]
 
 

@@ -13,6 +13,7 @@ import io
 import json
 import os
 import re
+import stat
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -139,20 +140,11 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     data: bytes | None = None
     p: Path | None = None
     if str(path) == "-":
-        data = sys.stdin.buffer.read()
-        if not data:
-            raise InputError(f"{source}: empty input; pipe a CSV table with a header into gyrotest")
+        data = _read_stdin(source)
         head = data[:65536]
     else:
         p = Path(path)
-        if not p.exists():
-            raise InputError(f"{source}: file not found")
-        if p.is_dir():
-            raise InputError(f"{source}: is a directory, expected a log file")
-        if p.stat().st_size == 0:
-            raise InputError(f"{source}: file is empty (0 bytes)")
-        with open(p, "rb") as fh:
-            head = fh.read(65536)
+        head = _read_head(p, source)
     suffix = p.suffix.lower() if p else ""
     if head[:4] == b"PAR1" or suffix in (".parquet", ".pq"):
         if p is None:
@@ -186,6 +178,48 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     if table.num_rows == 0:
         raise InputError(f"{source}: header only, no data rows")
     return RawTable(table, source, fmt, p, header_line=skip + 1)
+
+
+def _read_head(p: Path, source: str) -> bytes:
+    """The first 64 KiB of a regular file; anything else (missing, directory, FIFO, device,
+    unreadable) is a one-line error. A FIFO or device is refused rather than opened: opening
+    a FIFO blocks until a writer appears and /dev/zero never ends."""
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise InputError(f"{source}: file not found") from None
+    except OSError as e:
+        raise InputError(f"{source}: cannot access the file ({e.strerror}); check the path and "
+                         "its permissions") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise InputError(f"{source}: is a directory, expected a log file")
+    if not stat.S_ISREG(st.st_mode):
+        what = "a FIFO (named pipe)" if stat.S_ISFIFO(st.st_mode) else "a device or socket"
+        raise InputError(f"{source}: is {what}, not a regular file; save the log to a file, or "
+                         "pipe CSV text into gyrotest and pass '-'")
+    if st.st_size == 0:
+        raise InputError(f"{source}: file is empty (0 bytes)")
+    try:
+        with open(p, "rb") as fh:
+            return fh.read(65536)
+    except PermissionError:
+        raise InputError(f"{source}: permission denied; make the file readable "
+                         "(chmod u+r) or run as its owner") from None
+    except OSError as e:
+        raise InputError(f"{source}: cannot read the file ({e.strerror})") from None
+
+
+def _read_stdin(source: str) -> bytes:
+    """All of stdin; binary data (e.g. ``< /dev/zero``) is refused after the first 64 KiB
+    instead of being read to exhaustion."""
+    buf = sys.stdin.buffer
+    first = buf.read(65536)
+    if not first:
+        raise InputError(f"{source}: empty input; pipe a CSV table with a header into gyrotest")
+    if b"\x00" in first:
+        raise InputError(f"{source}: binary data, not a text table; pipe CSV/TSV text into "
+                         "gyrotest (Parquet/Feather: pass the file path)")
+    return first + buf.read()
 
 
 def _bad_binary(source: str):

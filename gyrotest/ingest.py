@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -33,7 +34,14 @@ import pyarrow as pa
 
 from .data import GyroConstants, GyroLog
 from .errors import InputError
-from .io.columns import _SUFFIX_UNITS, _ci, _unit_from_name, resolve_columns
+from .io.columns import (
+    _SUFFIX_UNITS,
+    RoleError,
+    _ci,
+    _unit_from_name,
+    column_guesses,
+    resolve_columns,
+)
 from .io.meta import (
     META_KEY,
     _from_gyrotest,
@@ -66,7 +74,8 @@ from .units import factor, to_internal
 
 __all__ = [
     "GAP_FACTOR", "JITTER_WARN", "META_KEY", "NULL_VALUES", "RANGE_BYTES", "STREAM_MIN_BYTES",
-    "RawTable", "_SUFFIX_UNITS", "_ci", "analyse_timing", "build_log", "column_names",
+    "RawTable", "RoleError", "_SUFFIX_UNITS", "_ci", "analyse_timing", "build_log",
+    "column_guesses", "column_names",
     "log_to_table", "read_log", "read_table", "resolve_columns", "site_from_profile", "write_log",
 ]
 
@@ -107,7 +116,18 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
     else:
         raw = read_table(path)
         roles, notes = resolve_columns(raw.table.column_names, prof, source)
-    return build_log(raw, roles, prof, notes, nan_policy)
+    return _naming_file(source, lambda: build_log(raw, roles, prof, notes, nan_policy))
+
+
+def _naming_file(source: str, build: Callable[[], GyroLog]) -> GyroLog:
+    """Run ``build``; an error that does not name the file yet (a unit, a profile value) gets
+    the file name in front, keeping its type."""
+    try:
+        return build()
+    except InputError as e:
+        if str(e).startswith(source):
+            raise
+        raise type(e)(f"{source}: {e}") from None
 
 
 def _wanted(roles: dict[str, Any]) -> list[str]:
@@ -348,7 +368,7 @@ def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
         for c in outs:
             u = prof.units.get(c) or _unit_from_name(c) or g.get("rate_unit")
             if not u:
-                raise InputError(
+                raise RoleError(
                     f"{source}: the unit of rate column {c!r} is not known; give --rate-unit "
                     "(deg/h, deg/s, rad/s, mrad/s, ...) or [gyro] rate_unit in the profile"
                 )

@@ -13,6 +13,7 @@ import io
 import math
 
 import click
+from rich.markup import escape
 
 from ..errors import InputError
 from ..noise.deviations import DEVIATION_KINDS
@@ -191,7 +192,7 @@ def _render(r) -> None:
     c = console()
     for a in r.axes:
         d = a.dev
-        c.print(f"\n[bold]{r.source}[/bold] — axis {a.axis}: {len(a.dev.tau)} τ, "
+        c.print(f"\n[bold]{escape(r.source)}[/bold] — axis {escape(str(a.axis))}: {len(a.dev.tau)} τ, "
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
         c.print(f"  input: {a.input_note}")
         t = Table(title=f"{d.kind.upper()} (σ in {d.unit}); CI {100 * d.confidence:.1f} % from "

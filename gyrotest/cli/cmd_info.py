@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import click
+from rich.markup import escape as esc
 
 from ..units import format_duration
 from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
@@ -23,7 +24,13 @@ def command(log, as_json, ingest_opts):
     Example:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
-    g = load_log(log, ingest_opts, announce=not as_json)
+    from ..ingest import RoleError
+
+    try:
+        g = load_log(log, ingest_opts, announce=not as_json)
+    except RoleError:
+        _list_columns(log, as_json)  # the columns and the guesses, then the error itself
+        raise
     summary = g.summary()
     if as_json:
         emit_json(summary)
@@ -32,14 +39,14 @@ def command(log, as_json, ingest_opts):
 
     tm = g.timing
     c = console()
-    c.print(f"[bold]{g.source}[/bold]")
-    c.print(f"  samples        {tm.n:,}   ({tm.source})")
+    c.print(f"[bold]{esc(g.source)}[/bold]")
+    c.print(f"  samples        {tm.n:,}   ({esc(tm.source)})")
     c.print(f"  sample rate    {fmt_num(tm.sample_rate_hz, 6)} Hz  (tau0 = {fmt_num(tm.tau0, 6)} s)")
     c.print(f"  duration       {format_duration(tm.duration_s)}  ({tm.duration_s:.6g} s)")
     if tm.start:
         c.print(f"  start          {tm.start}")
     gy = g.gyro
-    kind = {"rate": f"rate ({gy.rate_unit})", "counts": "pulse counts per sample",
+    kind = {"rate": f"rate ({esc(gy.rate_unit)})", "counts": "pulse counts per sample",
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
             "voltage": "analog voltage"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
@@ -48,7 +55,7 @@ def command(log, as_json, ingest_opts):
                 + (f", offset {gy.offset_v:g} V" if gy.offset_v is not None else ""))
     if g.site:
         s = g.site
-        c.print(f"  site           latitude {s.latitude_deg:g}°, IA {s.ia_label} "
+        c.print(f"  site           latitude {s.latitude_deg:g}°, IA {esc(s.ia_label)} "
                 f"(earth rate along IA {s.earth_rate_dph():+.4f} deg/h)")
     if tm.gaps:
         c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
@@ -62,8 +69,29 @@ def command(log, as_json, ingest_opts):
     for col in ("channel", "unit", "min", "mean", "max", "std"):
         t.add_column(col, justify="right" if col not in ("channel", "unit") else "left")
     for name, st in summary["channels"].items():
-        t.add_row(name, st["unit"], fmt_num(st["min"]), fmt_num(st["mean"]), fmt_num(st["max"]),
-                  fmt_num(st["std"]))
+        t.add_row(esc(name), esc(st["unit"]), fmt_num(st["min"]), fmt_num(st["mean"]),
+                  fmt_num(st["max"]), fmt_num(st["std"]))
     c.print(t)
     if summary.get("positions"):
-        c.print("  positions      " + ", ".join(f"{k}: {v}" for k, v in summary["positions"].items()))
+        c.print("  positions      " + esc(", ".join(f"{k}: {v}"
+                                                  for k, v in summary["positions"].items())))
+
+
+def _list_columns(log: str, as_json: bool) -> None:
+    """The columns of LOG with the role and unit gyrotest guesses from each name (on stdout)."""
+    from ..ingest import column_guesses, column_names
+
+    guesses = column_guesses(column_names(log))
+    if not guesses:
+        return
+    if as_json:
+        emit_json({"source": log, "columns": guesses})
+        return
+    from rich.table import Table
+
+    t = Table(title=f"columns of {esc(log)} (guessed from the names)")
+    for col in ("column", "guessed role", "unit in header"):
+        t.add_column(col)
+    for g in guesses:
+        t.add_row(esc(g["column"]), esc(g["role"] or "—"), esc(g["unit"] or "—"))
+    console().print(t)

@@ -15,6 +15,11 @@ _TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "s
                "elapsed_s", "datetime", "date_time"}
 _RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps", "omega_dps",
                "rate_rads", "gyro_rate"}
+#: rate columns: rate/omega/gyro/gyr/angvel with an optional axis and unit suffix
+#: (gyro_x_rps, rate_dph), and the short axis names gx/gy/gz, wx/wy/wz
+_RATE_RE = re.compile(
+    r"^(?:(?:rate|omega|gyro|gyr|ang_?vel|angular_velocity)_?[xyz123]?|[gw]_?[xyz])"
+    r"(?:_(?:d?p[hs]|rads?|rad_?s|rps|deg_?[sh]|mrad_?s))?$")
 _COUNT_NAMES = {"counts", "count", "pulses", "pulse", "dn", "delta_n", "n_pulses"}
 _COUNTER_NAMES = {"counter", "cnt", "cum_counts", "pulse_counter"}
 _VOLT_NAMES = {"voltage", "v_out", "vout", "volt", "u_out", "analog"}
@@ -33,7 +38,7 @@ _TEMP_PATTERN = re.compile(r"^(temp|temperature|t_(?!s$)|tc\d|t\d|thermo)", re.I
 _SUFFIX_UNITS = [
     (re.compile(r"_(dph|deg_?h|deg_per_h)$", re.I), "deg/h"),
     (re.compile(r"_(dps|deg_?s|deg_per_s)$", re.I), "deg/s"),
-    (re.compile(r"_(rads|rad_?s|rad_per_s)$", re.I), "rad/s"),
+    (re.compile(r"_(rads|rad_?s|rad_per_s|rps)$", re.I), "rad/s"),
     (re.compile(r"_(mrads|mrad_?s)$", re.I), "mrad/s"),
     (re.compile(r"_(degc|c)$", re.I), "degC"),
     (re.compile(r"_k$", re.I), "K"),
@@ -52,13 +57,68 @@ _SUFFIX_UNITS = [
 
 
 # ----------------------------------------------------------------------------- roles
+class RoleError(InputError):
+    """The columns do not say which one is the gyro output (or its unit): ``gyrotest info``
+    still lists the columns and its guesses before reporting it."""
+
+
+_ROLE_POOLS = [
+    ("time", lambda b: b in _TIME_NAMES),
+    ("rate", lambda b: b in _RATE_NAMES or bool(_RATE_RE.match(b))),
+    ("counts", lambda b: b in _COUNT_NAMES),
+    ("counter", lambda b: b in _COUNTER_NAMES),
+    ("voltage", lambda b: b in _VOLT_NAMES),
+    ("supply voltage", lambda b: b in _SUPPLY_NAMES),
+    ("rate-table rate", lambda b: b in _TABLE_NAMES),
+    ("position", lambda b: b in _POSITION_NAMES),
+    ("temperature", lambda b: bool(_TEMP_PATTERN.match(b))),
+    ("magnetic field", lambda b: any(p.match(b) for p, _ in _FIELD_PATTERNS)),
+    ("up pulses", lambda b: b == "up"),
+    ("down pulses", lambda b: b == "down"),
+]
+
+
+def column_guesses(names: list[str]) -> list[dict[str, str | None]]:
+    """Every column with the role its name suggests (or None) and the unit its header states
+    (or None): what ``gyrotest info`` lists when it cannot pick the gyro output."""
+    out = []
+    for n in names:
+        b = base_name(n).lower()
+        role = next((r for r, test in _ROLE_POOLS if test(b)), None)
+        out.append({"column": n, "role": role, "unit": _unit_from_name(n)})
+    return out
+
+
 def _ci(names: list[str]) -> dict[str, str]:
     return {n.lower(): n for n in names}
 
 
+_HEADER_UNIT = re.compile(r"^(?P<base>.*?\S)\s*(?:\[(?P<sq>[^\[\]]+)\]|\((?P<par>[^()]+)\))\s*$")
+
+
+def split_header_unit(col: str) -> tuple[str, str | None]:
+    """``"gx [deg/s]"`` → ``("gx", "deg/s")``, ``"temp (degC)"`` → ``("temp", "degC")``;
+    a name without a bracketed unit → ``(name, None)``."""
+    m = _HEADER_UNIT.match(col.strip())
+    if not m:
+        return col, None
+    unit = (m.group("sq") or m.group("par")).strip()
+    return m.group("base"), unit or None
+
+
+def base_name(col: str) -> str:
+    """The column name without a bracketed unit."""
+    return split_header_unit(col)[0]
+
+
 def _unit_from_name(col: str) -> str | None:
+    """A unit stated in the header: a bracketed unit (``gx [deg/s]``) or a name suffix
+    (``rate_dps``)."""
+    base, unit = split_header_unit(col)
+    if unit:
+        return unit
     for pat, unit in _SUFFIX_UNITS:
-        if pat.search(col):
+        if pat.search(base):
             return unit
     return None
 
@@ -82,6 +142,10 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
             real = lower[col.lower()]
             used.add(real)
             return real
+        by_base = [n for n in names if base_name(n).lower() == col.lower()]
+        if len(by_base) == 1:  # --rate-col gx for a header "gx [deg/s]"
+            used.add(by_base[0])
+            return by_base[0]
         raise InputError(_missing_column_msg(col, names, source, role))
 
     roles: dict[str, Any] = {}
@@ -89,7 +153,7 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
     if cols.get("time"):
         roles["time"] = need(cols["time"], "time")
     else:
-        hits = [n for n in names if n.lower() in _TIME_NAMES]
+        hits = [n for n in names if base_name(n).lower() in _TIME_NAMES]
         roles["time"] = hits[0] if hits else None
         if roles["time"]:
             used.add(roles["time"])
@@ -105,8 +169,8 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
         for n in names:
             if n in used:
                 continue
-            ln = n.lower()
-            if ln in _RATE_NAMES or re.match(r"^(rate|omega|gyro)_?[xyz123]?(_d?p[hs]|_rads)?$", ln):
+            ln = base_name(n).lower()
+            if ln in _RATE_NAMES or _RATE_RE.match(ln):
                 found.setdefault("rate", []).append(n)
             elif ln in _COUNT_NAMES:
                 found.setdefault("counts", []).append(n)
@@ -117,13 +181,13 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
         if "up" in lower and "down" in lower:
             found["updown"] = [lower["up"], lower["down"]]
         if len(found) > 1:
-            raise InputError(
+            raise RoleError(
                 f"{source}: several gyro outputs look possible ({'; '.join(f'{k}: {v}' for k, v in found.items())}); "
                 "name one with --rate-col, --counts-col, --up-col/--down-col, --counter-col or "
                 "--voltage-col (or in the profile's [columns])"
             )
         if not found:
-            raise InputError(
+            raise RoleError(
                 f"{source}: no gyro output column found among {', '.join(names[:12])}; name it "
                 "with --rate-col, --counts-col, --up-col/--down-col, --counter-col or --voltage-col "
                 "(or in a --profile)"
@@ -137,7 +201,8 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
     if cols.get("temperature"):
         roles["temperature"] = [need(c, "temperature") for c in cols["temperature"]]
     else:
-        roles["temperature"] = [n for n in names if n not in used and _TEMP_PATTERN.match(n)]
+        roles["temperature"] = [n for n in names
+                                if n not in used and _TEMP_PATTERN.match(base_name(n))]
         if roles["temperature"]:
             notes.append("temperature: " + ", ".join(map(repr, roles["temperature"])) + " (auto-detected)")
         used.update(roles["temperature"])
@@ -146,7 +211,7 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
     else:
         fx = []
         for pat, _axis in _FIELD_PATTERNS:
-            hit = [n for n in names if n not in used and pat.match(n)]
+            hit = [n for n in names if n not in used and pat.match(base_name(n))]
             if len(hit) == 1:
                 fx.append(hit[0])
         roles["field"] = fx if len(fx) == 3 else []
@@ -159,7 +224,7 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
         if cols.get(role):
             roles[role] = need(cols[role], label)
         else:
-            hit = [n for n in names if n not in used and n.lower() in pool]
+            hit = [n for n in names if n not in used and base_name(n).lower() in pool]
             roles[role] = hit[0] if hit else None
             if roles[role]:
                 used.add(roles[role])

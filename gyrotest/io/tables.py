@@ -158,7 +158,10 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         if _names_only:
             return RawTable(pa.table({}), source, "feather", p)
         return _read_feather(p, source, columns)
+    if head.startswith(BOM):  # Excel "CSV UTF-8": the mark would hide the first column name
+        head = head[len(BOM):]
     delim, skip, names = _sniff_text(head, source)
+    decimal = _sniff_decimal(head, delim, skip)
     if _names_only:
         return RawTable(pa.table({n: pa.array([], pa.float64()) for n in names}), source,
                         "csv", p, skip + 1)
@@ -166,15 +169,17 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         _check_columns(columns, names, source)
     fmt = {"\t": "tsv", "whitespace": "whitespace"}.get(delim, "csv")
     if delim == "whitespace":
-        table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns)
+        table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns,
+                                 decimal=decimal)
     else:
-        owned = _stream_numeric(p, delim, skip, names, columns) if p else None
+        owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal) if p else None
         if owned is not None:
             table = pa.table({c: owned[c] for c in (columns or names)})
             if table.num_rows == 0:
                 raise InputError(f"{source}: header only, no data rows")
             return RawTable(table, source, fmt, p, header_line=skip + 1, owned=owned)
-        table = _read_csv_arrow(p if p else io.BytesIO(data), source, delim, skip, columns, names)
+        table = _read_csv_arrow(p if p else io.BytesIO(data), source, delim, skip, columns, names,
+                                decimal=decimal)
     if table.num_rows == 0:
         raise InputError(f"{source}: header only, no data rows")
     return RawTable(table, source, fmt, p, header_line=skip + 1)
@@ -222,6 +227,33 @@ def _read_stdin(source: str) -> bytes:
     return first + buf.read()
 
 
+BOM = b"\xef\xbb\xbf"
+_COMMA_DECIMAL = re.compile(r"^[-+]?\d+,\d+(?:[eE][-+]?\d+)?$")
+_DOT_DECIMAL = re.compile(r"^[-+]?\d*\.\d+(?:[eE][-+]?\d+)?$")
+
+
+def _sniff_decimal(head: bytes, delim: str, skip: int) -> str:
+    """``,`` when the data rows (of a file not separated by commas) hold numbers written with
+    decimal commas (``0,1;5,82`` as European Excel writes them) and none with a decimal point."""
+    if delim == ",":
+        return "."
+    text = head.decode("utf-8", errors="ignore")
+    lines = [ln for ln in text.splitlines()[skip + 1: skip + 200]
+             if ln.strip() and not ln.lstrip().startswith("#")]
+    if len(head) >= 65536:
+        lines = lines[:-1]  # may be cut
+    sep = None if delim == "whitespace" else delim
+    comma = dot = 0
+    for ln in lines:
+        for tok in ln.split(sep):
+            tok = tok.strip().strip('"')
+            if _COMMA_DECIMAL.match(tok):
+                comma += 1
+            elif _DOT_DECIMAL.match(tok):
+                dot += 1
+    return "," if comma and not dot else "."
+
+
 def _bad_binary(source: str):
     raise InputError(f"{source}: Parquet/Feather cannot be read from stdin; pass the file path")
 
@@ -255,7 +287,7 @@ def _skip_comment_rows(row):
 
 
 def _csv_options(delim: str, skip: int, names: list[str], columns: list[str] | None,
-                 column_types: dict | None = None):
+                 column_types: dict | None = None, *, decimal: str = "."):
     import pyarrow.csv as pcsv
 
     # the header line is skipped and our own (stripped) names are used, so that a padded
@@ -265,12 +297,14 @@ def _csv_options(delim: str, skip: int, names: list[str], columns: list[str] | N
     parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
                                    ignore_empty_lines=True)
     conv_opts = pcsv.ConvertOptions(include_columns=columns, strings_can_be_null=True,
-                                    null_values=NULL_VALUES, column_types=column_types)
+                                    null_values=NULL_VALUES, column_types=column_types,
+                                    decimal_point=decimal)
     return read_opts, parse_opts, conv_opts
 
 
 def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
-                    columns: list[str] | None) -> dict[str, np.ndarray] | None:
+                    columns: list[str] | None, *, decimal: str = "."
+                    ) -> dict[str, np.ndarray] | None:
     """Read a large, all-numeric text table straight into preallocated float64 arrays.
 
     The file is read in ranges of :data:`RANGE_BYTES` cut at line ends; each range
@@ -302,7 +336,7 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
         parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
                                        ignore_empty_lines=True)
         conv_opts = pcsv.ConvertOptions(include_columns=cols, strings_can_be_null=True,
-                                        null_values=NULL_VALUES,
+                                        null_values=NULL_VALUES, decimal_point=decimal,
                                         column_types={c: pa.float64() for c in cols})
         n = 0
         fh.seek(pos)
@@ -354,10 +388,10 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
 
 
 def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] | None,
-                    names: list[str]) -> pa.Table:
+                    names: list[str], *, decimal: str = ".") -> pa.Table:
     import pyarrow.csv as pcsv
 
-    read_opts, parse_opts, conv_opts = _csv_options(delim, skip, names, columns)
+    read_opts, parse_opts, conv_opts = _csv_options(delim, skip, names, columns, decimal=decimal)
     try:
         return pcsv.read_csv(src, read_options=read_opts, parse_options=parse_opts,
                              convert_options=conv_opts)
@@ -373,12 +407,13 @@ def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] 
                          f"table: {msg.splitlines()[0][:200]}") from None
 
 
-def _read_whitespace(src, source: str, skip: int, columns: list[str] | None) -> pa.Table:
+def _read_whitespace(src, source: str, skip: int, columns: list[str] | None, *,
+                     decimal: str = ".") -> pa.Table:
     import pandas as pd
 
     try:
         df = pd.read_csv(src, sep=r"\s+", skiprows=skip, comment="#", usecols=columns,
-                         engine="c")
+                         engine="c", decimal=decimal)
     except (ValueError, pd.errors.ParserError) as e:
         raise InputError(f"{source}: cannot parse as a whitespace-separated table: "
                          f"{str(e).splitlines()[0][:200]}") from None
@@ -429,8 +464,24 @@ def _finish_binary(table: pa.Table, source: str, fmt: str, p: Path, meta: dict) 
 
 def column_names(path: str | os.PathLike) -> list[str]:
     """The column names of a log file without reading its data."""
-    raw = read_table(path, _names_only=True) if str(path) != "-" else None
-    return raw.table.column_names if raw else []
+    if str(path) == "-":
+        return []
+    raw = read_table(path, _names_only=True)
+    if raw.fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        try:
+            return list(pq.read_schema(raw.path).names)
+        except Exception:  # a corrupt file: the full read reports it
+            return []
+    if raw.fmt == "feather":
+        import pyarrow.feather as feather
+
+        try:
+            return list(feather.read_table(raw.path, memory_map=True).schema.names)
+        except Exception:
+            return []
+    return raw.table.column_names
 
 
 

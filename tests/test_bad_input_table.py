@@ -279,3 +279,23 @@ def test_quiet_and_debug_anywhere(tmp_path):
     assert run_cli(["info", p, "-q", "--rate-unit", "deg/h", "--quiet"]).err == ""
     bad = run_cli(["info", tmp_path / "nope.csv", "--debug"])
     assert bad.code == 2 and "Traceback" in bad.err
+
+
+# ----------------------------------------------------------------------------- resources
+def test_header_of_a_million_columns(tmp_path):
+    p = tmp_path / "wide.csv"
+    n = 10**6
+    p.write_text(",".join(f"c{i}" for i in range(n)) + "\n" + ",".join("1" * n) + "\n")
+    r = run_cli(["info", p, "--rate-unit", "deg/h"])
+    r.assert_clean_error("wide.csv", "no complete line in the first 64 KiB")
+
+
+def test_one_huge_line(tmp_path):
+    p = tmp_path / "oneline.csv"
+    with open(p, "wb") as fh:
+        fh.write(b"time,rate\n" + b"1" * (12 << 20))
+    run_cli(["info", p, "--rate-unit", "deg/h"]).assert_clean_error("oneline.csv",
+                                                                    "line longer than")
+    q = tmp_path / "noeol.csv"
+    q.write_bytes(b"7" * (1 << 20))
+    run_cli(["info", q]).assert_clean_error("noeol.csv", "no complete line")

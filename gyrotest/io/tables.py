@@ -7,6 +7,7 @@ file) with :func:`_stream_numeric` for large all-numeric files.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import difflib
 import io
@@ -93,6 +94,12 @@ def _sniff_text(head: bytes, source: str) -> tuple[str, int, list[str]]:
         else:
             text = head[: e.start].decode("utf-8")
     lines = text.splitlines()
+    if len(head) >= 65536 and len(lines) <= 1 + sum(
+            1 for ln in lines if not ln.strip() or ln.lstrip().startswith("#")):
+        raise InputError(f"{source}: no complete line in the first 64 KiB (a header of "
+                         f"{text.count(',') + text.count(chr(9)) + 1:,}+ fields, or no line "
+                         "ends); a gyro log has a header line naming a few columns — check the "
+                         "file and its line endings")
     skip = 0
     while skip < len(lines) and (not lines[skip].strip() or lines[skip].lstrip().startswith("#")):
         skip += 1
@@ -126,7 +133,8 @@ def _sniff_text(head: bytes, source: str) -> tuple[str, int, list[str]]:
     if not any(re.search(r"[A-Za-z_]", n) for n in names):
         raise InputError(f"{source}: line {skip + 1} does not look like a header (no column "
                          "names, only numbers); add a header line naming the columns")
-    dup = {n for n in names if names.count(n) > 1}
+    seen: set[str] = set()
+    dup = {n for n in names if n in seen or seen.add(n)}
     if dup:
         raise InputError(f"{source}: duplicate column name(s) in the header: {', '.join(sorted(dup))}")
     return delim, skip, names
@@ -279,9 +287,32 @@ STREAM_MIN_BYTES = 128 << 20
 RANGE_BYTES = 64 << 20
 
 
+@contextlib.contextmanager
+def _quiet_invalid_row_handler():
+    """pyarrow decodes an invalid row as UTF-8 *before* calling :func:`_skip_comment_rows`;
+    undecodable bytes raise there, inside a callback, and Python prints the traceback as
+    "Exception ignored in ..." — the row is still reported as an error, so silence that print
+    while a CSV is parsed."""
+    old = sys.unraisablehook
+
+    def hook(unraisable):
+        if unraisable.object is not _skip_comment_rows:
+            old(unraisable)
+
+    sys.unraisablehook = hook
+    try:
+        yield
+    finally:
+        sys.unraisablehook = old
+
+
 def _skip_comment_rows(row):
     """pyarrow invalid-row handler: skip ``#`` comment lines in the middle of a file."""
-    if row.text.lstrip().startswith("#") or not row.text.strip():
+    try:
+        text = row.text
+    except UnicodeDecodeError:  # undecodable bytes in the row: pyarrow reports the row
+        return "error"
+    if text.lstrip().startswith("#") or not text.strip():
         return "skip"
     return "error"
 
@@ -358,8 +389,10 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
                     continue
             else:
                 cut = end  # last line without a newline
-            tbl = pcsv.read_csv(pa.BufferReader(pa.py_buffer(view[:cut])), read_options=read_opts,
-                                parse_options=parse_opts, convert_options=conv_opts)
+            with _quiet_invalid_row_handler():
+                tbl = pcsv.read_csv(pa.BufferReader(pa.py_buffer(view[:cut])),
+                                    read_options=read_opts, parse_options=parse_opts,
+                                    convert_options=conv_opts)
             view[: end - cut] = view[cut:end]
             held = end - cut
             k = tbl.num_rows
@@ -393,14 +426,18 @@ def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] 
 
     read_opts, parse_opts, conv_opts = _csv_options(delim, skip, names, columns, decimal=decimal)
     try:
-        return pcsv.read_csv(src, read_options=read_opts, parse_options=parse_opts,
-                             convert_options=conv_opts)
+        with _quiet_invalid_row_handler():
+            return pcsv.read_csv(src, read_options=read_opts, parse_options=parse_opts,
+                                 convert_options=conv_opts)
     except pa.ArrowInvalid as e:
         msg = str(e)
         m = re.search(r"Expected (\d+) columns, got (\d+): (.*)", msg)
         if m:
             raise InputError(f"{source}: a row has {m.group(2)} fields where the header has "
                              f"{m.group(1)}: {m.group(3)[:60]!r}; fix or delete that line") from None
+        if "straddl" in msg:
+            raise InputError(f"{source}: a line longer than {4 << 20 >> 20} MiB; a bench log has "
+                             "short lines: check the line endings (or the file)") from None
         if "Empty CSV file" in msg:
             raise InputError(f"{source}: no data") from None
         raise InputError(f"{source}: cannot parse as a {('TSV' if delim == chr(9) else 'CSV')} "

@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import click
-from rich.markup import escape as esc
+from rich.markup import escape
 
 from ..units import format_duration
 from .common import console, emit_json, fmt_num, ingest_options, json_option, load_log, with_ingest
+
+
+def esc(x) -> str:
+    """Text for rich markup: brackets in names (``gx [deg/s]``) printed as they are."""
+    return escape("" if x is None else str(x))
 
 
 @click.command("info")

@@ -551,6 +551,7 @@ def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
             i = int(np.flatnonzero(bad.to_numpy())[0])
             raise InputError(f"{raw.source}: non-numeric value {str(s.iloc[i])[:30]!r} in column "
                              f"{col!r} ({role}), {raw.where(i)}; fix or delete that row")
-        return num.to_numpy(dtype=np.float64, na_value=np.nan)
+        out = num.to_numpy(dtype=np.float64, na_value=np.nan)
+        return out if out.flags.writeable else out.copy()  # callers convert units in place
     raise InputError(f"{raw.source}: column {col!r} ({role}) has type {t}, expected numbers")
 

@@ -141,7 +141,7 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             return TimeAxis((ns - ns[0]).astype(np.float64) * 1e-9, start, "ISO-8601", notes)
         if pd.api.types.is_integer_dtype(num.dtype):
             ints = num.to_numpy(dtype=np.int64)
-        v = num.to_numpy(dtype=np.float64)
+        v = np.array(num.to_numpy(dtype=np.float64))  # a writeable copy: shifted in place
     elif pa.types.is_integer(t) and arr.null_count == 0:
         ints = np.asarray(arr.to_numpy(zero_copy_only=False), dtype=np.int64)
         v = None

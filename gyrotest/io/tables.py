@@ -454,7 +454,14 @@ def _read_whitespace(src, source: str, skip: int, columns: list[str] | None, *,
     except (ValueError, pd.errors.ParserError) as e:
         raise InputError(f"{source}: cannot parse as a whitespace-separated table: "
                          f"{str(e).splitlines()[0][:200]}") from None
-    return pa.Table.from_pandas(df, preserve_index=False)
+    try:
+        return pa.Table.from_pandas(df, preserve_index=False)
+    except (OverflowError, pa.ArrowException):
+        # an object column Arrow cannot type (integers beyond 64 bits, mixed values): as text,
+        # so the column conversion reports the row
+        obj = [c for c in df.columns if df[c].dtype == object]
+        return pa.Table.from_pandas(df.astype({c: str for c in obj}).where(df.notna(), None),
+                                    preserve_index=False)
 
 
 def _read_parquet(p: Path, source: str, columns: list[str] | None) -> RawTable:

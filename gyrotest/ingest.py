@@ -23,680 +23,61 @@ are dropped with a note.
 
 from __future__ import annotations
 
-import csv
-import difflib
-import io
 import json
 import math
 import os
-import re
-import sys
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
-from . import __version__
-from .data import Gap, GyroConstants, GyroLog, Timing
-from .earth import Site, check_latitude, parse_ia
+from .data import GyroConstants, GyroLog
 from .errors import InputError
+from .io.columns import (
+    _SUFFIX_UNITS,
+    RoleError,
+    _ci,
+    _unit_from_name,
+    column_guesses,
+    resolve_columns,
+)
+from .io.meta import (
+    META_KEY,
+    _from_gyrotest,
+    log_to_table,
+    read_gyrotest_table,
+    validate_meta,
+    write_log,
+)
+from .io.site import site_from_profile
+from .io.tables import (
+    NULL_VALUES,
+    RANGE_BYTES,
+    STREAM_MIN_BYTES,
+    RawTable,
+    _column_to_float,
+    _source_name,
+    column_names,
+    read_table,
+)
+from .io.timeaxis import (
+    GAP_FACTOR,
+    JITTER_WARN,
+    TIME_UNIT_FIX,
+    _time_seconds,
+    analyse_timing,
+    check_rate,
+)
 from .profile import Profile, merge
-from .units import INTERNAL, factor, to_internal
+from .units import factor, to_internal
 
-META_KEY = b"gyrotest"
-GAP_FACTOR = 1.5  # an interval longer than this many nominal intervals is a gap
-JITTER_WARN = 0.01  # relative std of the interval above which sampling is called irregular
-
-# ----------------------------------------------------------------------------- auto-detection
-_TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "sec", "elapsed",
-               "elapsed_s", "datetime", "date_time"}
-_RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps", "omega_dps",
-               "rate_rads", "gyro_rate"}
-_COUNT_NAMES = {"counts", "count", "pulses", "pulse", "dn", "delta_n", "n_pulses"}
-_COUNTER_NAMES = {"counter", "cnt", "cum_counts", "pulse_counter"}
-_VOLT_NAMES = {"voltage", "v_out", "vout", "volt", "u_out", "analog"}
-_SUPPLY_NAMES = {"supply", "vsupply", "v_supply", "supply_v", "vcc", "vin", "v_in", "vdd"}
-_TABLE_NAMES = {"table_rate", "table", "cmd_rate", "table_dps", "commanded_rate", "table_cmd",
-                "rate_cmd", "input_rate"}
-_POSITION_NAMES = {"position", "pos", "ia_position"}
-_FIELD_PATTERNS = [
-    (re.compile(r"^(h|b|mag_?|field_?)x", re.I), "x"),
-    (re.compile(r"^(h|b|mag_?|field_?)y", re.I), "y"),
-    (re.compile(r"^(h|b|mag_?|field_?)z", re.I), "z"),
+__all__ = [
+    "GAP_FACTOR", "JITTER_WARN", "META_KEY", "NULL_VALUES", "RANGE_BYTES", "STREAM_MIN_BYTES",
+    "RawTable", "RoleError", "_SUFFIX_UNITS", "_ci", "analyse_timing", "build_log",
+    "column_guesses", "column_names",
+    "log_to_table", "read_log", "read_table", "resolve_columns", "site_from_profile", "write_log",
 ]
-_TEMP_PATTERN = re.compile(r"^(temp|temperature|t_(?!s$)|tc\d|t\d|thermo)", re.I)
-
-# unit hints from a column-name suffix
-_SUFFIX_UNITS = [
-    (re.compile(r"_(dph|deg_?h|deg_per_h)$", re.I), "deg/h"),
-    (re.compile(r"_(dps|deg_?s|deg_per_s)$", re.I), "deg/s"),
-    (re.compile(r"_(rads|rad_?s|rad_per_s)$", re.I), "rad/s"),
-    (re.compile(r"_(mrads|mrad_?s)$", re.I), "mrad/s"),
-    (re.compile(r"_(degc|c)$", re.I), "degC"),
-    (re.compile(r"_k$", re.I), "K"),
-    (re.compile(r"_(degf|f)$", re.I), "degF"),
-    (re.compile(r"_(ut|µt|microtesla)$", re.I), "uT"),
-    (re.compile(r"_nt$", re.I), "nT"),
-    (re.compile(r"_mt$"), "mT"),
-    (re.compile(r"_(g|gauss)$"), "G"),
-    (re.compile(r"_mg$"), "mG"),
-    (re.compile(r"_v$", re.I), "V"),
-    (re.compile(r"_mv$", re.I), "mV"),
-    (re.compile(r"_ms$", re.I), "ms"),
-    (re.compile(r"_us$", re.I), "us"),
-]
-
-
-@dataclass
-class RawTable:
-    """A table as read from disk, before roles and units are applied."""
-
-    table: pa.Table
-    source: str
-    fmt: str  # csv | tsv | whitespace | parquet | feather
-    path: Path | None  # None for stdin
-    header_line: int = 0  # 1-based line of the header in a text file
-    meta: dict | None = None  # gyrotest metadata of a converted Parquet/Feather file
-    # float64 columns read by the streaming reader, writeable and owned by this table: handed
-    # to the first (only) role that uses them without a copy (see _column_to_float)
-    owned: dict[str, np.ndarray] = field(default_factory=dict)
-    exclusive: set[str] = field(default_factory=set)
-
-    def line_of_row(self, row: int) -> int | None:
-        """1-based text line of 0-based data row ``row`` (text files only)."""
-        if self.fmt in ("parquet", "feather"):
-            return None
-        if self.path is None:
-            return None
-        count = -1
-        with open(self.path, "rb") as fh:
-            for lineno, line in enumerate(fh, 1):
-                if lineno <= self.header_line:
-                    continue
-                s = line.strip()
-                if not s or s.startswith(b"#"):
-                    continue
-                count += 1
-                if count == row:
-                    return lineno
-        return None
-
-    def where(self, row: int) -> str:
-        line = self.line_of_row(row)
-        return f"row {row + 1}" + (f" (line {line})" if line else "")
-
-
-# ----------------------------------------------------------------------------- table reading
-def _source_name(path: str | os.PathLike) -> str:
-    return "<stdin>" if str(path) == "-" else str(path)
-
-
-def _sniff_text(head: bytes, source: str) -> tuple[str, int, list[str]]:
-    """Find the delimiter, the number of leading comment/blank lines and the header names."""
-    if b"\x00" in head:
-        raise InputError(
-            f"{source}: binary data, not a text table; expected CSV/TSV text with a header, "
-            "Parquet or Feather"
-        )
-    try:
-        text = head.decode("utf-8")
-    except UnicodeDecodeError as e:
-        # a multi-byte character cut at the end of the sample is fine
-        if e.start < len(head) - 4:
-            try:
-                text = head.decode("latin-1")
-                if sum(ch.isprintable() or ch in "\r\n\t" for ch in text) < 0.95 * len(text):
-                    raise ValueError
-            except ValueError:
-                raise InputError(
-                    f"{source}: not a text table (undecodable bytes); expected CSV/TSV text with "
-                    "a header, Parquet or Feather"
-                ) from None
-        else:
-            text = head[: e.start].decode("utf-8")
-    lines = text.splitlines()
-    skip = 0
-    while skip < len(lines) and (not lines[skip].strip() or lines[skip].lstrip().startswith("#")):
-        skip += 1
-    if skip >= len(lines):
-        raise InputError(f"{source}: no header line found (the file holds only comments or blank "
-                         "lines); the first non-comment line must name the columns")
-    header = lines[skip]
-    sample = [ln for ln in lines[skip: skip + 50] if ln.strip() and not ln.lstrip().startswith("#")]
-    delim = None
-    for cand in (",", "\t", ";", "|"):
-        counts = [ln.count(cand) for ln in sample[:-1] or sample]
-        if counts[0] > 0 and all(c == counts[0] for c in counts):
-            delim = cand
-            break
-    if delim is None:
-        if len(header.split()) > 1:
-            delim = "whitespace"
-        elif any(c in header for c in ",\t;|"):
-            raise InputError(f"{source}: rows have different numbers of fields than the header; "
-                             "check the delimiter and the header line")
-        else:
-            delim = ","  # a single column
-    if delim == "whitespace":
-        names = header.split()
-    else:
-        names = next(csv.reader([header], delimiter=delim))
-        names = [n.strip() for n in names]
-    if any(not n for n in names):
-        raise InputError(f"{source}: the header (line {skip + 1}) has an empty column name; "
-                         "every column needs a name")
-    if not any(re.search(r"[A-Za-z_]", n) for n in names):
-        raise InputError(f"{source}: line {skip + 1} does not look like a header (no column "
-                         "names, only numbers); add a header line naming the columns")
-    dup = {n for n in names if names.count(n) > 1}
-    if dup:
-        raise InputError(f"{source}: duplicate column name(s) in the header: {', '.join(sorted(dup))}")
-    return delim, skip, names
-
-
-def read_table(path: str | os.PathLike, columns: list[str] | None = None,
-               *, _names_only: bool = False) -> RawTable:
-    """Read a table file (or ``-`` for stdin) into a pyarrow Table, only ``columns`` when
-    given. Errors name the file and the fix."""
-    source = _source_name(path)
-    data: bytes | None = None
-    p: Path | None = None
-    if str(path) == "-":
-        data = sys.stdin.buffer.read()
-        if not data:
-            raise InputError(f"{source}: empty input; pipe a CSV table with a header into gyrotest")
-        head = data[:65536]
-    else:
-        p = Path(path)
-        if not p.exists():
-            raise InputError(f"{source}: file not found")
-        if p.is_dir():
-            raise InputError(f"{source}: is a directory, expected a log file")
-        if p.stat().st_size == 0:
-            raise InputError(f"{source}: file is empty (0 bytes)")
-        with open(p, "rb") as fh:
-            head = fh.read(65536)
-    suffix = p.suffix.lower() if p else ""
-    if head[:4] == b"PAR1" or suffix in (".parquet", ".pq"):
-        if p is None:
-            _bad_binary(source)
-        if _names_only:
-            return RawTable(pa.table({}), source, "parquet", p)
-        return _read_parquet(p, source, columns)
-    if head[:6] == b"ARROW1" or head[:4] == b"FEA1" or suffix in (".feather", ".arrow", ".ipc"):
-        if p is None:
-            _bad_binary(source)
-        if _names_only:
-            return RawTable(pa.table({}), source, "feather", p)
-        return _read_feather(p, source, columns)
-    delim, skip, names = _sniff_text(head, source)
-    if _names_only:
-        return RawTable(pa.table({n: pa.array([], pa.float64()) for n in names}), source,
-                        "csv", p, skip + 1)
-    if columns is not None:
-        _check_columns(columns, names, source)
-    fmt = {"\t": "tsv", "whitespace": "whitespace"}.get(delim, "csv")
-    if delim == "whitespace":
-        table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns)
-    else:
-        owned = _stream_numeric(p, delim, skip, names, columns) if p else None
-        if owned is not None:
-            table = pa.table({c: owned[c] for c in (columns or names)})
-            if table.num_rows == 0:
-                raise InputError(f"{source}: header only, no data rows")
-            return RawTable(table, source, fmt, p, header_line=skip + 1, owned=owned)
-        table = _read_csv_arrow(p if p else io.BytesIO(data), source, delim, skip, columns, names)
-    if table.num_rows == 0:
-        raise InputError(f"{source}: header only, no data rows")
-    return RawTable(table, source, fmt, p, header_line=skip + 1)
-
-
-def _bad_binary(source: str):
-    raise InputError(f"{source}: Parquet/Feather cannot be read from stdin; pass the file path")
-
-
-def _check_columns(wanted: list[str], names: list[str], source: str) -> None:
-    for c in wanted:
-        if c not in names:
-            raise InputError(_missing_column_msg(c, names, source))
-
-
-def _missing_column_msg(col: str, names: list[str], source: str, role: str | None = None) -> str:
-    close = difflib.get_close_matches(col, names, n=1, cutoff=0.6)
-    hint = f"did you mean {close[0]!r}? " if close else ""
-    what = f" (named for {role})" if role else ""
-    return (f"{source}: column {col!r}{what} not found; {hint}columns are: "
-            f"{', '.join(names[:20])}{' ...' if len(names) > 20 else ''}")
-
-
-NULL_VALUES = ["", "NA", "N/A", "null", "NULL", "-"]
-#: text files at least this large are read by the streaming reader straight into float64 arrays
-STREAM_MIN_BYTES = 128 << 20
-#: bytes of text parsed at a time by the streaming reader
-RANGE_BYTES = 64 << 20
-
-
-def _skip_comment_rows(row):
-    """pyarrow invalid-row handler: skip ``#`` comment lines in the middle of a file."""
-    if row.text.lstrip().startswith("#") or not row.text.strip():
-        return "skip"
-    return "error"
-
-
-def _csv_options(delim: str, skip: int, names: list[str], columns: list[str] | None,
-                 column_types: dict | None = None):
-    import pyarrow.csv as pcsv
-
-    # the header line is skipped and our own (stripped) names are used, so that a padded
-    # header such as "rate , temp" still matches --rate-col rate
-    read_opts = pcsv.ReadOptions(skip_rows=skip + 1, column_names=names, use_threads=True,
-                                 block_size=1 << 22)
-    parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
-                                   ignore_empty_lines=True)
-    conv_opts = pcsv.ConvertOptions(include_columns=columns, strings_can_be_null=True,
-                                    null_values=NULL_VALUES, column_types=column_types)
-    return read_opts, parse_opts, conv_opts
-
-
-def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
-                    columns: list[str] | None) -> dict[str, np.ndarray] | None:
-    """Read a large, all-numeric text table straight into preallocated float64 arrays.
-
-    The file is read in ranges of :data:`RANGE_BYTES` cut at line ends; each range
-    is parsed by pyarrow's multithreaded reader with every used column forced to float64 and
-    copied into the output arrays, so peak memory is about the arrays plus one range instead of
-    Arrow buffers plus numpy copies of the whole file. Returns None — and the caller uses the
-    whole-file reader, which also produces the precise error messages — for small files or
-    anything that is not plain numbers (text, timestamps, quotes across a cut …)."""
-    import pyarrow.csv as pcsv
-
-    size = path.stat().st_size
-    if size < STREAM_MIN_BYTES:
-        return None
-    cols = list(columns or names)
-    try:
-        fh = open(path, "rb")
-    except OSError:
-        return None
-    try:
-        head = fh.read(1 << 22)
-        pos = 0
-        for _ in range(skip + 1):  # comment lines and the header
-            pos = head.index(b"\n", pos) + 1
-        body_sample = head[pos:]
-        per_row = len(body_sample) / max(body_sample.count(b"\n"), 1)
-        cap = int((size - pos) / max(per_row, 1.0) * 1.02) + 1024
-        out = {c: np.empty(cap) for c in cols}
-        read_opts = pcsv.ReadOptions(column_names=names, use_threads=True, block_size=1 << 22)
-        parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,
-                                       ignore_empty_lines=True)
-        conv_opts = pcsv.ConvertOptions(include_columns=cols, strings_can_be_null=True,
-                                        null_values=NULL_VALUES,
-                                        column_types={c: pa.float64() for c in cols})
-        n = 0
-        fh.seek(pos)
-        # one reusable buffer (fresh memory is expensive to touch): [carry | new bytes]
-        buf = bytearray(RANGE_BYTES + (1 << 20))
-        view = memoryview(buf)
-        held = 0  # bytes of an incomplete last line carried to the next range
-        while True:
-            if held >= len(buf) - (1 << 16):  # a single line longer than the buffer
-                return None
-            got = fh.readinto(view[held:held + RANGE_BYTES])
-            end = held + got
-            if end == 0:
-                break
-            if got:
-                cut = buf.rfind(b"\n", 0, end) + 1
-                if cut == 0:
-                    held = end
-                    continue
-            else:
-                cut = end  # last line without a newline
-            tbl = pcsv.read_csv(pa.BufferReader(pa.py_buffer(view[:cut])), read_options=read_opts,
-                                parse_options=parse_opts, convert_options=conv_opts)
-            view[: end - cut] = view[cut:end]
-            held = end - cut
-            k = tbl.num_rows
-            if n + k > cap:
-                cap = max(int(cap * 1.25), n + k)
-                for c in cols:
-                    grown = np.empty(cap)
-                    grown[:n] = out[c][:n]
-                    out[c] = grown
-            for c in cols:
-                dst = out[c][n:n + k]
-                off = 0
-                for chunk in tbl.column(c).chunks:
-                    m = len(chunk)
-                    dst[off:off + m] = chunk.to_numpy(zero_copy_only=False)
-                    off += m
-            n += k
-            del tbl
-            if not got:
-                break
-    except (pa.ArrowInvalid, ValueError, OSError, KeyError):
-        return None
-    finally:
-        fh.close()
-    return {c: a[:n] for c, a in out.items()}
-
-
-def _read_csv_arrow(src, source: str, delim: str, skip: int, columns: list[str] | None,
-                    names: list[str]) -> pa.Table:
-    import pyarrow.csv as pcsv
-
-    read_opts, parse_opts, conv_opts = _csv_options(delim, skip, names, columns)
-    try:
-        return pcsv.read_csv(src, read_options=read_opts, parse_options=parse_opts,
-                             convert_options=conv_opts)
-    except pa.ArrowInvalid as e:
-        msg = str(e)
-        m = re.search(r"Expected (\d+) columns, got (\d+): (.*)", msg)
-        if m:
-            raise InputError(f"{source}: a row has {m.group(2)} fields where the header has "
-                             f"{m.group(1)}: {m.group(3)[:60]!r}; fix or delete that line") from None
-        if "Empty CSV file" in msg:
-            raise InputError(f"{source}: no data") from None
-        raise InputError(f"{source}: cannot parse as a {('TSV' if delim == chr(9) else 'CSV')} "
-                         f"table: {msg.splitlines()[0][:200]}") from None
-
-
-def _read_whitespace(src, source: str, skip: int, columns: list[str] | None) -> pa.Table:
-    import pandas as pd
-
-    try:
-        df = pd.read_csv(src, sep=r"\s+", skiprows=skip, comment="#", usecols=columns,
-                         engine="c")
-    except (ValueError, pd.errors.ParserError) as e:
-        raise InputError(f"{source}: cannot parse as a whitespace-separated table: "
-                         f"{str(e).splitlines()[0][:200]}") from None
-    return pa.Table.from_pandas(df, preserve_index=False)
-
-
-def _read_parquet(p: Path, source: str, columns: list[str] | None) -> RawTable:
-    import pyarrow.parquet as pq
-
-    try:
-        pf = pq.ParquetFile(p)
-        names = pf.schema_arrow.names
-        if columns is not None:
-            _check_columns(columns, names, source)
-        table = pq.read_table(p, columns=columns, use_threads=True, memory_map=True)
-        meta = pf.schema_arrow.metadata or {}
-    except InputError:
-        raise
-    except Exception as e:  # pyarrow raises several types for corrupt files
-        raise InputError(f"{source}: not a readable Parquet file ({type(e).__name__}: "
-                         f"{str(e).splitlines()[0][:120]})") from None
-    return _finish_binary(table, source, "parquet", p, meta)
-
-
-def _read_feather(p: Path, source: str, columns: list[str] | None) -> RawTable:
-    import pyarrow.feather as feather
-
-    try:
-        table = feather.read_table(p, columns=columns, memory_map=True)
-        meta = table.schema.metadata or {}
-    except Exception as e:
-        raise InputError(f"{source}: not a readable Feather/Arrow file ({type(e).__name__}: "
-                         f"{str(e).splitlines()[0][:120]})") from None
-    return _finish_binary(table, source, "feather", p, meta)
-
-
-def _finish_binary(table: pa.Table, source: str, fmt: str, p: Path, meta: dict) -> RawTable:
-    if table.num_rows == 0:
-        raise InputError(f"{source}: the {fmt} file has no rows")
-    gmeta = None
-    if META_KEY in meta:
-        try:
-            gmeta = json.loads(meta[META_KEY])
-        except ValueError:
-            gmeta = None
-    return RawTable(table, source, fmt, p, meta=gmeta)
-
-
-def column_names(path: str | os.PathLike) -> list[str]:
-    """The column names of a log file without reading its data."""
-    raw = read_table(path, _names_only=True) if str(path) != "-" else None
-    return raw.table.column_names if raw else []
-
-
-# ----------------------------------------------------------------------------- roles
-def _ci(names: list[str]) -> dict[str, str]:
-    return {n.lower(): n for n in names}
-
-
-def _unit_from_name(col: str) -> str | None:
-    for pat, unit in _SUFFIX_UNITS:
-        if pat.search(col):
-            return unit
-    return None
-
-
-def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[str, Any], list[str]]:
-    """Map roles to columns: the profile (and overrides) first, then obvious names.
-
-    Returns (roles, notes). ``roles`` keys: time, kind, output (list), temperature (list),
-    field (list), supply, table_rate, position, extra (list).
-    """
-    cols = prof.columns
-    lower = _ci(names)
-    notes: list[str] = []
-    used: set[str] = set()
-
-    def need(col: str, role: str) -> str:
-        if col in names:
-            used.add(col)
-            return col
-        if col.lower() in lower:
-            real = lower[col.lower()]
-            used.add(real)
-            return real
-        raise InputError(_missing_column_msg(col, names, source, role))
-
-    roles: dict[str, Any] = {}
-    # time
-    if cols.get("time"):
-        roles["time"] = need(cols["time"], "time")
-    else:
-        hits = [n for n in names if n.lower() in _TIME_NAMES]
-        roles["time"] = hits[0] if hits else None
-        if roles["time"]:
-            used.add(roles["time"])
-            notes.append(f"time: column {roles['time']!r} (auto-detected)")
-    # gyro output
-    kind = prof.output_kind()
-    if kind == "updown":
-        roles["output"] = [need(cols["up"], "up pulses"), need(cols["down"], "down pulses")]
-    elif kind is not None:
-        roles["output"] = [need(c, kind) for c in cols[kind]]
-    else:
-        found: dict[str, list[str]] = {}
-        for n in names:
-            if n in used:
-                continue
-            ln = n.lower()
-            if ln in _RATE_NAMES or re.match(r"^(rate|omega|gyro)_?[xyz123]?(_d?p[hs]|_rads)?$", ln):
-                found.setdefault("rate", []).append(n)
-            elif ln in _COUNT_NAMES:
-                found.setdefault("counts", []).append(n)
-            elif ln in _COUNTER_NAMES:
-                found.setdefault("counter", []).append(n)
-            elif ln in _VOLT_NAMES:
-                found.setdefault("voltage", []).append(n)
-        if "up" in lower and "down" in lower:
-            found["updown"] = [lower["up"], lower["down"]]
-        if len(found) > 1:
-            raise InputError(
-                f"{source}: several gyro outputs look possible ({'; '.join(f'{k}: {v}' for k, v in found.items())}); "
-                "name one with --rate-col, --counts-col, --up-col/--down-col, --counter-col or "
-                "--voltage-col (or in the profile's [columns])"
-            )
-        if not found:
-            raise InputError(
-                f"{source}: no gyro output column found among {', '.join(names[:12])}; name it "
-                "with --rate-col, --counts-col, --up-col/--down-col, --counter-col or --voltage-col "
-                "(or in a --profile)"
-            )
-        kind, cs = next(iter(found.items()))
-        roles["output"] = cs
-        used.update(cs)
-        notes.append(f"gyro output: {kind} from column(s) {', '.join(map(repr, cs))} (auto-detected)")
-    roles["kind"] = kind
-    # auxiliary channels
-    if cols.get("temperature"):
-        roles["temperature"] = [need(c, "temperature") for c in cols["temperature"]]
-    else:
-        roles["temperature"] = [n for n in names if n not in used and _TEMP_PATTERN.match(n)]
-        if roles["temperature"]:
-            notes.append("temperature: " + ", ".join(map(repr, roles["temperature"])) + " (auto-detected)")
-        used.update(roles["temperature"])
-    if cols.get("field"):
-        roles["field"] = [need(c, "magnetic field") for c in cols["field"]]
-    else:
-        fx = []
-        for pat, _axis in _FIELD_PATTERNS:
-            hit = [n for n in names if n not in used and pat.match(n)]
-            if len(hit) == 1:
-                fx.append(hit[0])
-        roles["field"] = fx if len(fx) == 3 else []
-        if roles["field"]:
-            notes.append("magnetic field X, Y, Z: " + ", ".join(map(repr, fx)) + " (auto-detected)")
-        used.update(roles["field"])
-    for role, pool, label in (("supply", _SUPPLY_NAMES, "supply voltage"),
-                              ("table_rate", _TABLE_NAMES, "rate-table rate"),
-                              ("position", _POSITION_NAMES, "position")):
-        if cols.get(role):
-            roles[role] = need(cols[role], label)
-        else:
-            hit = [n for n in names if n not in used and n.lower() in pool]
-            roles[role] = hit[0] if hit else None
-            if roles[role]:
-                used.add(roles[role])
-                notes.append(f"{label}: column {roles[role]!r} (auto-detected)")
-    if cols.get("extra"):
-        roles["extra"] = [need(c, "extra channel") for c in cols["extra"]]
-    else:
-        roles["extra"] = [n for n in names if n not in used and not n.startswith("Unnamed")]
-    return roles, notes
-
-
-# ----------------------------------------------------------------------------- conversion
-def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
-    """A column as float64 with NaN for missing cells; a non-numeric cell is an error naming
-    the row."""
-    if col in raw.owned and col in raw.exclusive:
-        return raw.owned.pop(col)  # writeable float64 from the streaming reader: no copy
-    arr = raw.table.column(col)
-    t = arr.type
-    if pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t):
-        if pa.types.is_floating(t) and t != pa.float64():
-            arr = arr.cast(pa.float64())
-        out = arr.to_numpy() if arr.null_count == 0 else arr.to_numpy(zero_copy_only=False)
-        out = np.asarray(out, dtype=np.float64)
-        if not out.flags.writeable:
-            out = out.copy()
-        return out
-    if pa.types.is_null(t):
-        return np.full(len(arr), np.nan)
-    if pa.types.is_string(t) or pa.types.is_large_string(t):
-        import pandas as pd
-
-        s = arr.to_pandas()
-        num = pd.to_numeric(s, errors="coerce")
-        bad = num.isna() & s.notna() & ~s.astype(str).str.strip().str.lower().isin(
-            ["nan", "", "na", "n/a", "null", "-"])
-        if bad.any():
-            i = int(np.flatnonzero(bad.to_numpy())[0])
-            raise InputError(f"{raw.source}: non-numeric value {str(s.iloc[i])[:30]!r} in column "
-                             f"{col!r} ({role}), {raw.where(i)}; fix or delete that row")
-        return num.to_numpy(dtype=np.float64, na_value=np.nan)
-    raise InputError(f"{raw.source}: column {col!r} ({role}) has type {t}, expected numbers")
-
-
-def _time_seconds(raw: RawTable, col: str, unit: str) -> tuple[np.ndarray, str | None]:
-    """The time column in seconds from its first value, plus the ISO start when timestamps."""
-    arr = raw.table.column(col)
-    t = arr.type
-    if arr.null_count:
-        i = int(np.flatnonzero(arr.is_null().to_numpy(zero_copy_only=False))[0])
-        raise InputError(f"{raw.source}: empty time value in column {col!r}, {raw.where(i)}; "
-                         "every row needs a time")
-    if pa.types.is_timestamp(t) or pa.types.is_date(t):
-        ns = arr.cast(pa.timestamp("ns")).to_numpy().astype("datetime64[ns]").astype(np.int64)
-        start = str(np.datetime64(int(ns[0]), "ns"))
-        return (ns - ns[0]).astype(np.float64) * 1e-9, start
-    if pa.types.is_string(t) or pa.types.is_large_string(t):
-        import pandas as pd
-
-        s = arr.to_pandas()
-        num = pd.to_numeric(s, errors="coerce")
-        if num.notna().all():
-            return num.to_numpy(dtype=np.float64) * factor(unit, "time", what=f"column {col!r}"), None
-        try:
-            ts = pd.to_datetime(s, format="ISO8601", utc=False)
-        except (ValueError, TypeError):
-            ts = pd.to_datetime(s, errors="coerce", format="ISO8601")
-            i = int(np.flatnonzero(ts.isna().to_numpy())[0]) if ts.isna().any() else 0
-            raise InputError(f"{raw.source}: cannot read time {str(s.iloc[i])[:40]!r} in column "
-                             f"{col!r}, {raw.where(i)}; use seconds or ISO-8601 timestamps") from None
-        if getattr(ts.dt, "tz", None) is not None:
-            ts = ts.dt.tz_convert("UTC").dt.tz_localize(None)
-        ns = ts.to_numpy().astype("datetime64[ns]").astype(np.int64)
-        return (ns - ns[0]).astype(np.float64) * 1e-9, str(ts.iloc[0].isoformat())
-    v = _column_to_float(raw, col, "time")
-    bad = ~np.isfinite(v)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InputError(f"{raw.source}: invalid time value in column {col!r}, {raw.where(i)}")
-    f = factor(unit, "time", what=f"column {col!r}")
-    v -= v[0]  # in place: no new 10^7-element arrays
-    if f != 1.0:
-        v *= f
-    return v, None
-
-
-def analyse_timing(t: np.ndarray, source: str, where: Callable[[int], str],
-                   tau0: float | None = None) -> tuple[Timing, np.ndarray]:
-    """Nominal interval, gaps, jitter; raises on backwards time. Returns (Timing, keep mask for
-    exact duplicate timestamps — the caller decides whether the duplicated rows are identical).
-    """
-    n = len(t)
-    if n < 2:
-        raise InputError(f"{source}: only {n} sample(s); a log needs at least 2")
-    dt = np.diff(t)
-    dmin, dmax = float(dt.min()), float(dt.max())
-    if dmin > 0 and dmax <= dmin * (1 + 1e-6) and (tau0 is None or abs(dmin - tau0) <= 1e-6 * tau0):
-        # uniform sampling (the common case): no median/partition over 10^7 intervals
-        tau0 = (float(t[-1]) - float(t[0])) / (n - 1) if tau0 is None else tau0
-        timing = Timing(n=n, tau0=tau0, duration_s=float(t[-1] - t[0] + tau0), source="",
-                        jitter_rel=(dmax - dmin) / tau0 / math.sqrt(12.0))
-        return timing, np.ones(n, dtype=bool)
-    back = np.flatnonzero(dt < 0)
-    if back.size:
-        i = int(back[0]) + 1
-        raise InputError(f"{source}: time goes backwards at {where(i)} ({t[i]:.6g} s after "
-                         f"{t[i - 1]:.6g} s); sort the log by time or fix the logger")
-    dup = dt == 0
-    pos = dt[~dup]
-    if pos.size == 0:
-        raise InputError(f"{source}: all timestamps are equal")
-    if tau0 is None:
-        tau0 = float(np.median(pos))
-    gap_idx = np.flatnonzero(dt > GAP_FACTOR * tau0)
-    gaps = [Gap(index=int(i) + 1, time_s=float(t[i + 1]), duration_s=float(dt[i]),
-                missing=int(round(dt[i] / tau0)) - 1) for i in gap_idx]
-    inside = pos[pos <= GAP_FACTOR * tau0]
-    jitter = float(np.std(inside) / tau0) if inside.size > 1 else 0.0
-    keep = np.ones(n, dtype=bool)
-    keep[1:][dup] = False
-    timing = Timing(n=n, tau0=tau0, duration_s=float(t[-1] - t[0] + tau0), source="",
-                    gaps=gaps, jitter_rel=jitter, irregular=jitter > JITTER_WARN)
-    return timing, keep
 
 
 def _nan_runs(mask: np.ndarray) -> tuple[int, int, int]:
@@ -735,7 +116,18 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
     else:
         raw = read_table(path)
         roles, notes = resolve_columns(raw.table.column_names, prof, source)
-    return build_log(raw, roles, prof, notes, nan_policy)
+    return _naming_file(source, lambda: build_log(raw, roles, prof, notes, nan_policy))
+
+
+def _naming_file(source: str, build: Callable[[], GyroLog]) -> GyroLog:
+    """Run ``build``; an error that does not name the file yet (a unit, a profile value) gets
+    the file name in front, keeping its type."""
+    try:
+        return build()
+    except InputError as e:
+        if str(e).startswith(source):
+            raise
+        raise type(e)(f"{source}: {e}") from None
 
 
 def _wanted(roles: dict[str, Any]) -> list[str]:
@@ -746,6 +138,11 @@ def _wanted(roles: dict[str, Any]) -> list[str]:
     for key in ("output", "temperature", "field", "extra"):
         out.extend(roles.get(key) or [])
     return list(dict.fromkeys(out))
+
+
+def _time_unit_from_name(col: str) -> str | None:
+    u = _unit_from_name(col)
+    return u if u in ("ms", "us", "ns") else None
 
 
 def _unit_for(col: str, prof: Profile, default: str) -> str:
@@ -768,23 +165,25 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     units: dict[str, str] = {}
     # ---- time
     start_iso = None
+    fs = g.get("sample_rate_hz")
+    if fs is not None and not (isinstance(fs, (int, float)) and math.isfinite(fs) and fs > 0):
+        raise InputError(f"{source}: sample rate must be a positive number of Hz, got {fs}")
     if roles.get("time"):
-        tunit = _unit_for(roles["time"], prof, "s")
-        if tunit not in ("ms", "us", "µs", "ns", "s", "min", "h"):
-            tunit = prof.units.get(roles["time"], "s")
-        t, start_iso = _time_seconds(raw, roles["time"], tunit)
-        units[roles["time"]] = tunit if start_iso is None else "ISO-8601"
-        time_source = f"time column {roles['time']!r}"
+        tcol = roles["time"]
+        tunit = prof.units.get(tcol) or g.get("time_unit") or _time_unit_from_name(tcol)
+        if tunit is not None:
+            factor(tunit, "time", what=f"time column {tcol!r}")  # an unknown unit: clean error
+        ax = _time_seconds(raw, tcol, tunit, sample_rate_hz=fs)
+        t, start_iso = ax.t, ax.start
+        notes.extend(ax.notes)
+        units[tcol] = ax.unit
+        time_source = f"time column {tcol!r}" + (f" ({ax.unit})" if ax.unit != "s" else "")
         tau0_given = None
-        if g.get("sample_rate_hz"):
-            notes.append("sample_rate_hz ignored: the log has a time column")
     else:
-        fs = g.get("sample_rate_hz")
         if not fs:
             raise InputError(f"{source}: no time column and no sample rate; name the time column "
                              "with --time-col or give --sample-rate HZ (or [gyro] sample_rate_hz)")
-        if fs <= 0:
-            raise InputError(f"{source}: sample rate must be positive, got {fs}")
+        check_rate(1.0 / fs, source, f"--sample-rate {fs:g}")
         t = None
         tau0_given = 1.0 / float(fs)
         time_source = f"sample rate {fs:g} Hz (no time column)"
@@ -823,17 +222,18 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     gyro_cols = {f"gyro output {c!r}": v for c, v in arrays.items()}
     drop = np.zeros(n_rows, dtype=bool)
     for label, v in {**gyro_cols, **aux}.items():
-        miss = np.isnan(v)
+        miss = ~np.isfinite(v)  # ±inf is a missing value too (an overflowed logger cell)
         if not miss.any():
             continue
+        v[miss] = np.nan
         first, run, total = _nan_runs(miss)
         if total == n_rows:
-            raise InputError(f"{source}: {label} has no values (all empty/NaN); check the column "
+            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf); check the column "
                              "or leave it out")
         if nan_policy == "error":
             rng = raw.where(first) if run == 1 else f"{raw.where(first)} to {raw.where(first + run - 1)}"
             raise InputError(
-                f"{source}: {label} has {total} missing/NaN value(s), first at {rng}; fix the data, "
+                f"{source}: {label} has {total} missing/NaN/±inf value(s), first at {rng}; fix the data, "
                 "or pass --nan gap (drop those rows as gaps) or --nan interpolate"
             )
         if nan_policy == "interpolate" and label in aux:
@@ -844,9 +244,10 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
             drop |= miss
             notes.append(f"{label}: {total} row(s) with missing values dropped and treated as gaps")
     for c, v in extra.items():
-        if np.isnan(v).any():
+        miss = ~np.isfinite(v)
+        if miss.any():
             idx = np.arange(n_rows)
-            miss = np.isnan(v)
+            v[miss] = np.nan
             if (~miss).any():
                 v[miss] = np.interp(idx[miss], idx[~miss], v[~miss])
             notes.append(f"extra column {c!r}: missing values interpolated")
@@ -896,6 +297,15 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     timing.source = time_source
     timing.start = start_iso
     tau0 = timing.tau0
+    if roles.get("time"):
+        check_rate(tau0, source, f"time column {roles['time']!r} read in {units[roles['time']]}")
+        if fs:
+            if abs(1.0 / tau0 - fs) > 0.01 * fs:
+                raise InputError(
+                    f"{source}: the sample rate {fs:g} Hz (--sample-rate or [gyro] sample_rate_hz) "
+                    f"conflicts with time column {roles['time']!r} ({1.0 / tau0:.6g} Hz read in "
+                    f"{units[roles['time']]}); drop the sample rate, or {TIME_UNIT_FIX}")
+            notes.append(f"sample rate {fs:g} Hz agrees with the time column")
     if timing.gaps:
         tot = sum(gp.duration_s for gp in timing.gaps)
         notes.append(f"{len(timing.gaps)} gap(s) in the time axis ({tot:.4g} s in all); analyses "
@@ -958,7 +368,7 @@ def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
         for c in outs:
             u = prof.units.get(c) or _unit_from_name(c) or g.get("rate_unit")
             if not u:
-                raise InputError(
+                raise RoleError(
                     f"{source}: the unit of rate column {c!r} is not known; give --rate-unit "
                     "(deg/h, deg/s, rad/s, mrad/s, ...) or [gyro] rate_unit in the profile"
                 )
@@ -1027,30 +437,6 @@ def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
     return rates
 
 
-def site_from_profile(prof: Profile, source: str = "profile") -> Site | None:
-    s = prof.site
-    if not s:
-        return None
-    lat = s.get("latitude_deg")
-    if lat is None:
-        if any(k in s for k in ("ia", "ia_azimuth_deg", "ia_elevation_deg")):
-            raise InputError(f"{source}: the IA direction is given but no latitude; add "
-                             "--latitude or [site] latitude_deg")
-        return None
-    lat = check_latitude(lat)
-    if "ia_azimuth_deg" in s or "ia_elevation_deg" in s:
-        az = float(s.get("ia_azimuth_deg", 0.0))
-        el = float(s.get("ia_elevation_deg", 0.0))
-        if not -90 <= el <= 90:
-            raise InputError(f"{source}: ia_elevation_deg {el} is outside −90…90")
-        label = s.get("ia") or f"az {az:g}°, el {el:g}°"
-        if s.get("ia"):
-            az, el, label = parse_ia(s["ia"])
-        return Site(lat, az % 360.0, el, label)
-    az, el, label = parse_ia(s.get("ia", "up"))
-    return Site(lat, az, el, label)
-
-
 # ----------------------------------------------------------------------------- gyrotest files
 def _from_binary(head: RawTable, prof: Profile, nan_policy: str) -> GyroLog:
     """Read a Parquet/Feather file: a gyrotest-converted one through its metadata, any other
@@ -1073,142 +459,26 @@ def _from_binary(head: RawTable, prof: Profile, nan_policy: str) -> GyroLog:
             raise InputError(f"{head.source}: not a readable Feather/Arrow file "
                              f"({type(e).__name__}: {str(e).splitlines()[0][:120]})") from None
     meta = schema.metadata or {}
+    damaged = None
     if META_KEY in meta:
         try:
             gmeta = json.loads(meta[META_KEY])
-        except ValueError:
-            gmeta = None
-        if gmeta:
-            return _from_gyrotest(path, head.source, head.fmt, gmeta, prof)
-    roles, notes = resolve_columns(schema.names, prof, head.source)
-    raw = read_table(path, columns=_wanted(roles))
-    return build_log(raw, roles, prof, notes, nan_policy)
+            raw = read_gyrotest_table(path, head.source, head.fmt)
+            validate_meta(gmeta, raw.table.column_names, raw.table.num_rows)
+            return _from_gyrotest(raw, head.source, head.fmt, gmeta, prof)
+        except (ValueError, RecursionError) as e:  # MetaError, JSON errors
+            damaged = (f"its gyrotest metadata is damaged ({str(e)[:120]}); ignored, the "
+                       "columns are read by name")
+    try:
+        roles, notes = resolve_columns(schema.names, prof, head.source)
+        if damaged:
+            notes.insert(0, damaged)
+        raw = read_table(path, columns=_wanted(roles))
+        return build_log(raw, roles, prof, notes, nan_policy)
+    except InputError as e:
+        if not damaged:
+            raise
+        raise InputError(f"{e} ({head.source}: {damaged}; re-create it with 'gyrotest ingest')"
+                         ) from None
 
 
-def _from_gyrotest(path: Path, source: str, fmt: str, meta: dict, prof: Profile) -> GyroLog:
-    raw = _read_parquet(path, source, None) if fmt == "parquet" else _read_feather(path, source, None)
-    tab = raw.table
-    cols = meta["columns"]
-
-    def col(name):
-        a = tab.column(name)
-        out = a.to_numpy() if a.null_count == 0 else a.to_numpy(zero_copy_only=False)
-        return np.asarray(out, dtype=np.float64)
-
-    rates = {axis: col(c) for axis, c in cols["rates"].items()}
-    time = col(cols["time"]) if cols.get("time") else None
-    gaps = [Gap(int(g["index"]), float(g["time_s"]), float(g["duration_s"]),
-                int(g["missing_samples"])) for g in meta["timing"]["gaps"]]
-    tm = meta["timing"]
-    timing = Timing(n=tm["samples"], tau0=tm["tau0_s"], duration_s=tm["duration_s"],
-                    source=tm["time_source"], gaps=gaps, jitter_rel=tm["jitter_rel"],
-                    irregular=tm["irregular"], duplicates_dropped=tm["duplicates_dropped"],
-                    start=tm.get("start"))
-    gm = meta["gyro"]
-    gyro = GyroConstants(**{k: gm.get(k) for k in (
-        "output_kind", "scale_factor", "scale_factor_unit", "offset_v", "rate_unit",
-        "counter_bits", "model", "serial", "type")})
-    for k in ("model", "serial", "type"):
-        if prof.gyro.get(k):
-            setattr(gyro, k, prof.gyro[k])
-    site = None
-    if meta.get("site"):
-        s = meta["site"]
-        site = Site(s["latitude_deg"], s["ia_azimuth_deg"], s["ia_elevation_deg"], s["ia"])
-    if prof.site:
-        override = site_from_profile(
-            merge(Profile(site={"latitude_deg": site.latitude_deg, "ia_azimuth_deg": site.ia_azimuth_deg,
-                                "ia_elevation_deg": site.ia_elevation_deg} if site else {}),
-                  {"site": dict(prof.site)}), source)
-        site = override
-    position = None
-    if cols.get("position"):
-        position = np.asarray(tab.column(cols["position"]).to_pylist(), dtype=object)
-    log = GyroLog(
-        source=source, rates=rates, tau0=float(meta["tau0_s"]), timing=timing, gyro=gyro,
-        time=time,
-        temperature={c: col(c) for c in cols.get("temperature", [])},
-        field_uT={c: col(c) for c in cols.get("field", [])},
-        supply=col(cols["supply"]) if cols.get("supply") else None,
-        table_rate=col(cols["table_rate"]) if cols.get("table_rate") else None,
-        position=position,
-        extra={c: col(c) for c in cols.get("extra", [])},
-        site=site, column_map=meta.get("column_map", {}), units=meta.get("units", {}),
-        notes=list(meta.get("notes", [])) + [f"read from gyrotest {fmt} (converted by "
-                                             f"gyrotest {meta.get('gyrotest_version')})"],
-        meta={"format": fmt, "converted_from": meta.get("source")},
-    )
-    return log
-
-
-def log_to_table(log: GyroLog) -> pa.Table:
-    """A GyroLog as an Arrow table in internal units, with the gyrotest metadata attached
-    (units, sample interval, site, gyro constants, timing, column roles)."""
-    arrays: dict[str, Any] = {}
-    cols: dict[str, Any] = {"rates": {}}
-    if log.time is not None:
-        arrays["time_s"] = log.time
-        cols["time"] = "time_s"
-    for axis, v in log.rates.items():
-        name = "rate_dph" if len(log.rates) == 1 else f"rate_{axis}_dph"
-        arrays[name] = v
-        cols["rates"][axis] = name
-    for group, key in ((log.temperature, "temperature"), (log.field_uT, "field"),
-                       (log.extra, "extra")):
-        cols[key] = []
-        for c, v in group.items():
-            arrays[c] = v
-            cols[key].append(c)
-    if log.supply is not None:
-        arrays["supply_V"] = log.supply
-        cols["supply"] = "supply_V"
-    if log.table_rate is not None:
-        arrays["table_rate_dph"] = log.table_rate
-        cols["table_rate"] = "table_rate_dph"
-    if log.position is not None:
-        arrays["position"] = pa.array(list(log.position), pa.string())
-        cols["position"] = "position"
-    units = {"time_s": "s", "supply_V": "V", "table_rate_dph": "deg/h"}
-    units.update({c: "deg/h" for c in cols["rates"].values()})
-    units.update({c: INTERNAL["temperature"] for c in cols["temperature"]})
-    units.update({c: INTERNAL["field"] for c in cols["field"]})
-    units.update({c: log.units.get(c, "") for c in cols["extra"]})
-    meta = {
-        "format_version": 1,
-        "gyrotest_version": __version__,
-        "source": log.source,
-        "tau0_s": log.tau0,
-        "columns": cols,
-        "units": units,
-        "gyro": log.gyro.to_dict(),
-        "site": log.site.to_dict() if log.site else None,
-        "timing": log.timing.to_dict(),
-        "column_map": log.column_map,
-        "notes": log.notes,
-    }
-    table = pa.table(arrays)
-    return table.replace_schema_metadata({META_KEY: json.dumps(meta).encode()})
-
-
-def write_log(log: GyroLog, path: str | os.PathLike, fmt: str | None = None) -> Path:
-    """Write a GyroLog to Parquet (default) or Feather atomically, with metadata."""
-    from .output import atomic_path
-
-    p = Path(path)
-    fmt = fmt or ("feather" if p.suffix.lower() in (".feather", ".arrow") else "parquet")
-    table = log_to_table(log)
-    with atomic_path(p) as tmp:
-        if fmt == "parquet":
-            import pyarrow.parquet as pq
-
-            # plain, uncompressed float pages (gyro noise does not compress), large pages:
-            # re-reading is close to a memory copy
-            pq.write_table(table, tmp, compression="none", use_dictionary=False,
-                           write_statistics=False, data_page_size=8 << 20)
-        elif fmt == "feather":
-            import pyarrow.feather as feather
-
-            feather.write_feather(table, tmp, compression="uncompressed")
-        else:
-            raise InputError(f"unknown output format {fmt!r}; use parquet or feather")
-    return p

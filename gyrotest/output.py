@@ -78,17 +78,31 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     dest = Path(path)
     directory = dest.parent if str(dest.parent) else Path(".")
     if not directory.exists():
-        from .errors import InputError
-
         raise InputError(f"cannot write {dest}: directory {directory} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp" + dest.suffix, dir=directory)
+    if dest.is_dir():
+        raise InputError(f"cannot write {dest}: it is a directory; name an output file")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".tmp" + dest.suffix,
+                                   dir=directory)
+    except OSError as e:
+        raise InputError(f"cannot write {dest}: {e.strerror} in directory {directory}; choose "
+                         "a writable directory") from None
     os.close(fd)
     tmp_path = Path(tmp)
     # mkstemp creates 0600; give the file the permissions a plain open() would (0666 & ~umask)
     os.chmod(tmp_path, 0o666 & ~_umask())
     try:
         yield tmp_path
+        # os.replace renames over the name itself: a symlink at ``dest`` is replaced, never
+        # followed into the file it points to
         os.replace(tmp_path, dest)
+    except OSError as e:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        if e.errno is None:  # not a write failure (e.g. a library error subclassing OSError)
+            raise
+        raise InputError(f"cannot write {dest}: {e.strerror or e}; nothing was written (free "
+                         "space or choose another location)") from None
     except BaseException:
         with contextlib.suppress(OSError):
             tmp_path.unlink()

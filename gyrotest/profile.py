@@ -22,7 +22,8 @@ options override it key by key. Example::
     offset_v = 2.5
     rate_unit = "deg/h"            # for a rate column
     counter_bits = 32
-    sample_rate_hz = 10.0          # only when there is no time column
+    sample_rate_hz = 10.0          # when there is no time column (else checked against it)
+    time_unit = "ns"               # unit of a numeric time column: s, ms, us, ns (else guessed)
     model = "FOG-X"
     serial = "0001"
 
@@ -70,6 +71,7 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
         "offset_v": (float, int),
         "counter_bits": int,
         "sample_rate_hz": (float, int),
+        "time_unit": str,
         "model": str,
         "serial": str,
         "type": str,

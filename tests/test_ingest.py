@@ -263,7 +263,7 @@ def test_nan_policies(tmp_path, rng):
     temp[30] = np.nan
     d = pd.DataFrame({"t": np.arange(50.0), "rate": r, "temp": temp})
     p = write_csv(tmp_path / "n.csv", d)
-    with pytest.raises(InputError, match=r"3 missing/NaN value\(s\), first at row 11 \(line 12\) to row 13 \(line 14\)"):
+    with pytest.raises(InputError, match=r"3 missing/NaN/±inf value\(s\), first at row 11 \(line 12\) to row 13 \(line 14\)"):
         read_log(p, overrides=ov(rate_unit="deg/h"))
     log = read_log(p, overrides=ov(rate_unit="deg/h"), nan_policy="gap")
     assert log.n == 46 and len(log.timing.gaps) == 2
@@ -373,7 +373,7 @@ def test_streaming_reader_matches_whole_file_reader(tmp_path, rng, monkeypatch):
     """Large text files are read block by block into float64 arrays: same values, NaN for
     empty cells, mid-file comments skipped; text in a column falls back to the whole-file reader
     (and its row-naming errors)."""
-    import gyrotest.ingest as ing
+    import gyrotest.io.tables as tables
 
     n = 20_000
     d = pd.DataFrame({"t": np.arange(n) * 0.01, "rate": rng.normal(size=n),
@@ -385,7 +385,7 @@ def test_streaming_reader_matches_whole_file_reader(tmp_path, rng, monkeypatch):
     p.write_text("".join(lines))
     ov_ = ov(rate_unit="deg/h", supply="vsupply")
     whole = read_log(p, overrides=ov_)
-    monkeypatch.setattr(ing, "STREAM_MIN_BYTES", 0)
+    monkeypatch.setattr(tables, "STREAM_MIN_BYTES", 0)
     streamed = read_log(p, overrides=ov_)
     np.testing.assert_array_equal(streamed.rate, whole.rate)
     np.testing.assert_array_equal(streamed.temperature["temp"], whole.temperature["temp"])

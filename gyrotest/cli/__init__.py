@@ -16,6 +16,7 @@ import importlib.util
 import os
 import sys
 import traceback
+import warnings
 
 import click
 
@@ -113,10 +114,52 @@ def _err(msg: str) -> None:
         pass
 
 
+GLOBAL_FLAGS = ("-q", "--quiet", "--debug")
+
+
+def hoist_global_flags(args: list[str]) -> list[str]:
+    """``-q``/``--quiet``/``--debug`` are accepted anywhere on the command line (``gyrotest
+    allan log.csv -q``): they are moved in front of the sub-command; after ``--`` nothing is
+    moved."""
+    stop = args.index("--") if "--" in args else len(args)
+    flags = [a for a in args[:stop] if a in GLOBAL_FLAGS]
+    rest = [a for a in args[:stop] if a not in GLOBAL_FLAGS]
+    return flags + rest + args[stop:]
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console-script entry point."""
-    args = list(sys.argv[1:] if argv is None else argv)
+    args = hoist_global_flags(list(sys.argv[1:] if argv is None else argv))
     debug = "--debug" in args or os.environ.get("GYROTEST_DEBUG") == "1"
+    with warnings.catch_warnings():
+        _route_warnings(debug)
+        code = _run(args, debug)
+    sys.exit(code)
+
+
+def _route_warnings(debug: bool) -> None:
+    """Library warnings (numpy/pandas/scipy) never reach the terminal as Python warnings:
+    gyrotest turns the meaningful ones into notes or errors itself; the rest are silenced, or
+    shown as one-line notes with --debug. ``python -W ...`` or ``PYTHONWARNINGS`` (as the
+    tests use: warnings as errors) leave Python's own handling in place."""
+    if sys.warnoptions or os.environ.get("PYTHONWARNINGS"):
+        return
+    if not debug:
+        warnings.simplefilter("ignore")
+        return
+    warnings.simplefilter("always")
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        try:
+            sys.stderr.write(f"gyrotest: debug: {category.__name__} at "
+                             f"{os.path.basename(filename)}:{lineno}: {message}\n")
+        except Exception:  # pragma: no cover - stderr closed
+            pass
+
+    warnings.showwarning = show
+
+
+def _run(args: list[str], debug: bool) -> int:
     try:
         rv = cli.main(args=args, prog_name="gyrotest", standalone_mode=False)
         code = rv if isinstance(rv, int) else 0
@@ -146,6 +189,16 @@ def main(argv: list[str] | None = None) -> None:
         except OSError:
             pass
         code = 0
+    except OSError as e:
+        if debug:
+            traceback.print_exc()
+        if e.filename is None or e.errno is None:
+            _err(f"internal error: {type(e).__name__}: {e} (run with --debug for the traceback; "
+                 "please report it)")
+            code = 1
+        else:  # a path the user named that cannot be read or written
+            _err(f"{e.filename}: {e.strerror}; check the path, its permissions and free space")
+            code = 2
     except KeyboardInterrupt:
         _err("interrupted")
         code = 130
@@ -161,4 +214,4 @@ def main(argv: list[str] | None = None) -> None:
         _err(f"internal error: {type(e).__name__}: {e} (run with --debug for the traceback; "
              "please report it)")
         code = 1
-    sys.exit(code)
+    return code

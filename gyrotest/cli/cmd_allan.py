@@ -13,6 +13,7 @@ import io
 import math
 
 import click
+from rich.markup import escape
 
 from ..display import DEFAULT as DEFAULT_UNIT
 from ..errors import InputError
@@ -237,7 +238,7 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
     c = console()
     for a in r.axes:
         d = a.dev
-        c.print(f"\n[bold]{r.source}[/bold] — axis {a.axis}: {len(a.dev.tau)} τ, "
+        c.print(f"\n[bold]{escape(r.source)}[/bold] — axis {escape(str(a.axis))}: {len(a.dev.tau)} τ, "
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
         c.print(f"  input: {a.input_note}")
         t = Table(title=f"{d.kind.upper()} (σ in {unit.rate}); CI {100 * d.confidence:.1f} % from "

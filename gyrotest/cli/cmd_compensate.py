@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import click
+from rich.markup import escape
 
 from .cmd_model import check_output, write_plot
 from .common import (
@@ -74,7 +75,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
         emit_json(d)
         return
     c = console()
-    c.print(f"[bold]compensate[/bold]: {g.source} with {model_path} "
+    c.print(f"[bold]compensate[/bold]: {escape(g.source)} with {escape(str(model_path))} "
             f"({' + '.join(cp.model_terms)})")
     c.print(f"  drift RMS at {cp.resolution_s:g} s: before {fmt_num(cp.rms_before_dph)} deg/h, "
             f"after [bold]{fmt_num(cp.rms_after_dph)}[/bold] deg/h → ×{fmt_num(cp.factor, 3)} "
@@ -95,7 +96,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
         warn(f"the compensation achieves only {ratio:.0%} of the predicted reduction: the model "
              "does not transfer to this run (different physics, range or setup)")
     if out_path:
-        c.print(f"  compensated log written to {out_path}")
+        c.print(f"  compensated log written to {escape(str(out_path))}")
     elif not as_json:
         note("add -o out.parquet to keep the compensated log")
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import click
+from rich.markup import escape
 
 from ..axes import choose_axes
 from ..units import format_duration
@@ -17,6 +18,11 @@ from .common import (
     with_ingest,
 )
 from .common_display import resolve_display_unit, unit_option
+
+
+def esc(x) -> str:
+    """Text for rich markup: brackets in names (``gx [deg/s]``) printed as they are."""
+    return escape("" if x is None else str(x))
 
 
 @click.command("info")
@@ -40,10 +46,15 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     Example:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
     """
+    from ..ingest import RoleError
     from ..noise.outliers import detect_outliers
 
     unit = resolve_display_unit(display_unit, ingest_opts)
-    g = load_log(log, ingest_opts, announce=not as_json)
+    try:
+        g = load_log(log, ingest_opts, announce=not as_json)
+    except RoleError:
+        _list_columns(log, as_json)  # the columns and the guesses, then the error itself
+        raise
     summary = g.summary()
     axes = choose_axes([g], axis)
     summary["axes"] = axes
@@ -63,14 +74,14 @@ def command(log, axis, display_unit, as_json, ingest_opts):
 
     tm = g.timing
     c = console()
-    c.print(f"[bold]{g.source}[/bold]")
-    c.print(f"  samples        {tm.n:,}   ({tm.source})")
+    c.print(f"[bold]{esc(g.source)}[/bold]")
+    c.print(f"  samples        {tm.n:,}   ({esc(tm.source)})")
     c.print(f"  sample rate    {fmt_num(tm.sample_rate_hz, 6)} Hz  (tau0 = {fmt_num(tm.tau0, 6)} s)")
     c.print(f"  duration       {format_duration(tm.duration_s)}  ({tm.duration_s:.6g} s)")
     if tm.start:
         c.print(f"  start          {tm.start}")
     gy = g.gyro
-    kind = {"rate": f"rate ({gy.rate_unit})", "counts": "pulse counts per sample",
+    kind = {"rate": f"rate ({esc(gy.rate_unit)})", "counts": "pulse counts per sample",
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
             "voltage": "analog voltage"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
@@ -81,7 +92,7 @@ def command(log, axis, display_unit, as_json, ingest_opts):
                 + (f", offset {gy.offset_v:g} V" if gy.offset_v is not None else ""))
     if g.site:
         s = g.site
-        c.print(f"  site           latitude {s.latitude_deg:g}°, IA {s.ia_label} "
+        c.print(f"  site           latitude {s.latitude_deg:g}°, IA {esc(s.ia_label)} "
                 f"(earth rate along IA {fmt_num(s.earth_rate_dph() * unit.f, 5)} {unit.rate})")
     if tm.gaps:
         c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
@@ -96,8 +107,29 @@ def command(log, axis, display_unit, as_json, ingest_opts):
         t.add_column(col, justify="right" if col not in ("channel", "unit") else "left")
     for name, st in summary["channels"].items():
         f, u = (unit.f, unit.rate) if name.startswith("rate:") else (1.0, st["unit"])
-        t.add_row(name, u, fmt_num(st["min"] * f), fmt_num(st["mean"] * f),
+        t.add_row(esc(name), esc(u), fmt_num(st["min"] * f), fmt_num(st["mean"] * f),
                   fmt_num(st["max"] * f), fmt_num(st["std"] * f))
     c.print(t)
     if summary.get("positions"):
-        c.print("  positions      " + ", ".join(f"{k}: {v}" for k, v in summary["positions"].items()))
+        c.print("  positions      " + esc(", ".join(f"{k}: {v}"
+                                                  for k, v in summary["positions"].items())))
+
+
+def _list_columns(log: str, as_json: bool) -> None:
+    """The columns of LOG with the role and unit gyrotest guesses from each name (on stdout)."""
+    from ..ingest import column_guesses, column_names
+
+    guesses = column_guesses(column_names(log))
+    if not guesses:
+        return
+    if as_json:
+        emit_json({"source": log, "columns": guesses})
+        return
+    from rich.table import Table
+
+    t = Table(title=f"columns of {esc(log)} (guessed from the names)")
+    for col in ("column", "guessed role", "unit in header"):
+        t.add_column(col)
+    for g in guesses:
+        t.add_row(esc(g["column"]), esc(g["role"] or "—"), esc(g["unit"] or "—"))
+    console().print(t)

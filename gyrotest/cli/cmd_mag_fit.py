@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import click
+from rich.markup import escape
 
 from ..units import parse_duration
 from .cmd_model import (
@@ -79,7 +80,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
     from rich.table import Table
 
     c = console()
-    c.print(f"[bold]mag-fit[/bold]: {g.source}, {len(mg.plateaus)} plateau(s) detected")
+    c.print(f"[bold]mag-fit[/bold]: {escape(g.source)}, {len(mg.plateaus)} plateau(s) detected")
     t = Table(title="magnetic sensitivity, deg/h per 100 µT")
     for col, just in (("axis", "left"), ("w ± 1σ (HAC)", "right"), ("reversal K (signed)", "right"),
                       ("up − down, deg/h", "right"), ("hysteresis", "left")):
@@ -97,4 +98,4 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
         note(n)
     render_fit(mg.fit, title="fit details")
     if out_path:
-        c.print(f"  model written to {out_path}")
+        c.print(f"  model written to {escape(str(out_path))}")

@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 
 import click
+from rich.markup import escape
 
 from ..errors import InputError
 from ..units import format_duration
@@ -146,7 +147,8 @@ def render_fit(res, *, title: str = "model fit") -> None:
 
     out = console()
     d = res.data
-    out.print(f"[bold]{title}[/bold]: {d.get('file') or d.get('source')} (axis {d.get('axis')}, "
+    where = escape(str(d.get("file") or d.get("source")))
+    out.print(f"[bold]{title}[/bold]: {where} (axis {escape(str(d.get('axis')))}, "
               f"{d.get('samples', 0):,} samples, {format_duration(d.get('duration_s', 0))})")
     out.print(f"  working resolution: {_short(res)}")
     t = Table(title="coefficients (± 1σ HAC, robust to autocorrelated residuals)")

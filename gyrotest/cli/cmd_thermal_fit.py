@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import click
+from rich.markup import escape
 
 from ..errors import InputError
 from .cmd_model import (
@@ -127,7 +128,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
             c.print(f"  hysteresis check: {h.get('note')}")
         render_fit(th.am, title="fit details")
         if out_path:
-            c.print(f"  model written to {out_path}")
+            c.print(f"  model written to {escape(str(out_path))}")
     if sp:
         c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from t0 = {sp.t0_c:g} °C"
                 + (" (weighted by 1/σ²)" if sp.weighted else ""))

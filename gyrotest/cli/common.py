@@ -148,6 +148,7 @@ def _split_cols(value: str | None) -> list[str] | None:
 INGEST_OPTION_NAMES = (
     "profile", "time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
+    "time_unit",
     "temp_col", "field_cols", "supply_col", "table_col", "position_col", "latitude", "ia",
     "nan_policy",
 )
@@ -173,7 +174,11 @@ def ingest_options(f):
                      help="S0: arcsec/pulse for pulse outputs, (deg/h)/V for voltage."),
         click.option("--offset", type=float, default=None, help="Voltage offset, V."),
         click.option("--sample-rate", type=float, default=None,
-                     help="Sample rate, Hz, when the log has no time column."),
+                     help="Sample rate, Hz: the time axis when the log has no time column, "
+                          "else checked against it."),
+        click.option("--time-unit", type=click.Choice(["s", "ms", "us", "ns"]), default=None,
+                     help="Unit of a numeric time column (default: seconds, or a ms/us/ns Unix "
+                          "epoch recognised from its magnitude and spacing)."),
         click.option("--temp-col", multiple=True, help="Temperature column, degC (repeatable)."),
         click.option("--field-cols", default=None, help="Magnetic field columns X,Y,Z (uT)."),
         click.option("--supply-col", default=None, help="Supply-voltage column, V."),
@@ -217,6 +222,7 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
         "offset_v": opts.get("offset"),
         "counter_bits": opts.get("counter_bits"),
         "sample_rate_hz": opts.get("sample_rate"),
+        "time_unit": opts.get("time_unit"),
     }
     site: dict[str, Any] = {"latitude_deg": opts.get("latitude")}
     if opts.get("ia"):

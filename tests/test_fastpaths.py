@@ -187,3 +187,28 @@ def test_bad_value_in_big_csv_still_names_the_row(tmp_path):
     rows[12_345] = "123.45,abc"
     f = _write(tmp_path / "bad.csv", "t_s,omega_dph\n" + "\n".join(rows) + "\n")
     run_cli(["info", str(f)]).assert_clean_error("bad.csv", "abc", "12346")
+
+
+def test_allan_jobs_identical_to_serial(tmp_path):
+    """`allan A B C --jobs 3` (process pool) prints exactly what --jobs 1 prints."""
+    from cliutil import run_cli
+
+    paths = []
+    for seed in (1, 2, 3):
+        rng = np.random.default_rng(seed)
+        t = np.arange(1, 20_001) * 0.01
+        x = rng.standard_normal(t.size) * 6.0 + np.cumsum(rng.standard_normal(t.size)) * 0.01
+        f = tmp_path / f"log{seed}.csv"
+        np.savetxt(f, np.c_[t, x], delimiter=",", header="t_s,omega_dph", comments="",
+                   fmt="%.10g")
+        paths.append(str(f))
+    args = ["allan", *paths, "--rate-unit", "deg/h", "--taus", "octave"]
+    serial = run_cli([*args, "--json", "--jobs", "1"])
+    pooled = run_cli([*args, "--json", "--jobs", "3"])
+    assert serial.code == 0 and pooled.code == 0, serial.err + pooled.err
+    assert json.loads(serial.out)["logs"] and serial.out == pooled.out
+    text1, text3 = run_cli([*args, "--jobs", "1"]), run_cli([*args, "--jobs", "3"])
+    assert text1.out == text3.out and text1.err == text3.err
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_s,omega_dph\n0.01,1\n0.02,x\n")
+    run_cli([*args[:2], str(bad), *args[2:], "--jobs", "2"]).assert_clean_error("bad.csv")

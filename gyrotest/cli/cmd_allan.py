@@ -25,12 +25,12 @@ from .common import (
     fmt_num,
     ingest_options,
     json_option,
-    load_logs,
     note,
     plot_option,
     warn,
     with_ingest,
 )
+from .pool import jobs_option, map_logs
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 
@@ -70,12 +70,13 @@ _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 @plot_option("σ(τ) with fit, components and residuals (.png/.svg/.pdf).")
 @click.option("--psd", "psd_path", type=click.Path(dir_okay=False), default=None,
               help="Welch PSD and autocorrelation figure (.png/.svg/.pdf).")
+@jobs_option
 @ingest_options
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, detrend, skip,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, allow_irregular, csv_path,
-            plot_path, psd_path, as_json, ingest_opts):
+            plot_path, psd_path, jobs, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
 
     Overlapping Allan deviation (or --dev) with χ² confidence intervals from the EDF (noise
@@ -111,13 +112,12 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
-    glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    results = [analyse_allan(
-        g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
+    results = map_logs(  # one process per log with --jobs (identical results)
+        analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
+        skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
         axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
         detrend=detrend, run_diagnosis=not no_diagnose,
         impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
-        for g in glogs]
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)

@@ -142,35 +142,71 @@ def big(rows: int, pairs: int, tmp: str) -> None:
            out_a=out)
     paired("gyrotest allan big.parquet", [*GY, "allan", pq], "gyrotest allan big.csv",
            [*GY, "allan", path, "--rate-unit", "deg/h"], pairs, out_a=out)
-    # parse stage alone: read_log of the CSV vs the Parquet, in-process timing
-    code = ("import sys,time; from gyrotest.ingest import read_log; t=time.perf_counter(); "
-            "read_log(sys.argv[1], overrides={'gyro': {'rate_unit': 'deg/h'}}); "
-            "print(time.perf_counter()-t)")
-    ts: dict[str, list[float]] = {"csv": [], "parquet": []}
-    for _ in range(pairs):
-        for k, p in (("csv", path), ("parquet", pq)):
-            r = subprocess.run([sys.executable, "-c", code, p], capture_output=True, text=True,
+    parse_stage(path, pq, pairs)
+
+
+PARSE = r"""
+import json, resource, sys, time
+import pyarrow.csv, pyarrow.parquet  # imported before the clock starts: the stage only
+from gyrotest.ingest import read_log
+r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+log = read_log(sys.argv[1], overrides={"gyro": {"rate_unit": "deg/h"}})
+r1 = resource.getrusage(resource.RUSAGE_SELF)
+print(json.dumps({"wall": time.perf_counter() - t0, "user": r1.ru_utime - r0.ru_utime,
+                  "sys": r1.ru_stime - r0.ru_stime, "n": log.n}))
+"""
+
+
+def parse_stage(csv_path: str, pq_path: str, pairs: int) -> dict:
+    """read_log of the CSV vs of its Parquet conversion, fresh processes, alternating; the
+    clock runs around read_log only (imports done before)."""
+    import json
+
+    ts: dict[str, list[dict]] = {"csv": [], "parquet": []}
+    for i in range(pairs + 1):
+        for k, p in (("csv", csv_path), ("parquet", pq_path)):
+            r = subprocess.run([sys.executable, "-c", PARSE, p], capture_output=True, text=True,
                                cwd=ROOT, check=True)
-            ts[k].append(float(r.stdout))
-    c, q = statistics.median(ts["csv"]), statistics.median(ts["parquet"])
-    print(f"  parse stage (read_log, in-process): CSV {c:.3f} s, Parquet {q:.3f} s, "
-          f"ratio {c / q:.1f}×")
+            if i:
+                ts[k].append(json.loads(r.stdout))
+    med = {k: {q: statistics.median(d[q] for d in v) for q in ("wall", "user", "sys")}
+           for k, v in ts.items()}
+    ratio = {q: statistics.median(c[q] / max(p[q], 1e-3) for c, p in zip(ts["csv"],
+                                                                          ts["parquet"]))
+             for q in ("wall", "user")}
+    ratio_cpu = statistics.median((c["user"] + c["sys"]) / max(p["user"] + p["sys"], 1e-3)
+                                  for c, p in zip(ts["csv"], ts["parquet"]))
+    for k in ("csv", "parquet"):
+        m = med[k]
+        print(f"  parse stage read_log({k:<7}) {m['wall']:7.3f} s wall {m['user']:6.3f} s user "
+              f"{m['sys']:6.3f} s sys")
+    print(f"  {'ratio CSV / Parquet':<44} {ratio['wall']:7.1f}× wall {ratio['user']:7.1f}× user "
+          f"{ratio_cpu:5.1f}× CPU (user+sys)   (median of {pairs} pairs)")
+    return {"median": med, "ratio": ratio, "ratio_cpu": ratio_cpu}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--startup", action="store_true")
     ap.add_argument("--big", action="store_true")
+    ap.add_argument("--parse", action="store_true", help="only the CSV vs Parquet parse stage")
     ap.add_argument("--rows", type=float, default=1e7)
     ap.add_argument("--pairs", type=int, default=5)
     a = ap.parse_args()
-    if not (a.startup or a.big):
+    if not (a.startup or a.big or a.parse):
         a.startup = a.big = True
     tmp = tempfile.mkdtemp(prefix="bench_speed_")
     if a.startup:
         startup(a.pairs, tmp)
     if a.big:
         big(int(a.rows), a.pairs, tmp)
+    elif a.parse:
+        path, pq = os.path.join(tmp, "big.csv"), os.path.join(tmp, "big.parquet")
+        write_csv(path, int(a.rows))
+        run([*GY, "-q", "ingest", path, "--rate-unit", "deg/h", "-o", pq])
+        print(f"\nparse stage, {a.rows:.3g} rows ({os.path.getsize(path) / 1e6:.0f} MB CSV, "
+              f"{os.path.getsize(pq) / 1e6:.0f} MB Parquet; load {os.getloadavg()[0]:.1f})")
+        parse_stage(path, pq, a.pairs)
 
 
 if __name__ == "__main__":

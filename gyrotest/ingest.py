@@ -424,11 +424,11 @@ def _read_parquet(p: Path, source: str, columns: list[str] | None) -> RawTable:
     import pyarrow.parquet as pq
 
     try:
-        pf = pq.ParquetFile(p)
+        pf = pq.ParquetFile(p, memory_map=True)
         names = pf.schema_arrow.names
         if columns is not None:
             _check_columns(columns, names, source)
-        table = pq.read_table(p, columns=columns, use_threads=True, memory_map=True)
+        table = pf.read(columns=columns, use_threads=True)  # pq.read_table imports pandas
         meta = pf.schema_arrow.metadata or {}
     except InputError:
         raise
@@ -1094,9 +1094,9 @@ def _from_gyrotest(path: Path, source: str, fmt: str, meta: dict, prof: Profile)
     cols = meta["columns"]
 
     def col(name):
-        a = tab.column(name)
-        out = a.to_numpy() if a.null_count == 0 else a.to_numpy(zero_copy_only=False)
-        return np.asarray(out, dtype=np.float64)
+        from .fastcsv import float64_values  # Arrow's to_numpy would import pandas
+
+        return float64_values(tab.column(name))
 
     rates = {axis: col(c) for axis, c in cols["rates"].items()}
     time = col(cols["time"]) if cols.get("time") else None

@@ -212,3 +212,26 @@ def test_allan_jobs_identical_to_serial(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,omega_dph\n0.01,1\n0.02,x\n")
     run_cli([*args[:2], str(bad), *args[2:], "--jobs", "2"]).assert_clean_error("bad.csv")
+
+
+def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
+    from gyrotest.noise import deviations
+
+    calls = []
+    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    x = np.random.default_rng(5).standard_normal(300_000)  # above PARALLEL_MIN_SAMPLES
+    r = deviations.compute_deviation(x, 0.01, input_kind="rate", taus="octave", noise_id=False)
+    n = len(r.tau)
+    assert [c[0] for c in calls[:n]] == list(range(1, n + 1))
+    assert all(c[1] == n and c[2] == "oadev" for c in calls[:n])
+
+
+def test_no_progress_text_when_piped(tmp_path):
+    from cliutil import run_cli
+
+    f = tmp_path / "log.csv"
+    t = np.arange(1, 3001) * 0.01
+    np.savetxt(f, np.c_[t, np.sin(t * 7)], delimiter=",", header="t_s,omega_dph", comments="")
+    r = run_cli(["allan", str(f), "--rate-unit", "deg/h", "--dev", "mtotdev", "--taus", "octave"])
+    assert r.code == 0, r.err
+    assert "τ ━" not in r.err and "\r" not in r.err

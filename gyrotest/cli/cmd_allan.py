@@ -30,7 +30,7 @@ from .common import (
     warn,
     with_ingest,
 )
-from .pool import jobs_option, map_logs
+from .pool import deviation_progress, jobs_option, map_logs
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 
@@ -112,12 +112,13 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, min_edf, 
 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
-    results = map_logs(  # one process per log with --jobs (identical results)
-        analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
-        skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
-        axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-        detrend=detrend, run_diagnosis=not no_diagnose,
-        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
+    with deviation_progress():  # a bar on a terminal for τ loops longer than 2 s
+        results = map_logs(  # one process per log with --jobs (identical results)
+            analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
+            skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
+            axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+            detrend=detrend, run_diagnosis=not no_diagnose,
+            impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular)
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)

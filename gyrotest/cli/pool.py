@@ -10,9 +10,11 @@ the parent, in argument order. Stdin (``-``) and a single log run in-process.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import sys
+import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -33,9 +35,45 @@ def default_jobs() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+@contextlib.contextmanager
+def deviation_progress(min_s: float = 2.0):
+    """Progress of the deviation τ loops on a terminal (not with -q, nothing when piped).
+    The bar appears only once a loop has run for ``min_s`` seconds: short steps stay quiet."""
+    from ..noise import deviations
+    from .common import progress, settings
+
+    if settings().quiet or not sys.stderr.isatty():
+        yield
+        return
+    with contextlib.ExitStack() as stack:
+        state: dict[str, Any] = {"t0": None, "advance": None}
+
+        def hook(done: int, total: int, kind: str) -> None:
+            now = time.monotonic()
+            if done == 1 or state["t0"] is None:
+                state["t0"] = now
+            if state["advance"] is None and now - state["t0"] >= min_s and done < total:
+                state["advance"] = stack.enter_context(progress(f"{kind.upper()} τ", total))
+                state["advance"](done)
+                return
+            if state["advance"] is not None:
+                state["advance"](1, total=total, description=f"{kind.upper()} τ")
+                if done == total:
+                    state["advance"](-total)  # reset for the next loop (transient bar)
+
+        old, deviations.PROGRESS = deviations.PROGRESS, hook
+        try:
+            yield
+        finally:
+            deviations.PROGRESS = old
+
+
 def _work(args: tuple[Callable, str, dict, dict]) -> tuple[Any, list[str]]:
     fn, path, opts, kw = args
+    from ..noise import deviations
     from .common import load_log
+
+    deviations.PROGRESS = None  # a worker process draws no bar
 
     log = load_log(path, opts, announce=False)
     return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]

@@ -24,8 +24,9 @@ import click
 def jobs_option(func):
     """``--jobs N``: logs analysed in parallel (default: the number of CPU cores)."""
     return click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
-                        help="Logs analysed in parallel (worker processes; default: the "
-                             "number of CPU cores). Results are identical to --jobs 1.")(func)
+                        help="Logs analysed in parallel (worker processes, each holding one "
+                             "log in memory; default: the number of CPU cores). Results are "
+                             "identical to --jobs 1.")(func)
 
 
 def default_jobs() -> int:

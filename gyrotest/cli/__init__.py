@@ -18,10 +18,15 @@ import sys
 import traceback
 import warnings
 
-import click
+# Single-threaded BLAS unless the user says otherwise (set before numpy is imported): our
+# matrices are small (τ × frequency grids, a few dozen columns) and OpenBLAS' worker threads
+# cost 4–10× in CPU and wall time on a loaded 2-core machine (benchmarks/README.md, start-up)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from .. import __version__
-from ..errors import GyrotestError
+import click  # noqa: E402
+
+from .. import __version__  # noqa: E402
+from ..errors import GyrotestError  # noqa: E402
 
 # command name -> module (in the order shown by --help)
 COMMANDS: dict[str, str] = {
@@ -72,11 +77,16 @@ class LazyGroup(click.Group):
         return module.command
 
     def format_commands(self, ctx, formatter):
+        # the one-liners come from SHORT_HELP so that `gyrotest --help` imports no command
+        # module (and none of numpy/scipy/pyarrow); a command without one is imported
         rows = []
         for name in self.list_commands(ctx):
+            if name in SHORT_HELP:
+                rows.append((name, SHORT_HELP[name]))
+                continue
             cmd = self.get_command(ctx, name)
             if cmd is not None and not cmd.hidden:
-                rows.append((name, SHORT_HELP.get(name) or cmd.get_short_help_str(limit=70)))
+                rows.append((name, cmd.get_short_help_str(limit=70)))
         if rows:
             with formatter.section("Commands"):
                 formatter.write_dl(rows)

@@ -29,13 +29,13 @@ from .common import (
     ingest_options,
     json_option,
     load_for_terms,
-    load_logs,
     note,
     plot_option,
     warn,
     with_ingest,
 )
 from .common_display import resolve_display_unit, unit_option
+from .pool import deviation_progress, jobs_option, map_logs
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
@@ -96,13 +96,14 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @unit_option
 @click.option("--psd", "psd_path", type=click.Path(dir_okay=False), default=None,
               help="Welch PSD and autocorrelation figure (.png/.svg/.pdf).")
+@jobs_option
 @ingest_options
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
             skip, outliers, model_path,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
-            plot_path, psd_path, display_unit, as_json, ingest_opts):
+            plot_path, psd_path, display_unit, jobs, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
 
     Overlapping Allan deviation (or --dev) with χ² confidence intervals from the EDF (noise
@@ -144,22 +145,22 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     parse_detrend(detrend)
-    env_model = None
-    if model_path:
-        from ..envmodel.model import EnvModel
+    kw = dict(skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
+              axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+              detrend=detrend, run_diagnosis=not no_diagnose,
+              impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
+              fit_model=not no_fit, ci=ci_kind, outliers=outliers)
+    with deviation_progress():  # a bar on a terminal for τ loops longer than 2 s
+        if model_path:
+            from ..envmodel.model import EnvModel
 
-        env_model = EnvModel.load(model_path)
-        glogs = [load_for_terms(p, ingest_opts, env_model.specs, announce=not as_json)
-                 for p in logs]
-    else:
-        glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    results = [analyse_allan(
-        g, skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
-        axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-        detrend=detrend, run_diagnosis=not no_diagnose,
-        impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-        fit_model=not no_fit, ci=ci_kind, outliers=outliers, env_model=env_model)
-        for g in glogs]
+            env_model = EnvModel.load(model_path)
+            glogs = [load_for_terms(p, ingest_opts, env_model.specs, announce=not as_json)
+                     for p in logs]
+            results = [analyse_allan(g, env_model=env_model, **kw) for g in glogs]
+        else:
+            results = map_logs(  # one process per log with --jobs (identical results)
+                analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json, **kw)
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)

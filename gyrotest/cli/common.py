@@ -25,7 +25,6 @@ from typing import Any
 import click
 
 from ..errors import InputError
-from ..output import dumps
 from ..units import format_number
 
 
@@ -97,6 +96,8 @@ def _escape(msg: str) -> str:
 
 def emit_json(obj: Any) -> None:
     """Write one JSON document to stdout."""
+    from ..output import dumps  # numpy: only when JSON is written
+
     sys.stdout.write(dumps(obj) + "\n")
     sys.stdout.flush()
 

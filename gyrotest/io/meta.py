@@ -147,9 +147,9 @@ def _from_gyrotest(raw, source: str, fmt: str, meta: dict, prof: Profile) -> Gyr
     cols = meta["columns"]
 
     def col(name):
-        a = tab.column(name)
-        out = a.to_numpy() if a.null_count == 0 else a.to_numpy(zero_copy_only=False)
-        return np.asarray(out, dtype=np.float64)
+        from ..fastcsv import float64_values  # Arrow's to_numpy would import pandas
+
+        return float64_values(tab.column(name))
 
     rates = {axis: col(c) for axis, c in cols["rates"].items()}
     time = col(cols["time"]) if cols.get("time") else None

@@ -158,21 +158,22 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         if p is None:
             _bad_binary(source)
         if _names_only:
-            return RawTable(pa.table({}), source, "parquet", p)
+            return RawTable(pa.Table.from_batches([], schema=pa.schema([])), source, "parquet", p)
         return _read_parquet(p, source, columns)
     if head[:6] == b"ARROW1" or head[:4] == b"FEA1" or suffix in (".feather", ".arrow", ".ipc"):
         if p is None:
             _bad_binary(source)
         if _names_only:
-            return RawTable(pa.table({}), source, "feather", p)
+            return RawTable(pa.Table.from_batches([], schema=pa.schema([])), source, "feather", p)
         return _read_feather(p, source, columns)
     if head.startswith(BOM):  # Excel "CSV UTF-8": the mark would hide the first column name
         head = head[len(BOM):]
     delim, skip, names = _sniff_text(head, source)
     decimal = _sniff_decimal(head, delim, skip)
     if _names_only:
-        return RawTable(pa.table({n: pa.array([], pa.float64()) for n in names}), source,
-                        "csv", p, skip + 1)
+        # not pa.table/pa.array: they import pandas (≈ 0.4 s) on first use
+        empty = pa.Table.from_batches([], schema=pa.schema([(n, pa.float64()) for n in names]))
+        return RawTable(empty, source, "csv", p, skip + 1)
     if columns is not None:
         _check_columns(columns, names, source)
     fmt = {"\t": "tsv", "whitespace": "whitespace"}.get(delim, "csv")
@@ -180,9 +181,17 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns,
                                  decimal=decimal)
     else:
-        owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal) if p else None
+        owned = None
+        if p and decimal == ".":
+            from ..fastcsv import arrow_table, read_numeric  # plain numbers: fast path
+
+            owned = read_numeric(p, delim, skip, names, columns)
+        elif p:
+            owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal)
         if owned is not None:
-            table = pa.table({c: owned[c] for c in (columns or names)})
+            from ..fastcsv import arrow_table
+
+            table = arrow_table(owned, columns or names)
             if table.num_rows == 0:
                 raise InputError(f"{source}: header only, no data rows")
             return RawTable(table, source, fmt, p, header_line=skip + 1, owned=owned)
@@ -468,11 +477,11 @@ def _read_parquet(p: Path, source: str, columns: list[str] | None) -> RawTable:
     import pyarrow.parquet as pq
 
     try:
-        pf = pq.ParquetFile(p)
+        pf = pq.ParquetFile(p, memory_map=True)
         names = pf.schema_arrow.names
         if columns is not None:
             _check_columns(columns, names, source)
-        table = pq.read_table(p, columns=columns, use_threads=True, memory_map=True)
+        table = pf.read(columns=columns, use_threads=True)  # pq.read_table imports pandas
         meta = pf.schema_arrow.metadata or {}
     except InputError:
         raise

@@ -954,6 +954,9 @@ def _pooled_edf(kind: str, alpha: int, m: int, parts: Sequence[np.ndarray], ns: 
 
 #: below this many samples the τ loop runs in one thread (thread start-up would dominate)
 PARALLEL_MIN_SAMPLES = 200_000
+#: optional ``hook(done, total, kind)`` called after each τ of the τ loop, in the calling
+#: thread (the CLI's progress display sets it; the core never prints)
+PROGRESS: Callable[[int, int, str], None] | None = None
 
 
 def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> list:
@@ -963,13 +966,23 @@ def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> 
     the GIL, so long records are processed by a small thread pool (one thread per core, at
     most 4); the result is identical to the serial loop."""
     ms = [int(m) for m in ms]
+    hook = PROGRESS
+    out: list = []
     workers = min(os.cpu_count() or 1, 4, len(ms))
     if workers < 2 or longest < PARALLEL_MIN_SAMPLES:
-        return [_raw_variance(kind, parts, m) for m in ms]
+        for m in ms:
+            out.append(_raw_variance(kind, parts, m))
+            if hook is not None:
+                hook(len(out), len(ms), kind)
+        return out
     from concurrent.futures import ThreadPoolExecutor
 
     with ThreadPoolExecutor(max_workers=workers) as ex:
-        return list(ex.map(lambda m: _raw_variance(kind, parts, m), ms))
+        for r in ex.map(lambda m: _raw_variance(kind, parts, m), ms):
+            out.append(r)
+            if hook is not None:  # called in the calling thread, in τ order
+                hook(len(out), len(ms), kind)
+    return out
 
 
 def compute_deviation(

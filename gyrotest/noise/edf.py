@@ -31,7 +31,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from ..errors import AnalysisError, InputError
 
@@ -368,8 +368,9 @@ def chi2_interval(
     edf = np.asarray(edf, dtype=float)
     p = 0.5 * (1.0 - confidence)
     with np.errstate(invalid="ignore", divide="ignore"):
-        chi_lo = stats.chi2.ppf(p, edf)
-        chi_hi = stats.chi2.ppf(1.0 - p, edf)
+        # χ² quantiles: chdtri(ν, y) is the x with P(χ²_ν > x) = y (= stats.chi2.ppf(1 − y, ν))
+        chi_lo = special.chdtri(edf, 1.0 - p)
+        chi_hi = special.chdtri(edf, p)
         lo = sigma * np.sqrt(edf / chi_hi)
         hi = sigma * np.sqrt(edf / chi_lo)
     return lo, hi

@@ -71,7 +71,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import optimize, special, stats
+from scipy import optimize, special
 from scipy.optimize import nnls
 
 from ..errors import AnalysisError, InputError
@@ -922,7 +922,7 @@ class NoiseFit:
         d = self.dof / a
         if d <= 0:
             return math.nan
-        return float(stats.chi2.sf(self.chi2 / a, d))
+        return float(special.chdtrc(d, self.chi2 / a))  # χ² survival
 
     @property
     def aic(self) -> float:
@@ -1075,7 +1075,7 @@ def fit_noise_model(
             col.lo, col.hi = _shape_range(k, lo_t, hi_t, tau0)
             col.shape = math.sqrt(col.lo * col.hi)
         cols.append(col)
-    thr = {k: stats.chi2.ppf(_LRT_P, 2 if k in NONLINEAR_KEYS else 1) for k in KNOWN_TERMS}
+    thr = {k: special.chdtri(2 if k in NONLINEAR_KEYS else 1, 1 - _LRT_P) for k in KNOWN_TERMS}
     active = list(cols)
     dropped: dict[str, tuple[_Col, float, float]] = {}  # label -> (col, dD, coef) at drop time
     st = (_optimise_shapes(eng, active, line_hints)
@@ -1107,7 +1107,7 @@ def fit_noise_model(
         k_par = sum(n for n, _ in dropped_pos) + (2 if active[j].key in NONLINEAR_KEYS else 1)
         deffs = [d for _, d in dropped_pos] + [an.deff[j]]
         joint = (st_c.D - D_full) / float(np.mean(deffs))
-        if joint >= stats.chi2.ppf(_LRT_P, k_par):
+        if joint >= special.chdtri(k_par, 1 - _LRT_P):
             break
         dropped[active[j].label] = (st.cols[j], score[j] * thr[active[j].key], float(st.c[j]))
         dropped_pos.append((2 if active[j].key in NONLINEAR_KEYS else 1, an.deff[j]))
@@ -1236,7 +1236,7 @@ def _upper_bound(eng: _Engine, st: _State, j: int, deff: float) -> float:
     if col.key in NONLINEAR_KEYS and st.c[j] <= 0:
         shapes = list(np.geomspace(col.lo, col.hi, 16))
     best = 0.0
-    target = stats.chi2.ppf(1 - 2 * (1 - _LRT_P), 1)  # 2.71: one-sided 95 %
+    target = special.chdtri(1, 2 * (1 - _LRT_P))  # 2.71: one-sided 95 %
     others = [k for k in range(len(st.cols)) if k != j]
     for shp in shapes:
         cols = [_Col(c.key, c.label, c.shape, c.lo, c.hi) for c in st.cols]

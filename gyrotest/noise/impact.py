@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import integrate
 
 from ..errors import InputError
 from ..units import factor, parse_duration
@@ -124,6 +123,8 @@ def _flicker_angle_var(c: float, t: float, f_lo: float, f_hi: float) -> float:
         edges = sorted({math.log(f_lo), math.log(f_c)} | {
             math.log(k / t) for k in (0.25, 0.5, 1, 2, 4, 8) if f_lo < k / t < f_c})
         for a, b in zip(edges[:-1], edges[1:]):
+            from scipy import integrate  # imported on use: start-up time
+
             v, _ = integrate.quad(g, a, b, limit=200)
             val += v
     if f_hi > f_c:

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import signal, stats
+from scipy import special
 
 __all__ = [
     "Autocorrelation",
@@ -125,9 +125,7 @@ def welch_psd(rate: np.ndarray, tau0: float, *, segments: Sequence[tuple[int, in
         b = min(b, a + WELCH_MAX_SAMPLES)
         part = x[a:b]
         k = 1 + (part.size - nperseg) // (nperseg // 2)
-        f, p = signal.welch(part, fs=fs, window="hann", nperseg=nperseg,
-                            noverlap=nperseg // 2, detrend="constant", return_onesided=True,
-                            scaling="density")
+        f, p = _welch_density(part, fs, nperseg)
         acc = p * k if acc is None else acc + p * k
         count += k
         used += part.size
@@ -139,6 +137,33 @@ def welch_psd(rate: np.ndarray, tau0: float, *, segments: Sequence[tuple[int, in
     keep = f > 0
     return PsdEstimate(f=f[keep], psd=psd[keep], dof=2.0 * 0.9 * count if count > 1 else 2.0,
                        nperseg=nperseg, tau0=tau0, n_used=used, notes=notes)
+
+
+def _welch_density(x: np.ndarray, fs: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
+    """One-sided Welch PSD density of ``x``: periodic Hann window, 50 % overlap, the mean of
+    each segment removed, |FFT|² averaged over segments (Welch 1967) — the same numbers as
+    ``scipy.signal.welch(x, fs, window="hann", nperseg=nperseg, noverlap=nperseg // 2,
+    detrend="constant", scaling="density")`` (checked in the tests), without importing
+    scipy.signal (≈ 0.5–1 s) and with the segments transformed in cache-sized batches."""
+    step = nperseg - nperseg // 2
+    k = 1 + (x.size - nperseg) // step
+    win = 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(nperseg) / nperseg)  # periodic Hann
+    scale = 1.0 / (fs * float(np.dot(win, win)))
+    segs = np.lib.stride_tricks.as_strided(x, shape=(k, nperseg),
+                                           strides=(step * x.strides[0], x.strides[0]),
+                                           writeable=False)
+    acc = np.zeros(nperseg // 2 + 1)
+    batch = max(1, (1 << 20) // nperseg)
+    for i in range(0, k, batch):
+        blk = segs[i:i + batch]
+        blk = (blk - blk.mean(axis=1, keepdims=True)) * win
+        spec = np.fft.rfft(blk, axis=1)
+        acc += (spec.real ** 2 + spec.imag ** 2).sum(axis=0)
+    p = acc * (scale / k)
+    p[1:] *= 2.0  # one-sided: fold the negative frequencies
+    if nperseg % 2 == 0:
+        p[-1] /= 2.0  # the Nyquist bin has no mirror
+    return np.arange(nperseg // 2 + 1) * (fs / nperseg), p
 
 
 @dataclass
@@ -192,7 +217,7 @@ def find_lines(psd: PsdEstimate, *, max_lines: int = 3, p_false: float = 1e-6,
     bg = _background(f, p)
     ratio = p / bg
     nu = max(psd.dof, 2.0)
-    pv = stats.chi2.sf(nu * ratio, nu)
+    pv = special.chdtrc(nu, nu * ratio)  # χ² survival
     cand = (ratio > min_snr) & (pv < p_false / nb)
     cand[0] = False  # the lowest bin is not a line
     lines: list[SpectralLine] = []

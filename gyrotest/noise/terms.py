@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import integrate, special
+from scipy import special
 
 from ..earth import OMEGA_E_DPH
 
@@ -443,6 +443,8 @@ def _avar_from_psd_one(S, tau, f_max, lines, breakpoints, n_half) -> float:
             if u <= 0.0:
                 return 0.0
             return float(np.asarray(S(np.array([1.0 / u])), dtype=float)[0])
+
+        from scipy import integrate  # imported on use: start-up time
 
         tval, _ = integrate.quad(tail, u_lo, 1.0 / top, limit=200)
         total += 4.0 * 0.375 / (np.pi * tau) ** 2 * tval

@@ -1,0 +1,105 @@
+"""Run one analysis per log on a process pool (``--jobs N``).
+
+Lab scripts hand gyrotest a whole campaign (``gyrotest allan *.parquet``); each log is read
+and analysed independently, so the logs go to a pool of worker processes (fork on Linux:
+the workers inherit the imported modules). Results come back in the order of the arguments,
+and each worker runs exactly the serial code path, so the output is identical to ``--jobs 1``
+(``tests/test_fastpaths.py`` compares the JSON). The ingest notes of each log are printed by
+the parent, in argument order. Stdin (``-``) and a single log run in-process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import os
+import sys
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import click
+
+
+def jobs_option(func):
+    """``--jobs N``: logs analysed in parallel (default: the number of CPU cores)."""
+    return click.option("--jobs", "-j", type=click.IntRange(min=1), default=None,
+                        help="Logs analysed in parallel (worker processes, each holding one "
+                             "log in memory; default: the number of CPU cores). Results are "
+                             "identical to --jobs 1.")(func)
+
+
+def default_jobs() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@contextlib.contextmanager
+def deviation_progress(min_s: float = 2.0):
+    """Progress of the deviation τ loops on a terminal (not with -q, nothing when piped).
+    The bar appears only once a loop has run for ``min_s`` seconds: short steps stay quiet."""
+    from ..noise import deviations
+    from .common import progress, settings
+
+    if settings().quiet or not sys.stderr.isatty():
+        yield
+        return
+    with contextlib.ExitStack() as stack:
+        state: dict[str, Any] = {"t0": None, "advance": None}
+
+        def hook(done: int, total: int, kind: str) -> None:
+            now = time.monotonic()
+            if done == 1 or state["t0"] is None:
+                state["t0"] = now
+            if state["advance"] is None and now - state["t0"] >= min_s and done < total:
+                state["advance"] = stack.enter_context(progress(f"{kind.upper()} τ", total))
+                state["advance"](done)
+                return
+            if state["advance"] is not None:
+                state["advance"](1, total=total, description=f"{kind.upper()} τ")
+                if done == total:
+                    state["advance"](-total)  # reset for the next loop (transient bar)
+
+        old, deviations.PROGRESS = deviations.PROGRESS, hook
+        try:
+            yield
+        finally:
+            deviations.PROGRESS = old
+
+
+def _work(args: tuple[Callable, str, dict, dict]) -> tuple[Any, list[str]]:
+    fn, path, opts, kw = args
+    from ..noise import deviations
+    from .common import load_log
+
+    deviations.PROGRESS = None  # a worker process draws no bar
+
+    log = load_log(path, opts, announce=False)
+    return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]
+
+
+def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None = None,
+             announce: bool = True, **kw) -> list:
+    """``[fn(load_log(p), **kw) for p in paths]``, on ``jobs`` worker processes when there is
+    more than one log. ``fn`` must be a module-level function (it is pickled by name)."""
+    from .common import load_logs, note, progress
+
+    n_jobs = min(jobs or default_jobs(), len(paths))
+    if n_jobs < 2 or "-" in paths:
+        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce)]
+    from concurrent.futures import ProcessPoolExecutor
+
+    method = "fork" if sys.platform.startswith("linux") else None
+    ctx = multiprocessing.get_context(method)
+    out = []
+    with (progress(f"{len(paths)} logs on {n_jobs} processes", total=len(paths)) as advance,
+          ProcessPoolExecutor(max_workers=n_jobs, mp_context=ctx) as ex):
+        for res, notes in ex.map(_work, [(fn, p, opts, kw) for p in paths]):
+            if announce:
+                for m in notes:
+                    note(m)
+            out.append(res)
+            advance()
+    return out

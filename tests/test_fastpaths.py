@@ -1,0 +1,237 @@
+"""Start-up imports and the fast paths of issue #13, each against the slow reference.
+
+* which modules a command imports (a module-set check in a fresh interpreter, not a timing);
+* the numpy Welch PSD against ``scipy.signal.welch``;
+* the χ² quantiles from ``scipy.special`` against ``scipy.stats``;
+* the plain-number CSV reader (``gyrotest.fastcsv``) against pyarrow's reader and the general
+  ingest path, including ranges, comments, missing cells and the fall-back cases.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+HEAVY = ("scipy.stats", "scipy.signal", "matplotlib", "pandas", "reportlab")
+
+
+def _modules_after(code: str, *args: str) -> set[str]:
+    """Names in sys.modules after running ``code`` in a fresh interpreter (argv = args)."""
+    full = (
+        "import sys, json, atexit\n"
+        "atexit.register(lambda: sys.__stderr__.write('MODULES=' + json.dumps(sorted("
+        "sys.modules)) + '\\n'))\n"
+        "sys.argv = ['gyrotest', *json.loads(sys.argv[1])]\n"
+        f"{code}\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    p = subprocess.run([sys.executable, "-c", full, json.dumps(list(args))], capture_output=True,
+                       text=True, env=env, cwd=ROOT, timeout=300)
+    line = [ln for ln in p.stderr.splitlines() if ln.startswith("MODULES=")]
+    assert line, p.stderr
+    return set(json.loads(line[-1][len("MODULES="):]))
+
+
+def test_import_cli_is_light():
+    mods = _modules_after("import gyrotest.cli")
+    for m in (*HEAVY, "numpy", "scipy", "pyarrow", "rich"):
+        assert m not in mods, f"`import gyrotest.cli` imports {m}"
+
+
+def test_help_imports_no_command_module():
+    mods = _modules_after("from gyrotest.cli import main\nmain()", "--help")
+    assert not [m for m in mods if m.startswith("gyrotest.cli.cmd_")]
+    for m in (*HEAVY, "numpy", "scipy", "pyarrow"):
+        assert m not in mods, f"`gyrotest --help` imports {m}"
+
+
+def test_allan_help_and_info_import_no_heavy_module(tmp_path):
+    mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", "--help")
+    for m in HEAVY:
+        assert m not in mods, f"`gyrotest allan --help` imports {m}"
+    f = tmp_path / "small.csv"
+    t = np.arange(1, 501) * 0.1
+    np.savetxt(f, np.c_[t, np.sin(t)], delimiter=",", header="t_s,omega_dph", comments="")
+    mods = _modules_after("from gyrotest.cli import main\nmain()", "info", str(f), "--json")
+    for m in (*HEAVY, "scipy"):
+        assert m not in mods, f"`gyrotest info` imports {m}"
+
+
+def test_allan_on_plain_csv_imports_no_stats_signal_pandas(tmp_path):
+    f = tmp_path / "log.csv"
+    rng = np.random.default_rng(3)
+    t = np.arange(1, 4001) * 0.01
+    np.savetxt(f, np.c_[t, rng.standard_normal(t.size)], delimiter=",",
+               header="t_s,omega_dph", comments="")
+    mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", str(f), "--rate-unit",
+                          "deg/h", "--json")
+    for m in HEAVY:
+        assert m not in mods, f"`gyrotest allan` imports {m}"
+
+
+@pytest.mark.parametrize("n,nperseg", [(1000, 64), (12345, 1024), (777, 17), (70_000, 4096)])
+def test_welch_matches_scipy(n, nperseg):
+    from scipy import signal
+
+    from gyrotest.noise.spectral import _welch_density
+
+    rng = np.random.default_rng(n)
+    x = np.cumsum(rng.standard_normal(n)) * 0.01 + rng.standard_normal(n) + 3.0
+    f, p = signal.welch(x, fs=50.0, window="hann", nperseg=nperseg, noverlap=nperseg // 2,
+                        detrend="constant", scaling="density")
+    f2, p2 = _welch_density(x, 50.0, nperseg)
+    np.testing.assert_allclose(f2, f, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(p2, p, rtol=1e-10)
+
+
+def test_chi2_from_special_matches_stats():
+    from scipy import stats
+
+    from gyrotest.noise.edf import chi2_interval
+
+    edf = np.array([0.7, 1.0, 2.5, 10.0, 333.0, 1e5])
+    sigma = np.full(edf.size, 2.0)
+    for conf in (0.683, 0.95):
+        p = 0.5 * (1 - conf)
+        lo, hi = chi2_interval(sigma, edf, conf)
+        np.testing.assert_allclose(lo, sigma * np.sqrt(edf / stats.chi2.ppf(1 - p, edf)),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(hi, sigma * np.sqrt(edf / stats.chi2.ppf(p, edf)), rtol=1e-12)
+    lo, hi = chi2_interval(np.array([1.0]), np.array([np.nan]), 0.683)
+    assert np.isnan(lo[0]) and np.isnan(hi[0])
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def test_fastcsv_matches_pyarrow_across_ranges(tmp_path, monkeypatch):
+    import pyarrow.csv as pcsv
+
+    from gyrotest import fastcsv
+
+    rng = np.random.default_rng(7)
+    n = 50_000
+    a, b, c = np.arange(n) * 0.01, rng.standard_normal(n) * 1e3, rng.standard_normal(n) * 1e-7
+    lines = ["# comment before the header", "t,x,y"]
+    lines += [f"{float(u)!r},{float(v)!r},{float(w)!r}" for u, v, w in zip(a, b, c)]
+    lines.insert(5000, "# a comment in the middle")
+    lines.insert(20_000, "")
+    f = _write(tmp_path / "log.csv", "\n".join(lines))  # no final newline
+    monkeypatch.setattr(fastcsv, "RANGE_BYTES", 100_003)  # many ranges, cuts mid-line
+    got = fastcsv.read_numeric(f, ",", 1, ["t", "x", "y"], ["y", "t"])
+    assert got is not None and set(got) == {"y", "t"}
+    ref = pcsv.read_csv(f, read_options=pcsv.ReadOptions(skip_rows=1),
+                        parse_options=pcsv.ParseOptions(
+                            invalid_row_handler=lambda r: "skip"))
+    np.testing.assert_array_equal(got["t"], ref.column("t").to_numpy())
+    np.testing.assert_array_equal(got["y"], ref.column("y").to_numpy())
+    np.testing.assert_array_equal(got["t"], a)  # repr round-trips exactly
+    assert got["t"].flags.writeable
+    monkeypatch.setattr(fastcsv, "RANGE_BYTES", 16 << 20)
+    one = fastcsv.read_numeric(f, ",", 1, ["t", "x", "y"], None)
+    np.testing.assert_array_equal(one["x"], b)
+
+
+def test_fastcsv_missing_cells_are_nan_and_text_falls_back(tmp_path):
+    from gyrotest import fastcsv
+
+    f = _write(tmp_path / "na.csv", "t;x\n0;1.5\n1;NA\n2;\n3;nan\n4;-2e3\n")
+    got = fastcsv.read_numeric(f, ";", 0, ["t", "x"], None)
+    assert got is not None
+    np.testing.assert_array_equal(got["x"][[0, 4]], [1.5, -2e3])
+    assert np.isnan(got["x"][1:4]).all()
+    f2 = _write(tmp_path / "ts.csv", "time,x\n2024-01-01T00:00:00,1\n2024-01-01T00:00:01,2\n")
+    assert fastcsv.read_numeric(f2, ",", 0, ["time", "x"], None) is None
+    f3 = _write(tmp_path / "bad.csv", "t,x\n0,1\n1,oops\n")
+    assert fastcsv.read_numeric(f3, ",", 0, ["t", "x"], None) is None
+
+
+def test_ingest_results_unchanged_by_fast_path(tmp_path, monkeypatch):
+    """read_log through the fast path equals read_log through the general reader."""
+    from gyrotest import fastcsv
+    from gyrotest.ingest import read_log
+
+    rng = np.random.default_rng(11)
+    n = 3000
+    t = np.arange(n) * 0.1
+    x = rng.standard_normal(n)
+    x_txt = [repr(float(v)) for v in x]
+    x_txt[100] = "NA"
+    f = _write(tmp_path / "g.csv", "t_s,omega_dph,temp_c\n" + "\n".join(
+        f"{float(a)!r},{b},{float(c)!r}" for a, b, c in zip(t, x_txt, 20 + x / 10)) + "\n")
+    fast = read_log(f, overrides={"gyro": {"rate_unit": "deg/h"}}, nan_policy="gap")
+    monkeypatch.setattr(fastcsv, "read_numeric", lambda *a, **k: None)
+    slow = read_log(f, overrides={"gyro": {"rate_unit": "deg/h"}}, nan_policy="gap")
+    assert fast.axes == slow.axes and fast.n == slow.n and fast.tau0 == slow.tau0
+    for k in fast.rates:
+        np.testing.assert_array_equal(fast.rates[k], slow.rates[k])
+    np.testing.assert_array_equal(fast.t, slow.t)
+    assert [g.index for g in fast.timing.gaps] == [g.index for g in slow.timing.gaps]
+
+
+def test_bad_value_in_big_csv_still_names_the_row(tmp_path):
+    from cliutil import run_cli
+
+    n = 20_000
+    rows = [f"{i * 0.01!r},{math.sin(i):.6f}" for i in range(n)]
+    rows[12_345] = "123.45,abc"
+    f = _write(tmp_path / "bad.csv", "t_s,omega_dph\n" + "\n".join(rows) + "\n")
+    run_cli(["info", str(f)]).assert_clean_error("bad.csv", "abc", "12346")
+
+
+def test_allan_jobs_identical_to_serial(tmp_path):
+    """`allan A B C --jobs 3` (process pool) prints exactly what --jobs 1 prints."""
+    from cliutil import run_cli
+
+    paths = []
+    for seed in (1, 2, 3):
+        rng = np.random.default_rng(seed)
+        t = np.arange(1, 20_001) * 0.01
+        x = rng.standard_normal(t.size) * 6.0 + np.cumsum(rng.standard_normal(t.size)) * 0.01
+        f = tmp_path / f"log{seed}.csv"
+        np.savetxt(f, np.c_[t, x], delimiter=",", header="t_s,omega_dph", comments="",
+                   fmt="%.10g")
+        paths.append(str(f))
+    args = ["allan", *paths, "--rate-unit", "deg/h", "--taus", "octave"]
+    serial = run_cli([*args, "--json", "--jobs", "1"])
+    pooled = run_cli([*args, "--json", "--jobs", "3"])
+    assert serial.code == 0 and pooled.code == 0, serial.err + pooled.err
+    assert json.loads(serial.out)["logs"] and serial.out == pooled.out
+    text1, text3 = run_cli([*args, "--jobs", "1"]), run_cli([*args, "--jobs", "3"])
+    assert text1.out == text3.out and text1.err == text3.err
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_s,omega_dph\n0.01,1\n0.02,x\n")
+    run_cli([*args[:2], str(bad), *args[2:], "--jobs", "2"]).assert_clean_error("bad.csv")
+
+
+def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
+    from gyrotest.noise import deviations
+
+    calls = []
+    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    x = np.random.default_rng(5).standard_normal(300_000)  # above PARALLEL_MIN_SAMPLES
+    r = deviations.compute_deviation(x, 0.01, input_kind="rate", taus="octave", noise_id=False)
+    n = len(r.tau)
+    assert [c[0] for c in calls[:n]] == list(range(1, n + 1))
+    assert all(c[1] == n and c[2] == "oadev" for c in calls[:n])
+
+
+def test_no_progress_text_when_piped(tmp_path):
+    from cliutil import run_cli
+
+    f = tmp_path / "log.csv"
+    t = np.arange(1, 3001) * 0.01
+    np.savetxt(f, np.c_[t, np.sin(t * 7)], delimiter=",", header="t_s,omega_dph", comments="")
+    r = run_cli(["allan", str(f), "--rate-unit", "deg/h", "--dev", "mtotdev", "--taus", "octave"])
+    assert r.code == 0, r.err
+    assert "τ ━" not in r.err and "\r" not in r.err

@@ -94,3 +94,16 @@ def test_xsens_spikes_are_reported_everywhere(xsens_csv):
 
 def test_bad_outliers_value(xsens_csv):
     run_cli(["allan", xsens_csv, *XS, "--outliers", "drop"]).assert_clean_error("--outliers")
+
+
+def test_running_median_numpy_equals_scipy_median_filter():
+    """The numpy running median (small records: no scipy import in `info`) equals
+    scipy.ndimage.median_filter(mode="nearest"), the one used for long records."""
+    from scipy.ndimage import median_filter
+
+    from gyrotest.noise import outliers as o
+
+    rng = np.random.default_rng(11)
+    for n, w in ((5, 3), (7, 7), (1000, 51), (20001, 101)):
+        x = rng.standard_normal(n)
+        assert np.array_equal(o._running_median(x, w), median_filter(x, size=w, mode="nearest"))

@@ -186,6 +186,10 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
             from ..fastcsv import arrow_table, read_numeric  # plain numbers: fast path
 
             owned = read_numeric(p, delim, skip, names, columns)
+            if owned is not None and any(
+                    v.size and np.nanmax(np.abs(v), initial=0.0) >= 2.0 ** 53
+                    for v in owned.values()):
+                owned = None  # integers beyond float64's 53 bits (ns epochs): exact reader
         elif p:
             owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal)
         if owned is not None:

@@ -123,15 +123,31 @@ def _num(v: float) -> float | None:
 def threshold_k(n: int, false_alarm: float = FALSE_ALARM, k_min: float = K_MIN) -> float:
     """k = max(k_min, Φ⁻¹(1 − false_alarm/(2n))): the Gaussian two-sided level at which a record
     of n independent samples raises a false alarm with probability ≈ ``false_alarm``."""
-    from scipy.stats import norm
+    from statistics import NormalDist  # Φ⁻¹ (Wichura AS241); no scipy import in `info`
 
-    return max(float(k_min), float(norm.isf(false_alarm / (2.0 * max(n, 1)))))
+    return max(float(k_min), -NormalDist().inv_cdf(false_alarm / (2.0 * max(n, 1))))
+
+
+#: records up to this many samples get the running median from numpy (no scipy import: `info`
+#: on a small log stays quick); longer ones from scipy.ndimage (faster per sample)
+NUMPY_MEDIAN_MAX = 200_000
 
 
 def _running_median(x: np.ndarray, window: int) -> np.ndarray:
-    from scipy.ndimage import median_filter
+    """Running median over ``window`` (odd) samples, edges padded with the end values
+    (scipy.ndimage.median_filter with mode="nearest"; the same numbers either way)."""
+    if x.size > NUMPY_MEDIAN_MAX:
+        from scipy.ndimage import median_filter
 
-    return median_filter(x, size=window, mode="nearest")
+        return median_filter(x, size=window, mode="nearest")
+    h = window // 2
+    xp = np.concatenate([np.full(h, x[0]), x, np.full(h, x[-1])])
+    out = np.empty(x.size)
+    step = max(1, 4_000_000 // window)  # bounded memory: chunks of the window view
+    view = np.lib.stride_tricks.sliding_window_view(xp, window)
+    for i in range(0, x.size, step):
+        out[i:i + step] = np.median(view[i:i + step], axis=1)
+    return out
 
 
 def _scale(r: np.ndarray) -> tuple[float, str]:

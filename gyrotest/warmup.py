@@ -162,7 +162,7 @@ def warmup_time(rate_dph: np.ndarray, tau0: float, *, band_dph: float | None = N
     nb = len(y) // B
     if nb < 16:
         raise AnalysisError(f"the record has {nb} blocks of {block_s:g} s; the warm-up time "
-                            "needs at least 16 (a longer record or shorter --block)")
+                            "needs at least 16 (a longer record or shorter blocks, --warmup-block)")
     m = y[: nb * B].reshape(nb, B).mean(axis=1)
     Tb = B * tau0
     ref = m[nb - max(4, nb // 4):]

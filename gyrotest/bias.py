@@ -276,8 +276,8 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
 
 def run_warmup_time(log: GyroLog, axis: str, band_dph: float, block_s: float) -> dict:
     """Warm-up time of ``log`` (starting at power-on) for one axis: the JSON form of
-    :func:`gyrotest.warmup.warmup_time` on the whole record (no trim), plus the band
-    resolution 1σ = block/√12 (the time is found to one block)."""
+    :func:`gyrotest.warmup.warmup_time` on the whole record (no trim); its 1σ
+    ``warmup_time_sigma_s`` combines the block resolution and the band-crossing jitter."""
     from .warmup import warmup_time
 
     if len(log.segments) > 1:
@@ -288,7 +288,8 @@ def run_warmup_time(log: GyroLog, axis: str, band_dph: float, block_s: float) ->
     except AnalysisError as e:
         raise AnalysisError(f"{log.source}: {e}") from None
     d = w.to_dict()
-    d["warmup_time_sigma_s"] = w.block_s / math.sqrt(12.0) if math.isfinite(w.warmup_s) else None
+    if not math.isfinite(w.warmup_s):
+        d["warmup_time_sigma_s"] = None
     return d
 
 

@@ -59,7 +59,9 @@ def test_cli_warmup_time_against_truth(runs):
         assert abs(w["initial_offset_dph"] - A * TAU / BLOCK * (1 - math.exp(-BLOCK / TAU))) < 0.02
         times.append(w["warmup_time_s"])
     assert d["warmup_time_worst_s"] == max(times)
-    assert d["warmup_time_worst_sigma_s"] == pytest.approx(BLOCK / math.sqrt(12))
+    iw = times.index(max(times))
+    sig = d["runs"][iw]["warmup_time"]["warmup_time_sigma_s"]
+    assert d["warmup_time_worst_sigma_s"] == sig and sig >= BLOCK / math.sqrt(12)
     # the terminal table line
     r = run_cli(["bias", runs[0], "--profile", prof, "--warmup-band", "0.05"])
     assert r.code == 0, r.err
@@ -123,7 +125,7 @@ def test_report_item_verdicts_and_not_tested(runs):
     ch = {c["key"]: c for c in d["checks"]}["bias.warmup_time_s"]
     m = ch["measured"]
     assert abs(m["value"] - TRUTH) <= 2 * BLOCK
-    assert m["sigma"] == pytest.approx(BLOCK / math.sqrt(12))
+    assert BLOCK / math.sqrt(12) <= m["sigma"] < 3 * BLOCK
     assert ch["verdict"] == "PASS" and ch["limit"] == 3600 and ch["unit"] == "s"
     assert "IEEE 952 §5.3.3" in ch["ieee"]
     text = md.read_text(encoding="utf-8")
@@ -148,3 +150,18 @@ def test_campaign_bad_band(runs):
     tmp = runs[0].parent
     camp = _campaign(tmp, runs, 'warmup_band = "narrow"\n')
     run_cli(["report", camp]).assert_clean_error("warmup_band", "0.05deg/h")
+
+
+def test_warmup_sigma_calibrated():
+    """The stated 1σ of the warm-up time against simulator truth over seeds not used to design
+    it (300-315): RMS of error/σ between 0.5 and 1.6, ≥ 80 % within 2σ."""
+    from gyrotest.warmup import warmup_time
+
+    z = []
+    for seed in range(300, 316):
+        run = simulate(_scenario(seed)).run
+        r = warmup_time(run.rate_dph, run.tau0, band_dph=BAND, block_s=BLOCK)
+        z.append((r.warmup_s - TRUTH) / r.sigma_s)
+    rms = math.sqrt(sum(v * v for v in z) / len(z))
+    assert 0.5 <= rms <= 1.6, z
+    assert sum(abs(v) <= 2 for v in z) >= 0.8 * len(z), z

@@ -172,6 +172,8 @@ class BiasResult:
     notes: list[str] = field(default_factory=list)
     outliers: dict | None = None
     warmup: dict | None = None
+    #: warm-up time from power-on (:func:`gyrotest.warmup.warmup_time`) when a band was given
+    warmup_time: dict | None = None
 
     @property
     def sigma_dph(self) -> float:
@@ -195,6 +197,8 @@ class BiasResult:
             "mean_temperature_c": self.mean_temperature_c,
             "outliers": self.outliers,
             "warmup": self.warmup,
+            "warmup_time_s": (self.warmup_time or {}).get("warmup_time_s"),
+            "warmup_time": self.warmup_time,
             "notes": self.notes,
         }
 
@@ -207,12 +211,17 @@ def _mean_over_segments(x: np.ndarray, segs: list[tuple[int, int]]) -> float:
 
 def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
                   earth_rate: bool = True, label: str | None = None,
-                  outliers: str = "flag") -> BiasResult:
+                  outliers: str = "flag", warmup_band_dph: float | None = None,
+                  warmup_block_s: float = 60.0) -> BiasResult:
     """D_F of a static run: mean rate after ``skip_s`` minus the earth-rate component along
     the IA (from ``log.site``; without a site the earth rate is not removed and a note says
     so). Uncertainty from :func:`mean_uncertainty`. Spikes are detected
     (:mod:`gyrotest.noise.outliers`) and, by ``outliers``, flagged in a note ("flag"), replaced
     by their running median ("remove") or clipped ("robust").
+
+    With ``warmup_band_dph``, the warm-up time of the run (the log starts at power-on; the
+    whole log, before ``skip_s``) with :func:`gyrotest.warmup.warmup_time` in blocks of
+    ``warmup_block_s``.
     """
     axis = axis or log.axes[0]
     if axis not in log.rates:
@@ -252,14 +261,36 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
             f"noise term(s) {', '.join(unc.bounded_terms)} only bounded by this record: if they "
             f"were at their 95 % upper limits the 1σ would be {unc.bound_sigma_dph:.3g} deg/h; "
             "a longer record would resolve them")
+    wt = None
+    if warmup_band_dph is not None:
+        wt = run_warmup_time(log, axis, warmup_band_dph, warmup_block_s)
     temps = [np.mean(v) for v in part.temperature.values()]
     return BiasResult(
         source=log.source, axis=axis, label=label or log.source, samples=part.n,
         skip_s=skip_s, duration_s=part.duration_s, mean_output_dph=mean,
         earth_rate_ia_dph=er, bias_dph=mean - (er or 0.0), uncertainty=unc, site=log.site,
         mean_temperature_c=float(np.mean(temps)) if temps else None, notes=notes,
-        outliers=out_info, warmup=None if warm is None else warm.to_dict(),
+        outliers=out_info, warmup=None if warm is None else warm.to_dict(), warmup_time=wt,
     )
+
+
+def run_warmup_time(log: GyroLog, axis: str, band_dph: float, block_s: float) -> dict:
+    """Warm-up time of ``log`` (starting at power-on) for one axis: the JSON form of
+    :func:`gyrotest.warmup.warmup_time` on the whole record (no trim); its 1σ
+    ``warmup_time_sigma_s`` combines the block resolution and the band-crossing jitter."""
+    from .warmup import warmup_time
+
+    if len(log.segments) > 1:
+        raise InputError(f"{log.source}: the warm-up time needs one contiguous record from "
+                         f"power-on; the log has {len(log.segments)} segments (gaps)")
+    try:
+        w = warmup_time(log.rates[axis], log.tau0, band_dph=band_dph, block_s=block_s)
+    except AnalysisError as e:
+        raise AnalysisError(f"{log.source}: {e}") from None
+    d = w.to_dict()
+    if not math.isfinite(w.warmup_s):
+        d["warmup_time_sigma_s"] = None
+    return d
 
 
 def _treat_outliers(rate, part: GyroLog, segs, axis: str, mode: str, notes: list[str]):
@@ -528,10 +559,29 @@ class BiasAnalysis:
             return "multi-position"
         return "repeatability" if self.repeatability else "bias"
 
+    @property
+    def warmup_worst(self) -> tuple[float | None, int | None]:
+        """The longest warm-up time over the runs (s) and its run index; (None, None) when no
+        band was given; NaN when a run's warm-up was not resolvable or not reached."""
+        wts = [r.warmup_time for r in self.runs]
+        if not wts or any(w is None for w in wts):
+            return None, None
+        vals = [w["warmup_time_s"] for w in wts]
+        if any(not math.isfinite(v) for v in vals):
+            i = next(i for i, v in enumerate(vals) if not math.isfinite(v))
+            return math.nan, i
+        i = int(np.argmax(vals))
+        return float(vals[i]), i
+
     def to_dict(self) -> dict:
         """The JSON document of ``gyrotest bias --json``."""
+        worst, iw = self.warmup_worst
         return {
             "analysis": self.analysis,
+            "warmup_time_worst_s": worst,
+            "warmup_time_worst_sigma_s": (self.runs[iw].warmup_time["warmup_time_sigma_s"]
+                                          if iw is not None else None),
+            "warmup_time_worst_run": self.runs[iw].source if iw is not None else None,
             "runs": [r.to_dict() for r in self.runs],
             "repeatability": self.repeatability.to_dict() if self.repeatability else None,
             "multi_position": self.multi.to_dict() if self.multi else None,
@@ -554,7 +604,9 @@ def parse_positions(positions: str | list[str] | None, n_logs: int) -> list[str]
 
 def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 0.0,
                  axis: str | None = None, positions: str | list[str] | None = None,
-                 earth_rate: bool = True, outliers: str = "flag") -> BiasAnalysis:
+                 earth_rate: bool = True, outliers: str = "flag",
+                 warmup_band_dph: float | None = None,
+                 warmup_block_s: float = 60.0) -> BiasAnalysis:
     """The whole bias analysis of ``gyrotest bias`` (no printing, no files).
 
     * ``positions`` (one IA direction per log, :func:`parse_positions`) sets each log's IA;
@@ -564,7 +616,9 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
     * otherwise D_F of each log after ``skip_s`` (:func:`estimate_bias`, earth rate removed
       unless ``earth_rate`` is False);
     * several IA directions (or a position column): :func:`multi_position`; several runs with
-      one IA: :func:`repeatability`.
+      one IA: :func:`repeatability`;
+    * ``warmup_band_dph``: the warm-up time of each log from its start (power-on), blocks of
+      ``warmup_block_s`` (:func:`run_warmup_time`; not for logs with a position column).
 
     The input logs are not modified.
     """
@@ -584,6 +638,9 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
     runs: list[BiasResult] = []
     parts: list[GyroLog] = []
     has_pos_col = any(g.position is not None for g in logs)
+    if has_pos_col and warmup_band_dph is not None:
+        raise InputError("the warm-up time (--warmup-band) needs static runs from power-on, "
+                         "not a multi-position log with a position column")
     if has_pos_col:
         for g in logs:
             if g.position is None:
@@ -596,7 +653,8 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
         for g in logs:
             parts.append(g)
             runs.append(estimate_bias(g, skip_s=skip_s, axis=axis, earth_rate=earth_rate,
-                                      outliers=outliers))
+                                      outliers=outliers, warmup_band_dph=warmup_band_dph,
+                                      warmup_block_s=warmup_block_s))
     sites = {(round(r.site.ia_azimuth_deg, 6), round(r.site.ia_elevation_deg, 6))
              for r in runs if r.site is not None}
     multi = rep = None

@@ -47,7 +47,9 @@ class BiasAxes:
 
 def analyse_bias_axes(logs: list, *, axis: str | None = None, skip_s: float = 0.0,
                       settle_s: float = 0.0, positions: str | list[str] | None = None,
-                      earth_rate: bool = True, outliers: str = "flag") -> BiasAxes:
+                      earth_rate: bool = True, outliers: str = "flag",
+                      warmup_band_dph: float | None = None,
+                      warmup_block_s: float = 60.0) -> BiasAxes:
     """:func:`gyrotest.bias.analyse_bias` on every axis of ``logs`` (or the ``axis`` names,
     comma-separated). See the module docstring for the earth rate and multi-position rules."""
     names = choose_axes(logs, axis)
@@ -64,5 +66,7 @@ def analyse_bias_axes(logs: list, *, axis: str | None = None, skip_s: float = 0.
                      "along the IA")
         earth_rate = False
     per = {a: analyse_bias(logs, skip_s=skip_s, settle_s=settle_s, axis=a, positions=positions,
-                           earth_rate=earth_rate, outliers=outliers) for a in names}
+                           earth_rate=earth_rate, outliers=outliers,
+                           warmup_band_dph=warmup_band_dph, warmup_block_s=warmup_block_s)
+           for a in names}
     return BiasAxes(per, notes)

@@ -163,6 +163,26 @@ def rate_factor(unit: str) -> float:
     return factor(unit, "rate")
 
 
+_RATE_TOKEN = re.compile(r"^\s*((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s]*)\s*$")
+
+
+def parse_rate_dph(text: str | float | int, *, what: str = "rate") -> float:
+    """Parse a positive angular rate such as ``"0.05deg/h"``, ``"1e-5 deg/s"`` or a bare number
+    (deg/h) into deg/h."""
+    if isinstance(text, bool):
+        raise InputError(f"{what} must be a rate like 0.05deg/h, got {text!r}")
+    if isinstance(text, (int, float)):
+        v = float(text)
+    else:
+        m = _RATE_TOKEN.match(str(text))
+        if not m:
+            raise InputError(f"cannot read {what} {text!r}; write e.g. 0.05deg/h or 1e-5deg/s")
+        v = float(m.group(1)) * (factor(m.group(2), "rate", what=what) if m.group(2) else 1.0)
+    if not v > 0 or not math.isfinite(v):
+        raise InputError(f"{what} must be a positive rate, got {text!r}")
+    return v
+
+
 _DUR_TOKEN = re.compile(r"\s*((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zµ]*)\s*")
 _DUR_UNITS = {
     "": 1.0,

@@ -8,7 +8,8 @@ import click
 
 from ..bias import parse_positions
 from ..bias_axes import analyse_bias_axes
-from ..units import format_duration, parse_duration
+from ..errors import InputError
+from ..units import format_duration, parse_duration, parse_rate_dph
 from .common import (
     console,
     emit_json,
@@ -41,13 +42,19 @@ from .common_display import resolve_display_unit, unit_option
               show_default=True,
               help="Spikes (Hampel filter): flag = warn with their times, mean as recorded; "
                    "remove = replace each by its running median; robust = clip each.")
+@click.option("--warmup-band", "warmup_band", default=None, metavar="RATE",
+              help="Report the warm-up time of each run (IEEE 952 §5.3.3; the log starts at "
+                   "power-on): the time until the bias stays within ± RATE of its final value, "
+                   "e.g. 0.05deg/h (a bare number is deg/h).")
+@click.option("--warmup-block", default="60s", show_default=True,
+              help="Block length for the warm-up time (its resolution).")
 @plot_option("Plot the rate with D_F and its 2σ band (.png/.svg/.pdf).")
 @unit_option
 @ingest_options
 @json_option
 @with_ingest
-def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_path, display_unit,
-            as_json, ingest_opts):
+def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup_band,
+            warmup_block, plot_path, display_unit, as_json, ingest_opts):
     """Bias D_F (in --unit, default deg/h) of static runs, with an uncertainty honest for correlated noise.
 
     D_F = mean(rate) − earth-rate component along the IA (from --latitude and --ia or the
@@ -57,6 +64,11 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_p
     Several LOGS with the same IA: run-to-run repeatability (1σ and max − min spread).
     Several IA directions (--positions, per-file profiles, or a position column): a
     multi-position fit separates D_F from earth rate and checks latitude and IA alignment.
+
+    --warmup-band RATE: warm-up time of each run from power-on (the start of the log, before
+    --skip): the end of the last --warmup-block block whose mean lies outside ± RATE of the
+    final bias (mean of the last quarter); "not resolvable" when RATE is below 2σ of the
+    block means.
 
     \b
     Examples:
@@ -69,6 +81,10 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_p
     skip_s = parse_duration(skip, what="--skip")
     unit = resolve_display_unit(display_unit, ingest_opts)
     settle_s = parse_duration(settle, what="--settle")
+    band = parse_rate_dph(warmup_band, what="--warmup-band") if warmup_band is not None else None
+    wblock = parse_duration(warmup_block, what="--warmup-block")
+    if wblock <= 0:
+        raise InputError(f"--warmup-block must be > 0, got {warmup_block!r}")
     if plot_path:
         from ..plotting import check_plot_path
 
@@ -76,7 +92,8 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, plot_p
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
     res = analyse_bias_axes(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis,
-                            positions=pos_list, earth_rate=not no_earth_rate, outliers=outliers)
+                            positions=pos_list, earth_rate=not no_earth_rate, outliers=outliers,
+                            warmup_band_dph=band, warmup_block_s=wblock)
     if plot_path:
         from ..bias_plot import plot_bias
 
@@ -114,6 +131,7 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
                   fmt_num(r.bias_dph * f, 6) if not multi else "(fit)",
                   fmt_num(r.sigma_dph * f, 3), fmt_num(r.uncertainty.naive_sigma_dph * f, 2))
     c.print(t)
+    _render_warmup(runs, u)
     for r in runs:
         for n in r.notes:
             (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
@@ -145,3 +163,24 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
             c.print(f"  χ²/dof of the position fit: {m.chi2_dof:.2f}")
         for n in m.notes:
             note(n)
+
+
+def _render_warmup(runs, u) -> None:
+    """One line per run: the warm-up time from power-on (when --warmup-band was given)."""
+    if not runs or runs[0].warmup_time is None:
+        return
+    w0 = runs[0].warmup_time
+    c = console()
+    c.print(f"\n[bold]Warm-up time[/bold] (IEEE 952 §5.3.3 / IEEE 528; from power-on until the "
+            f"bias stays within ± {fmt_num(w0['band_dph'] * u.f, 3)} {u.rate} of its final value; "
+            f"{format_duration(w0['block_s'])} blocks)")
+    for r in runs:
+        w = r.warmup_time
+        name = os.path.basename(r.label)
+        if w["warmup_time_s"] == w["warmup_time_s"]:  # finite
+            c.print(f"  {name}: warm-up time {fmt_num(w['warmup_time_s'], 5)} s "
+                    f"({format_duration(w['warmup_time_s'])}; ± {fmt_num(w['block_s'], 3)} s "
+                    f"block resolution), initial offset {fmt_num(w['initial_offset_dph'] * u.f, 3)} "
+                    f"{u.rate}, block noise {fmt_num(w['block_noise_dph'] * u.f, 3)} {u.rate}")
+        else:
+            c.print(f"  {name}: {w['status']}")

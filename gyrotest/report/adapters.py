@@ -138,7 +138,7 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
     ``axis``) with :func:`gyrotest.bias_axes.analyse_bias_axes`, as the command does; the
     object kept is the first axis' :class:`~gyrotest.bias.BiasAnalysis`."""
     from ..bias_axes import analyse_bias_axes
-    from ..units import parse_duration
+    from ..units import parse_duration, parse_rate_dph
 
     opts, iargv = ingest_opts(test, campaign)
     paths = test.logs
@@ -147,9 +147,14 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
         """The command body: returns (result, objects, logs)."""
         skip_s = parse_duration(test.opt("skip", "0"), what="--skip")
         settle_s = parse_duration(test.opt("settle", "0"), what="--settle")
+        band = test.opt("warmup_band")
         logs = [cache.get(p, opts) for p in paths]
         res = analyse_bias_axes(logs, skip_s=skip_s, settle_s=settle_s, axis=test.opt("axis"),
-                                earth_rate=not test.opt("no_earth_rate", False))
+                                earth_rate=not test.opt("no_earth_rate", False),
+                                warmup_band_dph=(parse_rate_dph(band, what="warmup_band")
+                                                 if band is not None else None),
+                                warmup_block_s=parse_duration(test.opt("warmup_block", "60s"),
+                                                              what="warmup_block"))
         return res.to_dict(), next(iter(res.per_axis.values())), logs
 
     res, obj, logs, dt = _timed(go)

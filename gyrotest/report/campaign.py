@@ -89,7 +89,8 @@ from ..errors import InputError
 
 # ----------------------------------------------------------------------------- schema
 #: per test: key -> (type, CLI option or None, help). Types: "path", "paths", "str", "float",
-#: "int", "bool", "duration", "strs", "limits", "ingest".
+#: "int", "bool", "duration", "rate" (e.g. "0.05deg/h"; a number is deg/h), "strs", "limits",
+#: "ingest".
 COMMON_KEYS: dict[str, tuple[str, str | None, str]] = {
     "profile": ("path", "--profile", "bench profile TOML for the logs of this test"),
     "ingest": ("ingest", None, "shared ingest options (time_col, rate_col, temp_col ...)"),
@@ -112,6 +113,10 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
         "logs": ("paths", None, "static runs (one log per run)"),
         "skip": ("duration", "--skip", "warm-up trim at the start of each run"),
         "no_earth_rate": ("bool", "--no-earth-rate", "do not subtract the earth rate"),
+        "warmup_band": ("rate", "--warmup-band", "warm-up time: band around the final bias, "
+                        "e.g. \"0.05deg/h\" (a number is deg/h); each log starts at power-on"),
+        "warmup_block": ("duration", "--warmup-block", "warm-up time: block length (its "
+                         "resolution), default 60s"),
     },
     "allan": {
         "log": ("path", None, "static log for the Allan analysis"),
@@ -174,7 +179,8 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
 LIMITS: dict[str, dict[str, tuple[str, str]]] = {
     "bias": {"bias_dph": ("|D_F|", "°/h"),
              "repeatability_1sigma_dph": ("bias repeatability (1σ)", "°/h"),
-             "repeatability_max_spread_dph": ("bias repeatability (max spread)", "°/h")},
+             "repeatability_max_spread_dph": ("bias repeatability (max spread)", "°/h"),
+             "warmup_time_s": ("warm-up time (worst run)", "s")},
     "allan": {"N": ("angle random walk N", "°/√h"), "B": ("bias instability B", "°/h"),
               "K": ("rate random walk K", "(°/h)/√h"), "R": ("rate ramp R", "(°/h)/h"),
               "Q": ("quantization Q", "arcsec")},
@@ -343,8 +349,14 @@ def _check_file(err: _Err, root: Path, where: str, value: Any) -> Path:
 
 def _check_option(err: _Err, where: str, test: str, key: str, typ: str, value: Any) -> Any:
     """Type-check and pre-parse one option so that a bad value fails before any work."""
-    from ..units import parse_duration
+    from ..units import parse_duration, parse_rate_dph
 
+    if typ == "rate":
+        try:
+            v = parse_rate_dph(value, what=key)
+        except InputError as e:
+            raise err(where, str(e)) from None
+        return value if isinstance(value, str) else f"{v:g}deg/h"
     if typ == "duration":
         if isinstance(value, bool) or not isinstance(value, (str, int, float)):
             raise err(where, f"must be a duration like \"30min\" or seconds, got {value!r}")

@@ -22,6 +22,13 @@ from .layout import (
 from .sec_axes import allan_axes_table, allan_axis_names, axis_note, bias_axes_table
 from .sheet import NOT_TESTED, VERDICT_RULE, Check, Num, Section, fmt_number  # noqa: F401
 
+WARMUP_LABEL = "warm-up time"
+WARMUP_IEEE = "IEEE 952 §5.3.3 / IEEE 528"
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and v == v and abs(v) != float("inf")
+
 
 class DriftSections:
     """Mixin of :class:`~gyrotest.report.build.Builder`: section 3."""
@@ -40,6 +47,7 @@ class DriftSections:
             self.check("bias", "bias_dph", "bias D_F", "§5.3.3.1.1", None, sec.number)
             self.check("bias", "repeatability_1sigma_dph", "bias repeatability (1σ)",
                        "§5.3.3.1.1", None, sec.number)
+            self.check("bias", "warmup_time_s", WARMUP_LABEL, WARMUP_IEEE, None, sec.number)
             self.coef["D_F"] = None
             _not_tested(sec, "no static runs in the campaign ([tests.bias]).")
             return
@@ -73,6 +81,7 @@ class DriftSections:
                                     sec.number))
             items.append(self.check("bias", "repeatability_1sigma_dph", "repeatability (1σ)",
                                     "§5.3.3.1.1", None, sec.number))
+        items.append(self.warmup_item(s, r, runs, sec))
         self.coef["D_F"] = df
         mp = self.an.get("multiposition")
         if mp is not None and mp.result.get("multi_position"):
@@ -118,6 +127,29 @@ class DriftSections:
         for run in runs:
             for n in run.get("notes", []):
                 self.warn("bias", f"{Path(run['source']).name}: {n}")
+
+    def warmup_item(self, s: Src, r: dict, runs: list, sec: Section) -> Check:
+        """The warm-up time item: the longest over the runs (each log from power-on), ± the
+        block resolution (1σ = block/√12); "not tested" without ``warmup_band``."""
+        t = self.c.tests["bias"]
+        if t.opt("warmup_band") is None:
+            return self.check("bias", "warmup_time_s", WARMUP_LABEL, WARMUP_IEEE, None,
+                              sec.number)
+        worst = r.get("warmup_time_worst_s")
+        w0 = runs[0].get("warmup_time") or {}
+        band = w0.get("band_dph")
+        label = (f"{WARMUP_LABEL}, bias within ± {fmt_number(band, 3)} °/h of its final value "
+                 f"(longest of {len(runs)} run{'s' if len(runs) > 1 else ''}; "
+                 f"{fmt_number(w0.get('block_s'), 3)} s blocks)")
+        if worst is None or worst != worst:
+            i = next((i for i, run in enumerate(runs)
+                      if not _finite((run.get("warmup_time") or {}).get("warmup_time_s"))), 0)
+            st = (runs[i].get("warmup_time") or {}).get("status", "not measured")
+            self.warn("bias", f"warm-up time of {Path(runs[i]['source']).name}: {st}")
+            return self.check("bias", "warmup_time_s", label, WARMUP_IEEE, None, sec.number)
+        return self.check("bias", "warmup_time_s", label, WARMUP_IEEE,
+                          s.num(["warmup_time_worst_s"], "s", ["warmup_time_worst_sigma_s"],
+                                digits=4), sec.number)
 
     def random_drift(self, parent: Section) -> None:
         """Subsections 3.2-3.4 from the Allan analysis: N, B, K, R, Q with ≤ for bounds."""

@@ -75,9 +75,11 @@ author = "A. Tester"
 logs = ["static.parquet", "bias_run1.parquet"]
 profile = "static.profile.toml"              # bench profile (columns, units, gyro)
 skip = "30min"                               # warm-up trim
+warmup_band = "0.2deg/h"                     # warm-up time: bias within ± band (logs from power-on)
+warmup_block = "300s"                        # its block length (resolution)
 conditions = "IA up; power off for at least 12 h between runs"
 environment = { temperature = "22 ± 1 °C", humidity = "40 … 50 % RH", vibration = "isolated pier" }
-limits = { bias_dph = 3.0, repeatability_1sigma_dph = 0.05 }
+limits = { bias_dph = 3.0, repeatability_1sigma_dph = 0.05, warmup_time_s = 1800 }
 
 [tests.allan]                                # one static log: N, B, K, R, Q
 log = "static.parquet"

@@ -73,9 +73,10 @@ def test_with_stable32_alpha_the_interval_matches_too(results):
 
 def test_overlapping_kinds_identify_alpha_as_stable32(results):
     """B1 at 8 … 29 averages, theory at the statistic's term count: every α of the overlapping
-    Cs 5071A/GPS/TIC tables equals Stable32's (518 differing α rows before, 238 after: pink
-    near-threshold rows, the ADEV/HDEV "all" tables and the fixed-α TOTDEV tables)."""
+    Cs 5071A/GPS/TIC tables equals Stable32's. Differing α rows outside the fixed-α tables:
+    333 before, 51 after (lag-1 near-threshold rows of pink/TIC ADEV, few-average ADEV/HDEV,
+    the 4 TOTDEV rows)."""
     for name, c in results.items():
         if c["kind"] in ("oadev", "mdev", "tdev", "ohdev") and not name.startswith("pink"):
             assert not c["alpha_bad"], (name, c["alpha_bad"][:3])
-    assert sum(len(c["alpha_bad"]) for c in results.values()) <= 238
+    assert sum(len(c["alpha_bad"]) for c in results.values() if not c["fixed_alpha"]) <= 51

@@ -543,9 +543,10 @@ def b1_noise_id(
     value, boundary their geometric mean; without ``rn_ratio`` α = 1 is returned).
     ``rn_ratio`` may be a zero-argument callable: it is then evaluated only when needed.
     ``n_theory`` is the N at which :func:`b1_theory` is evaluated (default: the number of
-    averages). Stable32's overlapping tables (OADEV, MDEV, TDEV, OHDEV) are reproduced with N =
-    the statistic's number of terms (its ``#`` column): on the Cs 5071A, GPS and TIC records
-    every α of those tables then agrees (inferred from Stable32's tables, not documented).
+    averages). Stable32's tables are reproduced with N = the statistic's number of terms (its
+    ``#`` column, large for the overlapping kinds): on the Cs 5071A, GPS and TIC records every
+    α of the OADEV/MDEV/TDEV/OHDEV tables then agrees (inferred from Stable32's tables, not from
+    its documentation).
     """
     y = np.asarray(y_avg, dtype=float)
     n = y.size
@@ -602,8 +603,8 @@ def identify_noise(
       products and squares pooled over segments (each detrended on its own).
     * 8 … 29 points: B1 ratio on the longest segment (:func:`b1_noise_id`), R(n) from
       ``rn_ratio(m)`` to split α = 2/1; the theoretical B1 is evaluated at
-      ``b1_n_theory[i]`` (the statistic's number of terms, for the overlapping kinds) when
-      given, else at the number of averages.
+      ``b1_n_theory[i]`` (the statistic's number of terms, as Stable32) when given, else at
+      the number of averages.
     * fewer: the α identified at the previous (shorter) τ is reused — Stable32's rule for the
       longest τ; with no previous α, α = 0 (white rate noise) is assumed.
 

@@ -1116,7 +1116,6 @@ def compute_deviation(
         nids = _edf.identify_noise(
             parts, m_arr, data_type=data_type, dmax=3 if hadamard else 2, alpha_min=alpha_min,
             rn_ratio=rn_ratio,
-            b1_n_theory=rows_n,
         )
         a_arr = np.array([nid.alpha for nid in nids], dtype=np.int64)
         a_methods = [nid.method for nid in nids]

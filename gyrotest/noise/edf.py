@@ -532,7 +532,6 @@ def b1_noise_id(
     *,
     mu_max: int = 1,
     rn_ratio: float | Callable[[], float] | None = None,
-    n_theory: int | None = None,
 ) -> NoiseId:
     """B1-ratio noise identification for short series (Barnes 1969; Howe, Beard, Greenhall &
     Riley 2000), with the R(n) ratio to split white from flicker angle noise.
@@ -543,11 +542,6 @@ def b1_noise_id(
     (μ = −2 means α = 2 or 1, decided by R(n) = MVAR/AVAR against 1/m (white) and the flicker
     value, boundary their geometric mean; without ``rn_ratio`` α = 1 is returned).
     ``rn_ratio`` may be a zero-argument callable: it is then evaluated only when needed.
-    ``n_theory`` is the N at which :func:`b1_theory` is evaluated (default: the number of
-    averages). Stable32's tables are reproduced with N = the statistic's number of terms (its
-    ``#`` column, large for the overlapping kinds): on the Cs 5071A, GPS and TIC records every
-    α of the OADEV/MDEV/TDEV/OHDEV tables then agrees (inferred from Stable32's tables, not from
-    its documentation).
     """
     y = np.asarray(y_avg, dtype=float)
     n = y.size
@@ -559,8 +553,7 @@ def b1_noise_id(
         return NoiseId(0, math.nan, 0, math.nan, "b1", n)
     b1 = var / avar
     mus = list(range(-2, mu_max + 1))
-    nt = n if n_theory is None else max(int(n_theory), 2)
-    theo = [b1_theory(nt, mu) for mu in mus]
+    theo = [b1_theory(n, mu) for mu in mus]
     mu_sel = mus[-1]
     for i in range(len(mus) - 1):
         if b1 < math.sqrt(theo[i] * theo[i + 1]):
@@ -592,7 +585,6 @@ def identify_noise(
     dmax: int = 2,
     alpha_min: int = -2,
     rn_ratio: Callable[[int], float] | None = None,
-    b1_n_theory: Sequence[int] | None = None,
 ) -> list[NoiseId]:
     """Identify the power-law noise α at each averaging factor (vectorised; gap-aware).
 
@@ -603,9 +595,7 @@ def identify_noise(
     * ≥ 30 points in total: lag-1 autocorrelation method (:func:`acf_noise_id`), with the lag
       products and squares pooled over segments (each detrended on its own).
     * 8 … 29 points: B1 ratio on the longest segment (:func:`b1_noise_id`), R(n) from
-      ``rn_ratio(m)`` to split α = 2/1; the theoretical B1 is evaluated at
-      ``b1_n_theory[i]`` (the statistic's number of terms, as Stable32) when given, else at
-      the number of averages.
+      ``rn_ratio(m)`` to split α = 2/1.
     * fewer: the α identified at the previous (shorter) τ is reused — Stable32's rule for the
       longest τ; with no previous α, α = 0 (white rate noise) is assumed.
 
@@ -615,7 +605,7 @@ def identify_noise(
         raise InputError(f"data_type must be 'phase' or 'frequency', got {data_type!r}")
     out: list[NoiseId] = []
     prev: int | None = None
-    for i_m, m in enumerate(m_values):
+    for m in m_values:
         m = int(m)
         parts = []
         for th in segments:
@@ -636,8 +626,7 @@ def identify_noise(
             if rn_ratio is not None and m > 1:
                 def rn(f=rn_ratio, mm=m):  # evaluated only if B1 says white/flicker angle
                     return f(mm)
-            nid = b1_noise_id(y, m, mu_max=min(-alpha_min - 1, 3), rn_ratio=rn,
-                              n_theory=None if b1_n_theory is None else b1_n_theory[i_m])
+            nid = b1_noise_id(y, m, mu_max=min(-alpha_min - 1, 3), rn_ratio=rn)
         elif prev is not None:
             nid = NoiseId(prev, math.nan, 0, math.nan, "reused", n_pts)
         else:

@@ -1093,41 +1093,9 @@ def compute_deviation(
 
     # --- noise identification -----------------------------------------------------------
     hadamard = kind in ("hdev", "ohdev", "hkdev")
-    alpha_min = -4 if hadamard else -2
-    if alpha is not None:
-        a_in = np.asarray(alpha, dtype=np.int64)
-        if a_in.ndim and a_in.size != m_arr.size:
-            raise InputError(
-                f"forced alpha has {a_in.size} values for {m_arr.size} τ (after rounding τ to "
-                "multiples of τ0 and merging duplicates); give one α per τ or a single α"
-            )
-        a_arr = np.broadcast_to(a_in, m_arr.shape).copy()
-        if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
-            raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
-        a_methods = ["forced"] * len(m_arr)
-    elif noise_id:
-        data_type = "phase" if input_kind == "angle" else "frequency"
-
-        def rn_ratio(mm: int) -> float:
-            mv, _, _ = _raw_variance("mdev", parts, mm)
-            av, _, _ = _raw_variance("oadev", parts, mm)
-            return mv / av if av > 0 else math.nan
-
-        nids = _edf.identify_noise(
-            parts, m_arr, data_type=data_type, dmax=3 if hadamard else 2, alpha_min=alpha_min,
-            rn_ratio=rn_ratio,
-        )
-        a_arr = np.array([nid.alpha for nid in nids], dtype=np.int64)
-        a_methods = [nid.method for nid in nids]
-        if any(mm == "reused" for mm in a_methods):
-            notes.append(
-                "noise type at the longest τ reused from the previous τ (too few averages for "
-                "the lag-1 or B1 method), as Stable32 does"
-            )
-    else:
-        a_arr = np.zeros(len(m_arr), dtype=np.int64)
-        a_methods = ["assumed"] * len(m_arr)
-        notes.append("noise identification off: α = 0 (white rate noise) assumed for the EDF")
+    a_arr, a_methods = assign_alpha(
+        parts, m_arr, alpha=alpha, noise_id=noise_id, input_kind=input_kind, hadamard=hadamard,
+        notes=notes, count_hint=" (after rounding τ to multiples of τ0 and merging duplicates)")
 
     if bias_correction:
         if kind not in ("totdev", "mtotdev"):
@@ -1321,3 +1289,42 @@ hkdev = _make(
     overlapping Hadamard variance with the mean third difference removed, so a quadratic rate
     trend Ω = Ct² gives zero. Rate unit. EDF: OHDEV's Greenhall EDF minus 1. Stop ratio 4.""",
 )
+
+
+def assign_alpha(parts, m_id, *, alpha, noise_id: bool, input_kind: str, hadamard: bool,
+                 notes: list[str], count_hint: str = "") -> tuple[np.ndarray, list[str]]:
+    """The power-law noise type α per averaging factor ``m_id`` (one per τ row) and how it was
+    found: ``alpha`` forced (one value or one per τ), else identified as Stable32 does
+    (:func:`gyrotest.noise.edf.identify_noise`: lag-1 ACF, B1 ratio, R(n)) at each distinct
+    averaging factor, else α = 0 assumed. Notes for reused/assumed α go to ``notes``."""
+    m_id = np.asarray(m_id, dtype=np.int64)
+    alpha_min = -4 if hadamard else -2
+    if alpha is not None:
+        a_in = np.asarray(alpha, dtype=np.int64)
+        if a_in.ndim and a_in.size != m_id.size:
+            raise InputError(f"forced alpha has {a_in.size} values for {m_id.size} τ{count_hint}; "
+                             "give one α per τ or a single α")
+        a_arr = np.broadcast_to(a_in, m_id.shape).copy()
+        if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
+            raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
+        return a_arr, ["forced"] * len(m_id)
+    if not noise_id:
+        notes.append("noise identification off: α = 0 (white rate noise) assumed for the EDF")
+        return np.zeros(len(m_id), dtype=np.int64), ["assumed"] * len(m_id)
+    data_type = "phase" if input_kind == "angle" else "frequency"
+
+    def rn_ratio(mm: int) -> float:
+        mv, _, _ = _raw_variance("mdev", parts, mm)
+        av, _, _ = _raw_variance("oadev", parts, mm)
+        return mv / av if av > 0 else math.nan
+
+    uniq = sorted(set(int(v) for v in m_id))
+    nids = _edf.identify_noise(parts, uniq, data_type=data_type, dmax=3 if hadamard else 2,
+                               alpha_min=alpha_min, rn_ratio=rn_ratio)
+    by_m = dict(zip(uniq, nids))
+    a_arr = np.array([by_m[int(v)].alpha for v in m_id], dtype=np.int64)
+    a_methods = [by_m[int(v)].method for v in m_id]
+    if any(mm == "reused" for mm in a_methods):
+        notes.append("noise type at the longest τ reused from the previous τ (too few averages "
+                     "for the lag-1 or B1 method), as Stable32 does")
+    return a_arr, a_methods

@@ -373,38 +373,9 @@ def compute_theo_deviation(
 
     # --- noise identification (at the Allan-equivalent averaging factor τ/τ0) ---------------
     hadamard = kind == "htotdev"
-    alpha_min = -4 if hadamard else -2
     m_id = np.maximum(1, np.rint(tau / t0)).astype(np.int64)
-    if alpha is not None:
-        a_in = np.asarray(alpha, dtype=np.int64)
-        if a_in.ndim and a_in.size != m_arr.size:
-            raise InputError(f"forced alpha has {a_in.size} values for {m_arr.size} τ; give one α "
-                             "per τ or a single α")
-        a_arr = np.broadcast_to(a_in, m_arr.shape).copy()
-        if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
-            raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
-        a_methods = ["forced"] * len(m_arr)
-    elif noise_id:
-        data_type = "phase" if input_kind == "angle" else "frequency"
-
-        def rn_ratio(mm: int) -> float:
-            mv = _dv._raw_variance("mdev", parts, mm)[0]
-            av = _dv._raw_variance("oadev", parts, mm)[0]
-            return mv / av if av > 0 else math.nan
-
-        uniq = sorted(set(int(v) for v in m_id))
-        nids = _edf.identify_noise(parts, uniq, data_type=data_type, dmax=3 if hadamard else 2,
-                                   alpha_min=alpha_min, rn_ratio=rn_ratio)
-        by_m = dict(zip(uniq, nids))
-        a_arr = np.array([by_m[int(v)].alpha for v in m_id], dtype=np.int64)
-        a_methods = [by_m[int(v)].method for v in m_id]
-        if any(mm == "reused" for mm in a_methods):
-            notes.append("noise type at the longest τ reused from the previous τ (too few "
-                         "averages for the lag-1 or B1 method), as Stable32 does")
-    else:
-        a_arr = np.zeros(len(m_arr), dtype=np.int64)
-        a_methods = ["assumed"] * len(m_arr)
-        notes.append("noise identification off: α = 0 (white rate noise) assumed for the EDF")
+    a_arr, a_methods = _dv.assign_alpha(parts, m_id, alpha=alpha, noise_id=noise_id,
+                                        input_kind=input_kind, hadamard=hadamard, notes=notes)
 
     if bias_correction:
         if kind == "ttotdev":

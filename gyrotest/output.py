@@ -138,3 +138,27 @@ def check_output_path(path: str | os.PathLike, suffixes: tuple[str, ...], what: 
     if not parent.is_dir():
         raise InputError(f"{what} {p}: directory {parent} does not exist")
     return p
+
+
+def write_rendered(*, pdf=None, pdf_bytes: bytes | None = None, html=None,
+                   html_text: str | None = None, md=None, md_text: str | None = None,
+                   figures: dict | None = None) -> int:
+    """Write outputs that were all rendered first (so a rendering error leaves no file): the PDF
+    bytes, the HTML text, the Markdown text and its figure PNGs (``figures``: path → bytes; their
+    directory is created). Every file is written atomically. Returns the number of figures."""
+    from pathlib import Path
+
+    if pdf_bytes is not None:
+        with atomic_path(pdf) as tmp:
+            tmp.write_bytes(pdf_bytes)
+    if html_text is not None:
+        write_text(html, html_text)
+    n = 0
+    if md is not None:
+        for path, png in (figures or {}).items():
+            Path(path).parent.mkdir(exist_ok=True)
+            with atomic_path(path) as tmp:
+                tmp.write_bytes(png)
+            n += 1
+        write_text(md, md_text)
+    return n

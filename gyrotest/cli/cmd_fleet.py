@@ -59,7 +59,7 @@ def command(campaigns, jobs, scheduler, pdf_path, html_path, md_path, no_figures
       gyrotest fleet lot/campaign_*.toml --scheduler tcp://10.0.0.5:8786 --html lot.html
     """
     from ..fleet import fleet_sheet, run_fleet
-    from ..output import atomic_path, write_text
+    from ..output import write_rendered
     from ..report.campaign import load_campaign
 
     t0 = time.perf_counter()
@@ -112,17 +112,9 @@ def command(campaigns, jobs, scheduler, pdf_path, html_path, md_path, no_figures
                     links[f.key] = name
         md_text = render_markdown(sheet, links)
     # every output is rendered before the first file is written
-    if pdf_bytes is not None:
-        with atomic_path(pdf) as tmp:
-            tmp.write_bytes(pdf_bytes)
-    if html_text is not None:
-        write_text(htm, html_text)
+    write_rendered(pdf=pdf, pdf_bytes=pdf_bytes, html=htm, html_text=html_text, md=md,
+                   md_text=md_text, figures=fig_files if md is not None else None)
     if md is not None:
-        for path, png in fig_files.items():
-            path.parent.mkdir(exist_ok=True)
-            with atomic_path(path) as tmp:
-                tmp.write_bytes(png)
-        write_text(md, md_text)
         outputs.append(str(md) + (f" (+ {len(fig_files)} figure in {md.stem}_figures/)"
                                   if fig_files else ""))
     if as_json:

@@ -73,7 +73,7 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
       gyrotest report campaign.toml --html spec.html --md spec.md
       gyrotest report campaign.toml --json > spec.json
     """
-    from ..output import atomic_path, write_text
+    from ..output import write_rendered
     from ..report.campaign import load_campaign
 
     if template:
@@ -139,17 +139,9 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
                      if f.png is not None}
         md_text = render_markdown(sheet, links)
     # every output is rendered before the first file is written
-    if pdf_bytes is not None:
-        with atomic_path(pdf) as tmp:
-            tmp.write_bytes(pdf_bytes)
-    if html_text is not None:
-        write_text(htm, html_text)
+    write_rendered(pdf=pdf, pdf_bytes=pdf_bytes, html=htm, html_text=html_text, md=md,
+                   md_text=md_text, figures=fig_files if md is not None else None)
     if md is not None:
-        for path, png in fig_files.items():
-            path.parent.mkdir(exist_ok=True)
-            with atomic_path(path) as tmp:
-                tmp.write_bytes(png)
-        write_text(md, md_text)
         outputs.append(str(md) + (f" (+ {len(fig_files)} figures in {md.stem}_figures/)"
                                   if fig_files else ""))
     sheet.provenance["timing_s"]["render"] = time.perf_counter() - t1

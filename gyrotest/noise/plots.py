@@ -199,6 +199,10 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     axr.set_yticks([-4, -2, 0, 2, 4])
     axr.set_ylabel("residual\n(σ̂ − model)/CI")
     axr.set_xlabel("averaging time τ, s")
+    if all(a.fit is None for _, a in items):  # plain table: nothing to show in the panel
+        axr.text(0.5, 0.5, "no noise model fitted (--no-fit or too few τ): no residuals",
+                 transform=axr.transAxes, ha="center", va="center", color="0.3",
+                 bbox=dict(facecolor="white", edgecolor="0.8", boxstyle="round,pad=0.4"), zorder=5)
     axr.text(1.01, 0.5, "bands: ±1, ±2 CI\n△: beyond ±5 (clipped)", transform=axr.transAxes,
              ha="left", va="center", fontsize=7.5, color="0.3")
     return fig

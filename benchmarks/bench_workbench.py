@@ -45,6 +45,11 @@ working resolution):
   step) is in the effect's ``accept`` list (key and channels, channel order ignored);
   ``named_equiv`` also accepts a term the verdict listed as indistinguishable from the one it
   chose (``Candidate.equivalents``, when the installed gyrotest provides it);
+  ``named_data_equiv`` accepts an added term that is an exact equivalent *in this log*: the
+  part of its fitted contribution outside the base model's regressors correlates at
+  |r| >= 0.99 with the part of the effect's signal outside them (or with that of the summed
+  missing effects); e.g. a lag of the chamber air and a lag of the case sensor, which is
+  itself a lag of the air, or a lagged node's rate and a lagging sensor's rate;
 * **false alarm**: a null case (nothing missing) whose first diagnosis reports a missing
   effect; it is *spurious* when the added term explains < 0.1 floor of the injected truth
   (otherwise it repairs the base model, e.g. a smoother regressor for a noisy-sensor term).
@@ -107,6 +112,10 @@ FINAL_OK = 1.1
 FLOOR_FACTOR = 2.0
 STRONG = 3.0
 SPURIOUS = 0.1
+#: an added term is an exact equivalent of a missing effect in this log when their signals
+#: outside the base model correlate at least this well (the workbench's own rule for
+#: "indistinguishable in this log" is 0.995 between fitted contributions)
+EQUIV_R = 0.99
 TRUE_AT_FLOOR = 1.2
 OBSERVABLE = 1.0
 
@@ -169,6 +178,37 @@ def _unexplained(x: np.ndarray, X: np.ndarray | None) -> float:
     return _rms(x - (A / s) @ beta)
 
 
+def _resid(x: np.ndarray, X: np.ndarray | None) -> np.ndarray:
+    """The part of ``x`` outside the column space of ``X`` (+ a bias)."""
+    A = np.ones((len(x), 1)) if X is None or X.shape[1] == 0 else np.column_stack(
+        [np.ones(len(x)), X])
+    s = np.sqrt(np.sum(A * A, axis=0))
+    s[s == 0] = 1.0
+    beta, *_ = np.linalg.lstsq(A / s, x, rcond=None)
+    return x - (A / s) @ beta
+
+
+def _corr(a: np.ndarray, b: np.ndarray) -> float:
+    if np.std(a) == 0 or np.std(b) == 0:
+        return 0.0
+    return float(abs(np.corrcoef(a, b)[0, 1]))
+
+
+def _added_contributions(fit, added: list[dict]) -> dict[str, np.ndarray]:
+    """Block-level fitted contribution of every added term that is in ``fit``."""
+    from gyrotest.envmodel.fit import predict_blocks
+    out = {}
+    for a in added:
+        spec = next((s for s in fit.specs if s.label == a["label"]), None)
+        if spec is None:
+            continue
+        try:
+            out[a["label"]] = np.asarray(predict_blocks(fit, [spec]), float)
+        except Exception:  # noqa: BLE001 - internal API may change
+            continue
+    return out
+
+
 def _design(fit) -> np.ndarray | None:
     """Block-level design matrix of a fit (gyrotest internals; None when unavailable)."""
     try:
@@ -208,6 +248,26 @@ def realised_magnitudes(case: ws.Case, wd) -> tuple[float, dict[str, dict]]:
         out[e.name] = {"magnitude": _rms(b - b.mean()) / floor,
                        "magnitude_unique": _unexplained(b, X) / floor, "block": b}
     return floor, out
+
+
+def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> list[dict]:
+    """The ``top`` candidates by held-out gain with their evidence and what each would
+    explain of the injected truth (floor units), for studying the decision rules."""
+    import math as _m
+    ok = [c for c in d.candidates if _m.isfinite(c.improvement_pct)]
+    ok.sort(key=lambda c: -c.improvement_pct)
+    out = []
+    for c in ok[:top]:
+        X = _design(c._fit) if c._fit is not None else None
+        u1 = _unexplained(total, X) / floor if X is not None else None
+        out.append({"term": c.term, "class": c.klass, "key": c.spec.key if c.spec else None,
+                    "improvement_pct": c.improvement_pct, "scatter_pct": c.gain_scatter_pct,
+                    "cv_t": c.cv_t, "p_trials": c.p_trials, "z": c.z, "p_adj": c.p_adj,
+                    "n_params": c.n_params, "significant": c.significant,
+                    "rejected": c.rejected,
+                    "truth_reduction_floor": (u0 - u1) if (u0 is not None and u1 is not None)
+                    else None})
+    return out
 
 
 def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
@@ -315,6 +375,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
             step["truth_unexplained_floor"] = (_unexplained(total, Xk) / floor
                                                if Xk is not None else None)
             step["possible"] = d.verdict.startswith("possible")
+            step["best"] = _best_candidates(d, total, floor, step["truth_unexplained_floor"])
             if k == 0:
                 X_base = Xk
                 row.update(base_holdout_dph=d.base.rms_holdout,
@@ -384,6 +445,27 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
             t["named_equiv"] = bool(t["found"] and (named_by or any(
                 names_effect(*_parse_accept(q), e.accept) for a in added
                 for q in a["equivalents"])))
+        # ---- naming up to an exact equivalent in this log: an added term whose fitted
+        # contribution, outside what the base model spans, correlates at |r| >= EQUIV_R with
+        # the effect's own signal (or with the summed signal of the missing effects it
+        # replaces together) outside the base model: the log cannot tell them apart
+        contrib = _added_contributions(final_fit, added) if X_base is not None else {}
+        miss_b = [mags[e.name]["block"] for e in case.missing]
+        comb = _resid(sum(miss_b, np.zeros(wd.nb)), X_base) if miss_b and contrib else None
+        for t, e in zip(row["truth"], case.truth):
+            if e.name not in missing_names:
+                continue
+            t["named_data_equiv"] = bool(t.get("named"))
+            t["equiv_r"] = None
+            if t["named"] or not t["found"] or not contrib:
+                continue
+            bu = _resid(mags[e.name]["block"], X_base)
+            rs = []
+            for lab, x in contrib.items():
+                xu = _resid(x, X_base)
+                rs.append(max(_corr(xu, bu), _corr(xu, comb) if comb is not None else 0.0))
+            t["equiv_r"] = max(rs) if rs else None
+            t["named_data_equiv"] = bool(rs and max(rs) >= EQUIV_R)
         row["unmatched_added"] = [a["label"] for a in added if not any(
             names_effect(a["key"], a["channels"], e.accept) for e in case.missing)]
         row["spurious_added"] = [a["label"] for a in added
@@ -465,6 +547,10 @@ def summarise(rows: list[dict]) -> dict:
             "named_given_found": _frac(sum(e["named"] for e in eff),
                                        sum(e["found"] for e in eff)),
             "named_equiv": _frac(sum(e.get("named_equiv", False) for e in eff), len(eff)),
+            "named_data_equiv_strong": _frac(sum(e.get("named_data_equiv", False)
+                                                 for e in strong), len(strong)),
+            "named_data_equiv_strong_unique": _frac(sum(e.get("named_data_equiv", False)
+                                                        for e in strong_u), len(strong_u)),
             "false_alarms": _frac(sum(r["alarm"] for r in nulls), len(nulls)),
             "false_alarms_spurious": _frac(sum(r.get("alarm_spurious", False) for r in nulls),
                                            len(nulls)),
@@ -558,6 +644,11 @@ def markdown(s: dict, *, title: str = "") -> str:
         f"| named correctly when found | {_pct(o['named_given_found'])} |",
         f"| named correctly or among the verdict's indistinguishable equivalents | "
         f"{_pct(o['named_equiv'])} |",
+        f"| named correctly or an exact equivalent in this log (signals outside the base "
+        f"model at |r| >= {EQUIV_R:g}), magnitude >= {STRONG:g}x | "
+        f"{_pct(o['named_data_equiv_strong'])} |",
+        f"| ... unique magnitude >= {STRONG:g}x | "
+        f"{_pct(o['named_data_equiv_strong_unique'])} |",
         f"| false alarms on null cases | {_pct(o['false_alarms'])} |",
         f"| ... whose added term explains < {SPURIOUS:g} floor of the truth (spurious) | "
         f"{_pct(o['false_alarms_spurious'])} |",

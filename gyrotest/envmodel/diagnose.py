@@ -33,6 +33,14 @@ that the model under judgment cannot move:
      weaker test. An effect the base model lacks inflates the HAC error of
      every other candidate, so a large held-out gain must not wait for a strict p-value;
      the fold-to-fold scatter of the gain is reported with it.
+   or
+   * *far above the floor*: the base model's held-out RMS is at least 2 × the floor, so the
+     floor already says the model is incomplete and the question is only which candidate
+     explains the gap: the candidate cuts the held-out RMS by ≥ 10 % and the gain is
+     consistent across the folds, gain / (fold scatter/√folds) ≥ 2.13 (the one-sided 95 %
+     t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %). Far
+     from the floor every missing effect inflates the HAC error of every other candidate,
+     so the test is a guard only where the model is near the floor.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
    ≥ 10 % of its variance at that frequency) is not accepted: the stimulus acts through a
    channel. Hysteresis widths are searched only above what the sensor can resolve.
@@ -93,6 +101,15 @@ STRONG_P = 0.5
 HYST_CV_T = 2.0
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
+#: far above the floor the floor itself says the model is incomplete; the question is only
+#: which candidate explains the gap, and the cross-validated gain answers it: a held-out gain
+#: of at least FAR_GAIN that is consistent across the folds -- gain / (fold scatter/√folds)
+#: at least the one-sided 95 % t quantile for 4 degrees of freedom (99 % for the flexible
+#: nuisance terms, which must also cut the held-out RMS by BIG_GAIN)
+FAR_RATIO = 2.0
+FAR_GAIN = 0.10
+FAR_T = 2.13
+FAR_T_NUISANCE = 3.75
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.01
 EQUIVALENT_R = 0.995
@@ -433,16 +450,21 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                       or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
                           and p_tr < STRONG_P))
                  and (c.key != "hyst" or t_cv >= HYST_CV_T))
+    far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+               and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
+                    else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
+               and (c.key != "hyst" or t_cv >= HYST_CV_T))
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
-    if c.key == "sin" and (strict or clear):
+    if c.key == "sin" and (strict or clear or far):
         m = period_match(wd.frame, float(theta["f_Hz"]))
         if m is not None:
             rejected = (f"its period {1 / theta['f_Hz']:.4g} s is that of the logged stimulus "
                         f"{m[0]} (R² {m[1]:.2f}): an effect of that channel, not a periodic "
                         "disturbance")
-    sig = (strict or clear) and rejected is None
-    route = ("strict" if strict else "clear gain") if sig else None
+    sig = (strict or clear or far) and rejected is None
+    route = (("strict" if strict else "clear gain" if clear else "far above the floor")
+             if sig else None)
     coefs = [c2.to_dict() for c2 in r.coefficients if c2.term == c.label]
     try:
         custom = custom_text(c, theta, wd.frame)
@@ -524,6 +546,10 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
         v = (f"missing effect: {top.term} — {top.effect}; held-out RMS "
              f"{base.rms_holdout:.4g} → {top.rms_holdout:.4g} deg/h "
              f"({-top.improvement_pct:+.1f} %), {top.evidence.split(', ', 1)[1]}")
+        if top.route == "far above the floor":
+            v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
+                  f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
+                  "HAC test")
         if top.klass == "channel" and math.isfinite(top.r_residual):
             ch = ", ".join(top.spec.channels) if top.spec else ""
             v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"

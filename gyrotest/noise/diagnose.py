@@ -247,15 +247,25 @@ def _candidates_for(requested: Sequence[str], allowed: Sequence[str]) -> list[st
     return out
 
 
-def _try(fit_kwargs: dict[str, Any], base: NoiseFit, term: str) -> Candidate:
-    # the terms the base model kept (after its backward elimination) plus the candidate
-    terms = [t.key for t in base.terms if t.coef > 0] + [term]
+def _try(fit_kwargs: dict[str, Any], base: NoiseFit, term: str,
+         model: Sequence[str] | None = None) -> Candidate:
+    """Fit ``model`` (the requested terms plus the accepted additions; default the terms the
+    base kept) plus the candidate, with backward elimination, and score it against ``base``.
+
+    Every requested term is offered again: a term that the base fit eliminated because an
+    unmodelled hump swamped it (white noise N under a Markov hump, Krobka's central case) comes
+    back once the hump is modelled, instead of being imitated by a spurious blue/Markov term.
+    The penalty counts the free parameters actually added (new minus base), so a revived
+    term is paid for."""
+    kept = [t.key for t in base.terms if t.coef > 0]
+    terms = (list(model) if model is not None else kept) + [term]
     try:
         f = fit_noise_model(terms=terms, scan=True, **fit_kwargs)
     except AnalysisError as e:
         return Candidate(term, None, math.nan, math.nan, math.nan, False, False, str(e))
     added = f.terms[-1]
-    k = 2 if term in ("markov", "sine", "blue") else 1
+    k_own = 2 if term in ("markov", "sine", "blue") else 1
+    k = max(f.n_free - base.n_free, k_own) if model is not None else k_own
     dd = (f.deviance - base.deviance) / added.design_effect  # Rao-Scott corrected
     return Candidate(term, f, dd + 2.0 * k, dd + k * math.log(max(f.n_eff, 2.0)), f.chi2_dof,
                      added.identified, False)
@@ -281,8 +291,8 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
     accepted_any = False
     added_terms: list[str] = []
     for step in range(max_steps):
-        cands = [_try(kw, current, c) for c in _candidates_for(
-            list(fit.requested) + added_terms, candidates)]
+        cands = [_try(kw, current, c, list(fit.requested) + added_terms)
+                 for c in _candidates_for(list(fit.requested) + added_terms, candidates)]
         cands.sort(key=lambda c: (math.inf if not math.isfinite(c.delta_bic) else c.delta_bic))
         best = next((c for c in cands if c.fit is not None), None)
         need = accept_dbic if not current.consistent else min(accept_dbic, ACCEPT_DBIC_CONSISTENT)

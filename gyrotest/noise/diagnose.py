@@ -236,10 +236,16 @@ def _step_record(fit: NoiseFit, added: str | None, cand: Candidate | None = None
     }
 
 
-def _candidates_for(requested: Sequence[str], allowed: Sequence[str]) -> list[str]:
+def _candidates_for(requested: Sequence[str], allowed: Sequence[str],
+                    current: NoiseFit | None = None) -> list[str]:
+    """Candidate terms: those not in the model, plus requested linear terms (Q, N, B, K, R)
+    that the current fit eliminated. A term the base fit dropped because an unmodelled hump
+    swamped it (white noise N under a Markov hump, Krobka's central case) can so come back
+    once the hump is modelled, instead of a blue or second Markov term standing in for it."""
+    kept = {t.key for t in current.terms if t.coef > 0} if current is not None else set(requested)
     out = []
     for c in allowed:
-        if c in LINEAR_KEYS and c in requested:
+        if c in LINEAR_KEYS and c in requested and c in kept:
             continue
         if c not in LINEAR_KEYS and sum(k == c for k in requested) >= 2:
             continue
@@ -247,25 +253,15 @@ def _candidates_for(requested: Sequence[str], allowed: Sequence[str]) -> list[st
     return out
 
 
-def _try(fit_kwargs: dict[str, Any], base: NoiseFit, term: str,
-         model: Sequence[str] | None = None) -> Candidate:
-    """Fit ``model`` (the requested terms plus the accepted additions; default the terms the
-    base kept) plus the candidate, with backward elimination, and score it against ``base``.
-
-    Every requested term is offered again: a term that the base fit eliminated because an
-    unmodelled hump swamped it (white noise N under a Markov hump, Krobka's central case) comes
-    back once the hump is modelled, instead of being imitated by a spurious blue/Markov term.
-    The penalty counts the free parameters actually added (new minus base), so a revived
-    term is paid for."""
-    kept = [t.key for t in base.terms if t.coef > 0]
-    terms = (list(model) if model is not None else kept) + [term]
+def _try(fit_kwargs: dict[str, Any], base: NoiseFit, term: str) -> Candidate:
+    # the terms the base model kept (after its backward elimination) plus the candidate
+    terms = [t.key for t in base.terms if t.coef > 0] + [term]
     try:
         f = fit_noise_model(terms=terms, scan=True, **fit_kwargs)
     except AnalysisError as e:
         return Candidate(term, None, math.nan, math.nan, math.nan, False, False, str(e))
     added = f.terms[-1]
-    k_own = 2 if term in ("markov", "sine", "blue") else 1
-    k = max(f.n_free - base.n_free, k_own) if model is not None else k_own
+    k = 2 if term in ("markov", "sine", "blue") else 1
     dd = (f.deviance - base.deviance) / added.design_effect  # Rao-Scott corrected
     return Candidate(term, f, dd + 2.0 * k, dd + k * math.log(max(f.n_eff, 2.0)), f.chi2_dof,
                      added.identified, False)
@@ -291,11 +287,16 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
     accepted_any = False
     added_terms: list[str] = []
     for step in range(max_steps):
-        cands = [_try(kw, current, c, list(fit.requested) + added_terms)
-                 for c in _candidates_for(list(fit.requested) + added_terms, candidates)]
+        cands = [_try(kw, current, c) for c in _candidates_for(
+            list(fit.requested) + added_terms, candidates, current)]
         cands.sort(key=lambda c: (math.inf if not math.isfinite(c.delta_bic) else c.delta_bic))
-        best = next((c for c in cands if c.fit is not None), None)
         need = accept_dbic if not current.consistent else min(accept_dbic, ACCEPT_DBIC_CONSISTENT)
+        # a requested term the fit had eliminated is restored before the model is extended:
+        # near-degenerate extensions (blue or a second Markov ≈ white noise) otherwise win
+        # on a fraction of a BIC unit
+        restored = [c for c in cands if c.fit is not None and c.term in fit.requested
+                    and c.term in LINEAR_KEYS and c.delta_bic <= need and c.identified]
+        best = restored[0] if restored else next((c for c in cands if c.fit is not None), None)
         if best is not None and best.delta_bic <= need and best.identified:
             best.accepted = True
         if step == 0:
@@ -307,9 +308,15 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         current = best.fit
         steps.append(_step_record(current, best.term, best))
     if accepted_any:
-        final = fit_noise_model(terms=list(fit.requested) + added_terms, with_bounds=True, **kw)
-        added = [s["added"] for s in steps[1:]]
-        lastfit = final.terms[len(fit.requested):]
+        # a restored requested term (e.g. N) is already in the requested list
+        extra = [t for t in added_terms if not (t in LINEAR_KEYS and t in fit.requested)]
+        final = fit_noise_model(terms=list(fit.requested) + extra, with_bounds=True, **kw)
+        # restored requested terms are named when the final fit identifies them
+        back = [t for t in final.terms[:len(fit.requested)]
+                if t.key in added_terms and t.identified]
+        added = [a for a in added_terms if a not in LINEAR_KEYS or a not in fit.requested] + [
+            f"{t.key} (restored)" for t in back]
+        lastfit = final.terms[len(fit.requested):] + back
         desc = "; ".join(t.text() for t in lastfit)
         verdict = (f"missing term{'s' if len(added) > 1 else ''}: {', '.join(added)} ({desc}); "
                    f"χ²/dof {steps[0]['chi2_per_dof']:.2f} → {steps[-1]['chi2_per_dof']:.2f}. "

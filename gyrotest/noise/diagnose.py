@@ -11,7 +11,9 @@ unmodelled noises turn into parameter error. So every fit is checked against the
 3. **Goodness of fit**: Pearson χ²/dof with the EDF-based variances and its p-value with the
    correlation-corrected degrees of freedom (:class:`gyrotest.noise.fit.NoiseFit`).
 4. **Diagnosis**: each candidate extra term (Markov, sinusoid, blue S(0)=0 noise, and Q, N, B,
-   K (RRW), R (ramp) when the model lacks them) is added in turn and the model re-fitted; the
+   K (RRW), R (ramp) when the model lacks them — also a requested term the fit eliminated,
+   e.g. N swamped by an unmodelled hump; such a restored term is taken before the model is
+   extended) is added in turn and the model re-fitted; the
    candidates are ranked by ΔBIC (scaled deviance + k·ln n_eff, GMWM-style model selection;
    Guerrier et al. 2013) with ΔAIC and χ²/dof as further evidence. A candidate is **accepted**
    when ΔBIC ≤ −6 ("strong" on the Kass–Raftery scale) and the added term is itself identified

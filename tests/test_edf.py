@@ -348,3 +348,60 @@ def test_b1_noise_id_statistics():
         rw[b] = rw.get(b, 0) + 1
     assert white.get(0, 0) >= 60, white
     assert rw.get(-2, 0) + rw.get(-1, 0) >= 90 and rw.get(-2, 0) > rw.get(-1, 0), rw
+
+
+def test_identify_noise_pair_rules():
+    """Stable32's rule (printed α) vs the statistical rule (fit weights) on random-walk rate
+    noise with 20 averages: the statistical rule is identify_noise itself and calls α = −2 in
+    most records; Stable32's (B1 theory at the OADEV term count) almost never does — the reason
+    the fit keeps its own α. With ≥ 30 averages both are the lag-1 ACF."""
+    m = 64
+    s32_hits = fit_hits = 0
+    for seed in range(40):
+        y = power_law_rate(-2, 20 * m, seed=500 + seed)
+        parts = angle_series(y, 1.0, input_kind="rate").parts()
+        s32, fit = E.identify_noise_pair(parts, [m], [y.size + 1 - 2 * m], kind="oadev",
+                                         data_type="frequency")
+        plain = E.identify_noise(parts, [m], data_type="frequency")
+        assert (fit[0].alpha, fit[0].method) == (plain[0].alpha, plain[0].method)
+        s32_hits += s32[0].alpha == -2
+        fit_hits += fit[0].alpha == -2
+    assert fit_hits >= 20 and s32_hits <= 2, (fit_hits, s32_hits)
+    y = power_law_rate(-2, 40 * m, seed=1)
+    parts = angle_series(y, 1.0, input_kind="rate").parts()
+    s32, fit = E.identify_noise_pair(parts, [m], [y.size], kind="oadev", data_type="frequency")
+    assert s32[0] == fit[0] and s32[0].method == "acf"
+
+
+def test_totdev_b1_from_six_averages():
+    """Stable32's TOTDEV tables identify by B1 at 6–7 averages where OADEV reuses α."""
+    y = np.random.default_rng(3).standard_normal(6 * 100 + 5)
+    parts = angle_series(y, 1.0, input_kind="rate").parts()
+    tot, _ = E.identify_noise_pair(parts, [1, 100], [y.size - 1] * 2, kind="totdev",
+                                   data_type="frequency")
+    oad, fit = E.identify_noise_pair(parts, [1, 100], [y.size - 1] * 2, kind="oadev",
+                                     data_type="frequency")
+    assert tot[1].method == "b1" and oad[1].method == "reused" and fit[1].method == "reused"
+
+
+def test_deviation_carries_both_identifications():
+    """compute_deviation prints Stable32's α and keeps the statistical one (alpha_fit, edf_fit)
+    for the fit; the fit starts from alpha_fit (fit_alpha), the JSON has both."""
+    from gyrotest.noise.deviations import compute_deviation
+    from gyrotest.noise.fit import fit_alpha
+
+    y = power_law_rate(-2, 1 << 14, seed=7)
+    d = compute_deviation(y, 1.0, input_kind="rate", taus="octave")
+    assert d.alpha_fit is not None and d.edf_fit is not None
+    differ = np.flatnonzero(d.alpha_fit != d.alpha)
+    assert differ.size >= 1  # B1 regime: Stable32 calls the random walk something else
+    assert np.all(d.edf_fit[differ] != d.edf[differ])
+    same = np.flatnonzero(d.alpha_fit == d.alpha)
+    assert np.array_equal(d.edf_fit[same], d.edf[same])
+    a, e, _ = fit_alpha(d)
+    assert np.array_equal(a, d.alpha_fit) and np.array_equal(e, d.edf_fit, equal_nan=True)
+    js = d.to_dict()
+    assert js["alpha_fit"] == [int(v) for v in d.alpha_fit] and "edf_fit" in js
+    assert any("Stable32's B1 identification" in n for n in d.notes)
+    forced = compute_deviation(y, 1.0, input_kind="rate", taus="octave", alpha=0)
+    assert forced.alpha_fit is None and "alpha_fit" not in forced.to_dict()

@@ -277,7 +277,8 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
         if cons:
-            c.print("  *_ci: conservative interval (--ci conservative): cap = EDF capped at the "
+            c.print("  *_ci: conservative interval (--ci conservative), the fit's weights: alpha_ci "
+                    "from the B1 ratio at the number of averages, cap = EDF capped at the "
                     "white-rate value (α > 0 from few averages), min = running minimum in τ")
         if a.fit is not None:
             _render_fit(a, unit)

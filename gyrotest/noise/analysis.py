@@ -41,6 +41,7 @@ from .fit import (
     MIN_EDF,
     NoiseFit,
     conversions,
+    fit_alpha,
     fit_deviation,
     parse_terms,
     robust_edf_rules,
@@ -71,14 +72,17 @@ MAX_JITTER = 0.1
 CI_TEXT = {
     "stable32": "Stable32's: χ² interval from the EDF of the noise type identified at that τ "
                 "(the alpha column), no capping",
-    "conservative": "Stable32's in sigma_lo/sigma_hi; sigma_lo_ci/sigma_hi_ci from an EDF capped "
+    "conservative": "Stable32's in sigma_lo/sigma_hi; sigma_lo_ci/sigma_hi_ci from the fit's "
+                    "EDF: noise type from the B1 ratio at the number of averages, EDF capped "
                     "at the white-rate value where α > 0 came from few averages and made "
                     "non-increasing in τ (alpha_ci/edf_ci)",
 }
 #: how the fit weights the τ (always the conservative EDF), stated with every fit
-FIT_WEIGHTS = ("the fit weights each σ̂²(τ) by a χ² likelihood with a conservative EDF (capped at "
-               "the white-rate value where α > 0 came from few averages, non-increasing in τ); "
-               "the table's interval is Stable32's")
+FIT_WEIGHTS = ("the fit weights each σ̂²(τ) by a χ² likelihood with its own conservative EDF: "
+               "the noise type from the B1 ratio at the number of averages (Barnes 1969) where "
+               "Stable32's rule differs, the EDF capped at the white-rate value where α > 0 "
+               "came from few averages, non-increasing in τ; the table's α and interval are "
+               "Stable32's")
 _PER_DECADE = re.compile(r"^\s*(\d+)\s*/\s*decade\s*$")
 
 
@@ -616,7 +620,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                                                          edf_c[changed], confidence)
             notes.extend(edf_notes)
         alpha_c = np.where(np.array([r == "white-rate cap" for r in rules]), 0,
-                           np.asarray(table_dev.alpha, int))
+                           fit_alpha(table_dev)[0])
         ci_cols = {"alpha_ci": alpha_c, "edf_ci": edf_c, "edf_ci_rule": rules,
                    "sigma_lo_ci": lo_c, "sigma_hi_ci": hi_c}
     psd = None

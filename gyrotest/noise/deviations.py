@@ -141,7 +141,10 @@ class DeviationResult:
     exponent used for the EDF: −2 … 2, down to −4 for the Hadamard family), ``alpha_method``
     (per τ: "acf", "b1", "b1+rn", "reused", "assumed", "forced"), ``edf``, ``sigma``,
     ``sigma_lo``/``sigma_hi`` (χ² interval at ``confidence``), ``ci_method``, ``unit`` (of
-    sigma), ``notes`` (gap pooling, τ dropped or moved, assumptions).
+    sigma), ``notes`` (gap pooling, τ dropped or moved, assumptions). ``alpha`` and the
+    interval follow Stable32's noise identification; ``alpha_fit``/``edf_fit`` hold the
+    statistical identification used for the noise-model fit's weights (see
+    :func:`gyrotest.noise.edf.identify_noise_pair`).
     """
 
     kind: str
@@ -162,6 +165,12 @@ class DeviationResult:
     alpha_method: list[str] = field(default_factory=list)
     n_samples: int = 0
     segments: list[tuple[int, int]] = field(default_factory=list)
+    #: the statistical identification (B1 theory at the number of averages) and its EDF, kept
+    #: for the noise-model fit's weights where it differs from the printed (Stable32) α; None
+    #: when α was forced/assumed or the kind has one identification only
+    alpha_fit: np.ndarray | None = None
+    alpha_fit_method: list[str] | None = None
+    edf_fit: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.m)
@@ -187,6 +196,10 @@ class DeviationResult:
             "sigma": [_json_float(v) for v in self.sigma],
             "sigma_lo": [_json_float(v) for v in self.sigma_lo],
             "sigma_hi": [_json_float(v) for v in self.sigma_hi],
+            **({} if self.alpha_fit is None else {
+                "alpha_fit": [int(v) for v in self.alpha_fit],
+                "alpha_fit_method": list(self.alpha_fit_method or []),
+                "edf_fit": [_json_float(v) for v in self.edf_fit]}),
             "notes": list(self.notes),
         }
 
@@ -1093,9 +1106,10 @@ def compute_deviation(
 
     # --- noise identification -----------------------------------------------------------
     hadamard = kind in ("hdev", "ohdev", "hkdev")
-    a_arr, a_methods = assign_alpha(
+    a_arr, a_methods, fit_ids = assign_alpha(
         parts, m_arr, alpha=alpha, noise_id=noise_id, input_kind=input_kind, hadamard=hadamard,
-        notes=notes, count_hint=" (after rounding τ to multiples of τ0 and merging duplicates)")
+        notes=notes, count_hint=" (after rounding τ to multiples of τ0 and merging duplicates)",
+        n_terms=rows_n, kind=kind, with_fit=True)
 
     if bias_correction:
         if kind not in ("totdev", "mtotdev"):
@@ -1117,6 +1131,13 @@ def compute_deviation(
         edfs[i] = e if (e > 0 and math.isfinite(e)) else math.nan
         methods.append(lab)
     lo, hi = _edf.chi2_interval(sigma, edfs, confidence)
+    alpha_fit = alpha_fit_method = edf_fit = None
+    if fit_ids is not None:
+        alpha_fit, alpha_fit_method = fit_ids
+        edf_fit = edfs.copy()
+        for i in np.flatnonzero(alpha_fit != a_arr):
+            e, _ = _pooled_edf(edf_kind, int(alpha_fit[i]), int(m_arr[i]), parts, rows_ns[i])
+            edf_fit[i] = e if (e > 0 and math.isfinite(e)) else math.nan
     uniq = list(dict.fromkeys(methods))
     ci_method = uniq[0] if len(uniq) == 1 else "; ".join(uniq)
     if kind in ("akdev", "hkdev"):
@@ -1146,6 +1167,9 @@ def compute_deviation(
         alpha_method=a_methods,
         n_samples=series.n_data,
         segments=list(series.segments),
+        alpha_fit=alpha_fit,
+        alpha_fit_method=alpha_fit_method,
+        edf_fit=edf_fit,
     )
 
 
@@ -1292,13 +1316,24 @@ hkdev = _make(
 
 
 def assign_alpha(parts, m_id, *, alpha, noise_id: bool, input_kind: str, hadamard: bool,
-                 notes: list[str], count_hint: str = "") -> tuple[np.ndarray, list[str]]:
+                 notes: list[str], count_hint: str = "", n_terms=None, kind: str = "",
+                 with_fit: bool = False):
     """The power-law noise type α per averaging factor ``m_id`` (one per τ row) and how it was
     found: ``alpha`` forced (one value or one per τ), else identified as Stable32 does
     (:func:`gyrotest.noise.edf.identify_noise`: lag-1 ACF, B1 ratio, R(n)) at each distinct
-    averaging factor, else α = 0 assumed. Notes for reused/assumed α go to ``notes``."""
+    averaging factor, else α = 0 assumed. Notes for reused/assumed α go to ``notes``.
+
+    With ``n_terms`` (the statistic's number of terms per row) the B1 rule is Stable32's (B1
+    theory at N = n_terms, :func:`gyrotest.noise.edf.identify_noise_pair`). Returns (α,
+    methods), or with ``with_fit`` (α, methods, fit) where ``fit`` is None or (α, methods) of
+    the statistical identification (B1 theory at the number of averages) for the noise-model
+    fit's weights."""
     m_id = np.asarray(m_id, dtype=np.int64)
     alpha_min = -4 if hadamard else -2
+
+    def done(a, meth, fit=None):
+        return (a, meth, fit) if with_fit else (a, meth)
+
     if alpha is not None:
         a_in = np.asarray(alpha, dtype=np.int64)
         if a_in.ndim and a_in.size != m_id.size:
@@ -1307,10 +1342,10 @@ def assign_alpha(parts, m_id, *, alpha, noise_id: bool, input_kind: str, hadamar
         a_arr = np.broadcast_to(a_in, m_id.shape).copy()
         if np.any(a_arr > 2) or np.any(a_arr < alpha_min):
             raise InputError(f"forced alpha must be in [{alpha_min}, 2], got {np.unique(a_arr).tolist()}")
-        return a_arr, ["forced"] * len(m_id)
+        return done(a_arr, ["forced"] * len(m_id))
     if not noise_id:
         notes.append("noise identification off: α = 0 (white rate noise) assumed for the EDF")
-        return np.zeros(len(m_id), dtype=np.int64), ["assumed"] * len(m_id)
+        return done(np.zeros(len(m_id), dtype=np.int64), ["assumed"] * len(m_id))
     data_type = "phase" if input_kind == "angle" else "frequency"
 
     def rn_ratio(mm: int) -> float:
@@ -1319,12 +1354,32 @@ def assign_alpha(parts, m_id, *, alpha, noise_id: bool, input_kind: str, hadamar
         return mv / av if av > 0 else math.nan
 
     uniq = sorted(set(int(v) for v in m_id))
-    nids = _edf.identify_noise(parts, uniq, data_type=data_type, dmax=3 if hadamard else 2,
-                               alpha_min=alpha_min, rn_ratio=rn_ratio)
+    fit = None
+    if n_terms is not None:
+        n_by_m: dict[int, int] = {}
+        for mm, nn in zip(m_id, n_terms):
+            n_by_m[int(mm)] = max(n_by_m.get(int(mm), 0), int(nn))
+        nids, fit_nids = _edf.identify_noise_pair(
+            parts, uniq, [n_by_m[v] for v in uniq], kind=kind, data_type=data_type,
+            dmax=3 if hadamard else 2, alpha_min=alpha_min, rn_ratio=rn_ratio)
+        by_f = dict(zip(uniq, fit_nids))
+        fit = (np.array([by_f[int(v)].alpha for v in m_id], dtype=np.int64),
+               [by_f[int(v)].method for v in m_id])
+    else:
+        nids = _edf.identify_noise(parts, uniq, data_type=data_type, dmax=3 if hadamard else 2,
+                                   alpha_min=alpha_min, rn_ratio=rn_ratio)
     by_m = dict(zip(uniq, nids))
     a_arr = np.array([by_m[int(v)].alpha for v in m_id], dtype=np.int64)
     a_methods = [by_m[int(v)].method for v in m_id]
     if any(mm == "reused" for mm in a_methods):
         notes.append("noise type at the longest τ reused from the previous τ (too few averages "
                      "for the lag-1 or B1 method), as Stable32 does")
-    return a_arr, a_methods
+    if fit is not None and np.any(fit[0] != a_arr):
+        diff = np.flatnonzero(fit[0] != a_arr)
+        notes.append(
+            "α at averaging factor m = " + ", ".join(f"{m_id[i]:d}" for i in diff[:6])
+            + (" …" if diff.size > 6 else "")
+            + " is Stable32's B1 identification (theory at the statistic's number of terms); "
+            "the noise-model fit weights with the B1 identification at the number of averages "
+            "(Barnes 1969), which resolves random-walk rate noise")
+    return done(a_arr, a_methods, fit)

@@ -11,7 +11,9 @@ unmodelled noises turn into parameter error. So every fit is checked against the
 3. **Goodness of fit**: Pearson χ²/dof with the EDF-based variances and its p-value with the
    correlation-corrected degrees of freedom (:class:`gyrotest.noise.fit.NoiseFit`).
 4. **Diagnosis**: each candidate extra term (Markov, sinusoid, blue S(0)=0 noise, and Q, N, B,
-   K (RRW), R (ramp) when the model lacks them) is added in turn and the model re-fitted; the
+   K (RRW), R (ramp) when the model lacks them — also a requested term the fit eliminated,
+   e.g. N swamped by an unmodelled hump; such a restored term is taken before the model is
+   extended) is added in turn and the model re-fitted; the
    candidates are ranked by ΔBIC (scaled deviance + k·ln n_eff, GMWM-style model selection;
    Guerrier et al. 2013) with ΔAIC and χ²/dof as further evidence. A candidate is **accepted**
    when ΔBIC ≤ −6 ("strong" on the Kass–Raftery scale) and the added term is itself identified
@@ -236,10 +238,16 @@ def _step_record(fit: NoiseFit, added: str | None, cand: Candidate | None = None
     }
 
 
-def _candidates_for(requested: Sequence[str], allowed: Sequence[str]) -> list[str]:
+def _candidates_for(requested: Sequence[str], allowed: Sequence[str],
+                    current: NoiseFit | None = None) -> list[str]:
+    """Candidate terms: those not in the model, plus requested linear terms (Q, N, B, K, R)
+    that the current fit eliminated. A term the base fit dropped because an unmodelled hump
+    swamped it (white noise N under a Markov hump, Krobka's central case) can so come back
+    once the hump is modelled, instead of a blue or second Markov term standing in for it."""
+    kept = {t.key for t in current.terms if t.coef > 0} if current is not None else set(requested)
     out = []
     for c in allowed:
-        if c in LINEAR_KEYS and c in requested:
+        if c in LINEAR_KEYS and c in requested and c in kept:
             continue
         if c not in LINEAR_KEYS and sum(k == c for k in requested) >= 2:
             continue
@@ -282,10 +290,15 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
     added_terms: list[str] = []
     for step in range(max_steps):
         cands = [_try(kw, current, c) for c in _candidates_for(
-            list(fit.requested) + added_terms, candidates)]
+            list(fit.requested) + added_terms, candidates, current)]
         cands.sort(key=lambda c: (math.inf if not math.isfinite(c.delta_bic) else c.delta_bic))
-        best = next((c for c in cands if c.fit is not None), None)
         need = accept_dbic if not current.consistent else min(accept_dbic, ACCEPT_DBIC_CONSISTENT)
+        # a requested term the fit had eliminated is restored before the model is extended:
+        # near-degenerate extensions (blue or a second Markov ≈ white noise) otherwise win
+        # on a fraction of a BIC unit
+        restored = [c for c in cands if c.fit is not None and c.term in fit.requested
+                    and c.term in LINEAR_KEYS and c.delta_bic <= need and c.identified]
+        best = restored[0] if restored else next((c for c in cands if c.fit is not None), None)
         if best is not None and best.delta_bic <= need and best.identified:
             best.accepted = True
         if step == 0:
@@ -297,9 +310,15 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         current = best.fit
         steps.append(_step_record(current, best.term, best))
     if accepted_any:
-        final = fit_noise_model(terms=list(fit.requested) + added_terms, with_bounds=True, **kw)
-        added = [s["added"] for s in steps[1:]]
-        lastfit = final.terms[len(fit.requested):]
+        # a restored requested term (e.g. N) is already in the requested list
+        extra = [t for t in added_terms if not (t in LINEAR_KEYS and t in fit.requested)]
+        final = fit_noise_model(terms=list(fit.requested) + extra, with_bounds=True, **kw)
+        # restored requested terms are named when the final fit identifies them
+        back = [t for t in final.terms[:len(fit.requested)]
+                if t.key in added_terms and t.identified]
+        added = [a for a in added_terms if a not in LINEAR_KEYS or a not in fit.requested] + [
+            f"{t.key} (restored)" for t in back]
+        lastfit = final.terms[len(fit.requested):] + back
         desc = "; ".join(t.text() for t in lastfit)
         verdict = (f"missing term{'s' if len(added) > 1 else ''}: {', '.join(added)} ({desc}); "
                    f"χ²/dof {steps[0]['chi2_per_dof']:.2f} → {steps[-1]['chi2_per_dof']:.2f}. "

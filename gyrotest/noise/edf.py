@@ -532,6 +532,7 @@ def b1_noise_id(
     *,
     mu_max: int = 1,
     rn_ratio: float | Callable[[], float] | None = None,
+    n_theory: int | None = None,
 ) -> NoiseId:
     """B1-ratio noise identification for short series (Barnes 1969; Howe, Beard, Greenhall &
     Riley 2000), with the R(n) ratio to split white from flicker angle noise.
@@ -542,6 +543,11 @@ def b1_noise_id(
     (μ = −2 means α = 2 or 1, decided by R(n) = MVAR/AVAR against 1/m (white) and the flicker
     value, boundary their geometric mean; without ``rn_ratio`` α = 1 is returned).
     ``rn_ratio`` may be a zero-argument callable: it is then evaluated only when needed.
+    ``n_theory`` is the N at which :func:`b1_theory` is evaluated (default: the number of
+    averages). Stable32's tables are reproduced with N = the statistic's number of terms (its
+    ``#`` column, large for the overlapping kinds): on the Cs 5071A, GPS and TIC records every
+    α of the OADEV/MDEV/TDEV/OHDEV tables then agrees (inferred from Stable32's tables, not from
+    its documentation).
     """
     y = np.asarray(y_avg, dtype=float)
     n = y.size
@@ -553,7 +559,8 @@ def b1_noise_id(
         return NoiseId(0, math.nan, 0, math.nan, "b1", n)
     b1 = var / avar
     mus = list(range(-2, mu_max + 1))
-    theo = [b1_theory(n, mu) for mu in mus]
+    nt = n if n_theory is None else max(int(n_theory), 2)
+    theo = [b1_theory(nt, mu) for mu in mus]
     mu_sel = mus[-1]
     for i in range(len(mus) - 1):
         if b1 < math.sqrt(theo[i] * theo[i + 1]):
@@ -585,6 +592,8 @@ def identify_noise(
     dmax: int = 2,
     alpha_min: int = -2,
     rn_ratio: Callable[[int], float] | None = None,
+    b1_n_theory: Sequence[int] | None = None,
+    b1_min_points: int | None = None,
 ) -> list[NoiseId]:
     """Identify the power-law noise α at each averaging factor (vectorised; gap-aware).
 
@@ -594,18 +603,66 @@ def identify_noise(
       averages, diff(θ[::m]); ``"phase"`` (angle input): the decimated angles θ[::m].
     * ≥ 30 points in total: lag-1 autocorrelation method (:func:`acf_noise_id`), with the lag
       products and squares pooled over segments (each detrended on its own).
-    * 8 … 29 points: B1 ratio on the longest segment (:func:`b1_noise_id`), R(n) from
-      ``rn_ratio(m)`` to split α = 2/1.
+    * ``b1_min_points`` (default 8) … 29 points: B1 ratio on the longest segment
+      (:func:`b1_noise_id`), R(n) from ``rn_ratio(m)`` to split α = 2/1; the theoretical B1
+      is evaluated at ``b1_n_theory[i]`` when given (Stable32: the statistic's number of
+      terms, see :func:`identify_noise_stable32`), else at the number of averages.
     * fewer: the α identified at the previous (shorter) τ is reused — Stable32's rule for the
       longest τ; with no previous α, α = 0 (white rate noise) is assumed.
 
     α is clipped to [``alpha_min``, 2] (−2 for the Allan family, −4 for Hadamard).
     """
+    return _identify_rules(segments, m_values, data_type=data_type, dmax=dmax,
+                           alpha_min=alpha_min, rn_ratio=rn_ratio,
+                           rules=[(b1_n_theory, b1_min_points or B1_MIN_POINTS)])[0]
+
+
+#: Stable32's minimum number of averages for the B1 ratio on a total deviation (TOTDEV):
+#: the two Stable32 TOTDEV tables on real records (GPS, Keysight TIC) identify the noise
+#: type by B1 at 6 and 7 averages, where their OADEV tables reuse the previous α; at 3
+#: averages TOTDEV reuses it too (inferred from the tables, not from Stable32's documentation).
+B1_MIN_POINTS_TOTDEV = 6
+
+
+def identify_noise_pair(
+    segments: Sequence[np.ndarray],
+    m_values: Sequence[int],
+    n_terms: Sequence[int],
+    *,
+    kind: str,
+    data_type: str,
+    dmax: int = 2,
+    alpha_min: int = -2,
+    rn_ratio: Callable[[int], float] | None = None,
+) -> tuple[list[NoiseId], list[NoiseId]]:
+    """Two identifications in one pass (the lag-1 ACF part is shared): (Stable32's, the
+    statistical one).
+
+    * Stable32's rule, for the printed α and its confidence interval: with 8 … 29 averages
+      (6 … 29 for TOTDEV, :data:`B1_MIN_POINTS_TOTDEV`) B1 is compared with Barnes' theory
+      evaluated at N = ``n_terms[i]``, the statistic's number of terms (Stable32's ``#``
+      column) — for the overlapping kinds a large N, so effectively the asymptotic B1. This
+      reproduces every α of Stable32's tables on the shared real records (Cs 5071A, GPS,
+      Keysight TIC) but almost never calls random-walk rate noise at 8 … 29 averages (B1
+      diverges with N for μ = 1).
+    * The statistical rule (Barnes 1969; Howe, Beard, Greenhall & Riley 2000): B1 theory at
+      N = the number of averages, 8 … 29 averages. Used for the noise-model fit's weights.
+    """
+    mins = B1_MIN_POINTS_TOTDEV if kind == "totdev" else B1_MIN_POINTS
+    s32, stat = _identify_rules(segments, m_values, data_type=data_type, dmax=dmax,
+                                alpha_min=alpha_min, rn_ratio=rn_ratio,
+                                rules=[(list(n_terms), mins), (None, B1_MIN_POINTS)])
+    return s32, stat
+
+
+def _identify_rules(segments, m_values, *, data_type, dmax, alpha_min, rn_ratio, rules):
+    """The identification loop of :func:`identify_noise` for several B1 rules at once:
+    ``rules`` = [(b1_n_theory or None, b1_min_points), ...]; one list of NoiseId per rule."""
     if data_type not in ("phase", "frequency"):
         raise InputError(f"data_type must be 'phase' or 'frequency', got {data_type!r}")
-    out: list[NoiseId] = []
-    prev: int | None = None
-    for m in m_values:
+    outs: list[list[NoiseId]] = [[] for _ in rules]
+    prevs: list[int | None] = [None] * len(rules)
+    for i_m, m in enumerate(m_values):
         m = int(m)
         parts = []
         for th in segments:
@@ -617,23 +674,30 @@ def identify_noise(
             if part.size >= 3:
                 parts.append(part)
         n_pts = int(sum(p.size for p in parts))
-        if n_pts >= ACF_MIN_POINTS:
-            nid = _acf_from_parts(parts, data_type, 0, dmax)
-        elif parts and max(p.size for p in parts) >= B1_MIN_POINTS:
-            longest = max(parts, key=lambda p: p.size)
-            y = longest if data_type == "frequency" else np.diff(longest)
-            rn = None
-            if rn_ratio is not None and m > 1:
-                def rn(f=rn_ratio, mm=m):  # evaluated only if B1 says white/flicker angle
-                    return f(mm)
-            nid = b1_noise_id(y, m, mu_max=min(-alpha_min - 1, 3), rn_ratio=rn)
-        elif prev is not None:
-            nid = NoiseId(prev, math.nan, 0, math.nan, "reused", n_pts)
-        else:
-            nid = NoiseId(0, math.nan, 0, math.nan, "assumed", n_pts)
-        a = int(min(max(nid.alpha, alpha_min), 2))
-        if a != nid.alpha:
-            nid = NoiseId(a, nid.alpha_float, nid.d, nid.rho, nid.method, nid.n_points)
-        out.append(nid)
-        prev = nid.alpha
-    return out
+        acf = _acf_from_parts(parts, data_type, 0, dmax) if n_pts >= ACF_MIN_POINTS else None
+        rn = None
+        if rn_ratio is not None and m > 1:
+            cache: dict[int, float] = {}
+
+            def rn(f=rn_ratio, mm=m, c=cache):  # evaluated only if B1 says white/flicker angle
+                if mm not in c:
+                    c[mm] = f(mm)
+                return c[mm]
+        for k, (n_theory, min_pts) in enumerate(rules):
+            if acf is not None:
+                nid = acf
+            elif parts and max(p.size for p in parts) >= min_pts:
+                longest = max(parts, key=lambda p: p.size)
+                y = longest if data_type == "frequency" else np.diff(longest)
+                nid = b1_noise_id(y, m, mu_max=min(-alpha_min - 1, 3), rn_ratio=rn,
+                                  n_theory=None if n_theory is None else n_theory[i_m])
+            elif prevs[k] is not None:
+                nid = NoiseId(prevs[k], math.nan, 0, math.nan, "reused", n_pts)
+            else:
+                nid = NoiseId(0, math.nan, 0, math.nan, "assumed", n_pts)
+            a = int(min(max(nid.alpha, alpha_min), 2))
+            if a != nid.alpha:
+                nid = NoiseId(a, nid.alpha_float, nid.d, nid.rho, nid.method, nid.n_points)
+            outs[k].append(nid)
+            prevs[k] = nid.alpha
+    return outs

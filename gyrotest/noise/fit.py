@@ -99,6 +99,7 @@ __all__ = [
     "log_chi2_moments",
     "log_chi2_objective",
     "parse_terms",
+    "fit_alpha",
     "robust_edf",
     "robust_edf_rules",
     "sanitize_edf",
@@ -1289,6 +1290,16 @@ def _dominance(fit: NoiseFit) -> None:
 _WEAK_ID = ("b1", "b1+rn", "reused")
 
 
+def fit_alpha(dev) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(α, EDF, methods) the noise-model fit starts from: the deviation's statistical
+    identification (``alpha_fit``, ``edf_fit``) when it carries one, else its printed α/EDF."""
+    if getattr(dev, "alpha_fit", None) is not None and getattr(dev, "edf_fit", None) is not None:
+        return (np.asarray(dev.alpha_fit, int), np.asarray(dev.edf_fit, float),
+                list(dev.alpha_fit_method or []) or [""] * len(dev.alpha_fit))
+    methods = list(getattr(dev, "alpha_method", [])) or [""] * len(dev.edf)
+    return np.asarray(dev.alpha, int), np.asarray(dev.edf, float), methods
+
+
 def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
     """(edf, notes) of :func:`robust_edf_rules`."""
     e, _, notes = robust_edf_rules(dev)
@@ -1304,18 +1315,21 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
        large when the estimate is really a scattered rate-random-walk point.
     2. :func:`sanitize_edf`: non-increasing in τ.
 
-    Returns (edf, rules, notes): ``rules[i]`` is "" (the identified α's EDF, as Stable32),
-    "white-rate cap" or "running minimum"."""
+    The starting point is the statistical identification (``dev.alpha_fit``/``dev.edf_fit``,
+    B1 theory at the number of averages) where the table carries one, else the table's α/EDF.
+
+    Returns (edf, rules, notes): ``rules[i]`` is "" (the identified α's EDF), "white-rate cap"
+    or "running minimum"."""
     from .edf import edf_for
 
-    e = np.asarray(dev.edf, float).copy()
+    alpha, e, methods = fit_alpha(dev)
+    e = e.copy()
     notes: list[str] = []
     segs = getattr(dev, "segments", None) or [(0, int(getattr(dev, "n_samples", 0)))]
     n_longest = max(b - a for a, b in segs) + (0 if dev.input_kind == "angle" else 1)
     kind = "mdev" if dev.kind == "tdev" else dev.kind
     capped = []
-    methods = list(getattr(dev, "alpha_method", [])) or [""] * len(e)
-    for i, (a, meth) in enumerate(zip(np.asarray(dev.alpha), methods)):
+    for i, (a, meth) in enumerate(zip(alpha, methods)):
         if a > 0 and meth in _WEAK_ID and math.isfinite(e[i]) and n_longest > 1:
             try:
                 cap, _ = edf_for(kind, 0, int(dev.m[i]), n_longest)

@@ -107,12 +107,17 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
     source = _source_name(path)
     # names first (cheap) so that only the used columns are parsed
     if str(path) != "-":
-        head = read_table(path, _names_only=True)
+        select = prof.columns.get("topic")
+        head = read_table(path, select=select, _names_only=True)
         if head.fmt in ("parquet", "feather"):
             return _from_binary(head, prof, nan_policy)
+        if select and head.fmt not in CONTAINER_FORMATS:
+            raise InputError(f"{source}: --topic (or [columns] topic) selects a ROS topic, HDF5 "
+                             f"group or MATLAB struct; a {head.fmt.upper()} table has none")
         roles, notes = resolve_columns(head.table.column_names, prof, source)
+        notes[:0] = head.notes
         wanted = _wanted(roles)
-        raw = read_table(path, columns=wanted)
+        raw = read_table(path, columns=wanted, select=select)
     else:
         raw = read_table(path)
         roles, notes = resolve_columns(raw.table.column_names, prof, source)
@@ -140,15 +145,22 @@ def _wanted(roles: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
+#: formats read by gyrotest.io.containers (their columns may come with units)
+CONTAINER_FORMATS = ("mat", "hdf5", "rosbag")
+
+
 def _time_unit_from_name(col: str) -> str | None:
     u = _unit_from_name(col)
     return u if u in ("ms", "us", "ns") else None
 
 
-def _unit_for(col: str, prof: Profile, default: str) -> str:
+def _unit_for(col: str, prof: Profile, default: str, stated: dict[str, str] | None = None
+              ) -> str:
+    """A column's unit: the profile's [units], else the file's own (ROS, HDF5 attribute),
+    else the header, else the role default."""
     if col in prof.units:
         return prof.units[col]
-    return _unit_from_name(col) or default
+    return (stated or {}).get(col) or _unit_from_name(col) or default
 
 
 def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[str],
@@ -170,7 +182,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         raise InputError(f"{source}: sample rate must be a positive number of Hz, got {fs}")
     if roles.get("time"):
         tcol = roles["time"]
-        tunit = prof.units.get(tcol) or g.get("time_unit") or _time_unit_from_name(tcol)
+        tunit = (prof.units.get(tcol) or raw.units.get(tcol) or g.get("time_unit")
+                 or _time_unit_from_name(tcol))
         if tunit is not None:
             factor(tunit, "time", what=f"time column {tcol!r}")  # an unknown unit: clean error
         ax = _time_seconds(raw, tcol, tunit, sample_rate_hz=fs)
@@ -314,7 +327,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         notes.append(f"irregular sampling: interval jitter {100 * timing.jitter_rel:.2g}% of the "
                      f"nominal {tau0:.6g} s; uniform-sampling analyses assume the nominal interval")
     # ---- gyro conversion
-    rates = _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes)
+    rates = _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes, raw.units)
     if kind == "counter":
         # the first sample only sets the counter origin
         t = t[1:] - t[1]
@@ -328,24 +341,24 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         position = None if position is None else position[1:]
     # ---- auxiliary units
     for c in list(temps):
-        u = _unit_for(c, prof, "degC")
+        u = _unit_for(c, prof, "degC", raw.units)
         temps[c] = to_internal(temps[c], u, "temperature", what=f"column {c!r}")
         units[c] = u
     for c in list(fields):
-        u = _unit_for(c, prof, "uT")
+        u = _unit_for(c, prof, "uT", raw.units)
         temps_u = to_internal(fields[c], u, "field", what=f"column {c!r}")
         fields[c] = temps_u
         units[c] = u
     if supply is not None:
-        u = _unit_for(roles["supply"], prof, "V")
+        u = _unit_for(roles["supply"], prof, "V", raw.units)
         supply = to_internal(supply, u, "voltage", what=f"column {roles['supply']!r}")
         units[roles["supply"]] = u
     if table is not None:
-        u = _unit_for(roles["table_rate"], prof, "deg/s")
+        u = _unit_for(roles["table_rate"], prof, "deg/s", raw.units)
         table = to_internal(table, u, "rate", what=f"column {roles['table_rate']!r}")
         units[roles["table_rate"]] = u
     for c in extra:
-        units[c] = prof.units.get(c, _unit_from_name(c) or "")
+        units[c] = prof.units.get(c) or raw.units.get(c) or _unit_from_name(c) or ""
     site = site_from_profile(prof, source)
     column_map = {"time": roles.get("time"), "gyro_output": outs, "output_kind": kind,
                   "temperature": list(temps), "field": list(fields),
@@ -361,12 +374,13 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     return log
 
 
-def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
+def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes, stated=None):
     g = prof.gyro
+    stated = stated or {}
     rates: dict[str, np.ndarray] = {}
     if kind == "rate":
         for c in outs:
-            u = prof.units.get(c) or _unit_from_name(c) or g.get("rate_unit")
+            u = prof.units.get(c) or stated.get(c) or _unit_from_name(c) or g.get("rate_unit")
             if not u:
                 raise RoleError(
                     f"{source}: the unit of rate column {c!r} is not known; give --rate-unit "

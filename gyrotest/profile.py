@@ -13,6 +13,7 @@ options override it key by key. Example::
     table_rate = "table_dps"       # commanded rate-table rate
     position = "pos"               # multi-position label column (up/down/north/...)
     extra = ["vib_g"]              # free channels
+    topic = "/imu/data"            # ROS bag topic, HDF5 group or MATLAB struct of the columns
 
     [units]                        # per-column units where not the role default
     "table_dps" = "deg/s"
@@ -63,6 +64,7 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
         "table_rate": str,
         "position": str,
         "extra": (str, list),
+        "topic": str,  # ROS topic / HDF5 group / MATLAB struct holding the columns
     },
     "units": {},  # free keys: column name -> unit string
     "gyro": {

@@ -151,7 +151,7 @@ INGEST_OPTION_NAMES = (
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
     "time_unit",
     "temp_col", "field_cols", "supply_col", "table_col", "position_col", "latitude", "ia",
-    "nan_policy",
+    "nan_policy", "topic",
 )
 
 
@@ -188,6 +188,9 @@ def ingest_options(f):
         click.option("--latitude", type=float, default=None, help="Site latitude, degrees."),
         click.option("--ia", default=None,
                      help="Input-axis direction: up/down/north/south/east/west or AZ/EL degrees."),
+        click.option("--topic", default=None,
+                     help="ROS bag: the sensor_msgs/Imu topic (needed when there are several); "
+                          "HDF5: the group; MATLAB: the struct holding the columns."),
         click.option("--nan", "nan_policy", type=click.Choice(["error", "gap", "interpolate"]),
                      default="error", show_default=True,
                      help="Missing values: stop, drop rows as gaps, or interpolate channels."),
@@ -216,6 +219,7 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
         "supply": opts.get("supply_col"),
         "table_rate": opts.get("table_col"),
         "position": opts.get("position_col"),
+        "topic": opts.get("topic"),
     }
     gyro = {
         "rate_unit": opts.get("rate_unit"),

@@ -83,7 +83,9 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     gy = g.gyro
     kind = {"rate": f"rate ({esc(gy.rate_unit)})", "counts": "pulse counts per sample",
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
-            "voltage": "analog voltage"}[gy.output_kind]
+            "voltage": "analog voltage",
+            "delta-angle": f"angle increments per sample ({esc(gy.rate_unit)})",
+            "angle": f"cumulative angle ({esc(gy.rate_unit)})"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
     c.print(f"  gyro axes      {', '.join(axes)}"
             + (f"  (of {', '.join(g.axes)})" if len(axes) < len(g.axes) else ""))

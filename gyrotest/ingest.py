@@ -123,6 +123,7 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
         notes[:0] = head.notes
         wanted = _wanted(roles)
         raw = read_table(path, columns=wanted, select=select)
+        notes += [n for n in raw.notes if n not in notes]  # found while reading the data
     else:
         raw = read_table(path)
         roles, notes = resolve_columns(raw.table.column_names, prof, source)

@@ -136,13 +136,17 @@ def scan(f, h5py, source: str, select: str | None, *, matlab: bool) -> tuple[Fou
     elif matlab and skipped:
         found.notes.append(f"struct(s) {', '.join(map(repr, skipped[:6]))} not read; name "
                            "one with --topic to read its fields")
-    names = unique_names([n for n, _ in entries])
-    cols = {n: c for n, (_, c) in zip(names, entries)}
-    keep, notes = equal_lengths({n: c.length for n, c in cols.items()}, source, found.what)
+    # lengths are compared by path (``imu/time`` and ``gps/time`` differ); the columns kept
+    # are named by their dataset (a clash gets a numeric suffix)
+    where = {f"{c.path.rsplit('/', 1)[0]}/{n}".lstrip("/"): (n, c) for n, c in entries}
+    keep, notes = equal_lengths({k: c.length for k, (_, c) in where.items()}, source,
+                                found.what)
     found.notes += notes
-    found.names = keep
-    found.units = {n: u for n, u in units.items() if n in keep}
-    return found, {n: cols[n] for n in keep}
+    names = unique_names([where[k][0] for k in keep])
+    cols = {n: where[k][1] for n, k in zip(names, keep)}
+    found.names = names
+    found.units = {n: units[where[k][0]] for n, k in zip(names, keep) if where[k][0] in units}
+    return found, cols
 
 
 def read_columns(f, found: Found, cols: dict, wanted: list[str]) -> None:

@@ -444,3 +444,34 @@ def test_columns_of_a_bag_show_file_units(tmp_path):
     assert units == {"time": "ns", "gx": "rad/s", "gy": "rad/s", "gz": "rad/s",
                      "ax": "m/s^2", "ay": "m/s^2", "az": "m/s^2"}
     assert d["format"] == "rosbag"
+
+
+# ----------------------------------------------------------------------------- README demo
+def test_readme_demo_files(tmp_path):
+    """sample_data/make_imu_files.py and the README commands on what it writes: every
+    format gives the same samples, and N comes back as the simulated 0.3 deg/√h."""
+    pytest.importorskip("rosbags")
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("mk", root / "sample_data" / "make_imu_files.py")
+    mk = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mk)
+    out = tmp_path / "imu_demo"
+    mk.main([str(out), "--minutes", "3"])
+    ref = read_log(out / "imu.bag")
+    for f, extra in [("imu_mcap", {}), ("imu.mat", {"gyro": {"rate_unit": "rad/s"}}),
+                     ("imu.csv.gz", {})]:
+        log = read_log(out / f, overrides=extra)
+        assert log.n == ref.n == 18000
+        for a, b in zip(ref.axes, log.axes):
+            np.testing.assert_allclose(log.rates[b], ref.rates[a], rtol=1e-8)
+    assert run_cli(["columns", out / "imu.bag"]).code == 0
+    r = run_cli(["allan", out / "imu.mat", "--rate-unit", "rad/s", "--json", "-q"])
+    assert r.code == 0, r.err
+    for ax in json.loads(r.out)["logs"][0]["axes"]:
+        n = next(t for t in ax["fit"]["terms"] if t["key"] == "N")
+        assert n["params"]["N"] == pytest.approx(mk.ARW_DEG_SQRT_H, rel=0.03)
+    r = run_cli(["export", "kalibr", out / "imu.bag", "-o", out / "kalibr_imu.yaml", "-q"])
+    assert r.code == 0, r.err

@@ -12,7 +12,8 @@ from .tables import _missing_column_msg
 
 # ----------------------------------------------------------------------------- auto-detection
 _TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "sec", "elapsed",
-               "elapsed_s", "datetime", "date_time"}
+               "elapsed_s", "datetime", "date_time", "time_ns", "time_us", "time_ms", "t_ns",
+               "timestamp_ns", "timestamp_us", "timestamp_ms", "stamp_ns"}
 _RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps", "omega_dps",
                "rate_rads", "gyro_rate"}
 #: rate columns: rate/omega/gyro/gyr/angvel with an optional axis and unit suffix

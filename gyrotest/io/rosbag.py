@@ -84,7 +84,7 @@ def read_bag(p: Path, source: str, columns: list[str] | None, select: str | None
             return found
         if count == 0:
             raise InputError(f"{source}: the Imu topic {topic!r} holds no messages")
-        _read_messages(reader, topic, count, found, source)
+        _read_messages(reader, topic, count, found, source, p)
     finally:
         reader.close()
     wanted = columns if columns is not None else found.names
@@ -92,7 +92,22 @@ def read_bag(p: Path, source: str, columns: list[str] | None, select: str | None
     return found
 
 
-def _read_messages(reader, topic: str, count: int, found: Found, source: str) -> None:
+def _size(p: Path) -> int:
+    try:
+        return sum(f.stat().st_size for f in p.iterdir()) if p.is_dir() else p.stat().st_size
+    except OSError:
+        return 0
+
+
+#: bytes an Imu message takes in a bag at least (its payload alone is over 300 bytes): the
+#: index's message count is trusted only up to the file size over this
+MIN_MESSAGE_BYTES = 64
+
+
+def _read_messages(reader, topic: str, count: int, found: Found, source: str,
+                   p: Path | None = None) -> None:
+    if p is not None:  # a damaged index may claim any count: never allocate past the file
+        count = max(16, min(count, _size(p) // MIN_MESSAGE_BYTES))
     stamp = np.empty(count, dtype=np.int64)
     recv = np.empty(count, dtype=np.int64)
     vals = np.empty((6, count))

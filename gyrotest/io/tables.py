@@ -17,6 +17,7 @@ import os
 import re
 import stat
 import sys
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -270,7 +271,7 @@ def _gzip_head(p: Path, source: str) -> bytes:
     try:
         with gzip.open(p, "rb") as fh:
             head = fh.read(65536)
-    except (OSError, EOFError, gzip.BadGzipFile) as e:
+    except (OSError, EOFError, zlib.error) as e:  # BadGzipFile is an OSError
         raise InputError(f"{source}: not a readable gzip file ({type(e).__name__}: "
                          f"{str(e)[:100]}); check the file or decompress it with gunzip") from None
     if not head:
@@ -291,7 +292,7 @@ def _read_gzip_text(p: Path, source: str, delim: str, skip: int, columns: list[s
             return _read_csv_arrow(stream, source, delim, skip, columns, names, decimal=decimal)
     except InputError:
         raise
-    except (OSError, EOFError, pa.ArrowException) as e:  # truncated or corrupt stream
+    except (OSError, EOFError, zlib.error, pa.ArrowException) as e:  # truncated or corrupt
         raise InputError(f"{source}: the gzip stream is damaged or truncated "
                          f"({str(e).splitlines()[0][:100]}); check the file (gzip -t)") from None
 

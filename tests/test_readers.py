@@ -475,3 +475,35 @@ def test_readme_demo_files(tmp_path):
         assert n["params"]["N"] == pytest.approx(mk.ARW_DEG_SQRT_H, rel=0.03)
     r = run_cli(["export", "kalibr", out / "imu.bag", "-o", out / "kalibr_imu.yaml", "-q"])
     assert r.code == 0, r.err
+
+
+@pytest.mark.parametrize("ros1", [True, False])
+def test_fast_imu_parser_equals_rosbags_deserialisation(ros1):
+    """The byte-level Imu reader against rosbags' own (de)serialiser, for every frame_id
+    length mod 8 (CDR aligns the doubles after the string)."""
+    pytest.importorskip("rosbags")
+    from rosbags.typesys import Stores, get_typestore
+
+    from gyrotest.io.rosbag import fast_imu
+
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    ser = store.serialize_ros1 if ros1 else store.serialize_cdr
+    T = store.types
+    rng = np.random.default_rng(3)
+    for k in range(10):
+        w, a = rng.normal(size=3), rng.normal(size=3)
+        h = T["std_msgs/msg/Header"](**({"seq": k} if ros1 else {}),
+                                     stamp=T["builtin_interfaces/msg/Time"](sec=1716200000 + k,
+                                                                            nanosec=123456789),
+                                     frame_id="f" * k)
+        v3 = T["geometry_msgs/msg/Vector3"]
+        msg = T[IMU](header=h, orientation=T["geometry_msgs/msg/Quaternion"](x=1.0, y=2.0, z=3.0,
+                                                                              w=4.0),
+                     orientation_covariance=rng.normal(size=9),
+                     angular_velocity=v3(x=w[0], y=w[1], z=w[2]),
+                     angular_velocity_covariance=rng.normal(size=9),
+                     linear_acceleration=v3(x=a[0], y=a[1], z=a[2]),
+                     linear_acceleration_covariance=rng.normal(size=9))
+        raw = ser(msg, IMU)
+        assert fast_imu(raw, ros1) == (1716200000 + k, 123456789, *w, *a)
+        assert fast_imu(bytes(raw) + b"\0" * 8, ros1) is None  # not the standard layout

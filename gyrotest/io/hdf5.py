@@ -115,7 +115,7 @@ def scan(f, h5py, source: str, select: str | None, *, matlab: bool) -> tuple[Fou
     """The columns of an open HDF5 file: (Found without arrays, name → _Col)."""
     what = "MATLAB v7.3 file" if matlab else "HDF5 file"
     base = f
-    if select:
+    if select and select.strip("/"):
         key = select.strip("/")
         if key not in f or not isinstance(f[key], h5py.Group):
             groups = []

@@ -16,6 +16,7 @@ the columns, not the bag. Requires ``rosbags`` (``pip install 'gyrotest[ros]'``)
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +93,31 @@ def read_bag(p: Path, source: str, columns: list[str] | None, select: str | None
     return found
 
 
+_U32 = struct.Struct("<I")
+_STAMP1 = struct.Struct("<4xII")  # ROS 1 header: seq, stamp.sec, stamp.nsec
+_STAMP2 = struct.Struct("<iI")  # ROS 2 (CDR, little endian): stamp.sec, stamp.nanosec
+_SIX = struct.Struct("<3d72x3d")  # angular_velocity, its covariance, linear_acceleration
+_TAIL = 8 * (4 + 9 + 3 + 9 + 3 + 9)  # bytes after the header of a standard Imu message
+
+
+def fast_imu(raw: bytes | memoryview, ros1: bool) -> tuple | None:
+    """(sec, nanosec, wx, wy, wz, ax, ay, az) straight from the bytes of a standard
+    ``sensor_msgs/Imu`` (ROS 1 serialisation, or little-endian CDR), or None when the layout
+    is not the standard one (then the library deserialises it)."""
+    if ros1:
+        sec, nsec = _STAMP1.unpack_from(raw, 0)
+        pos = 16 + _U32.unpack_from(raw, 12)[0]
+    else:
+        if len(raw) < 16 or raw[1] != 1:  # encapsulation: CDR little endian
+            return None
+        sec, nsec = _STAMP2.unpack_from(raw, 4)
+        pos = 16 + _U32.unpack_from(raw, 12)[0]
+        pos = ((pos - 4 + 7) & ~7) + 4  # doubles are aligned to 8 from the CDR body start
+    if pos + _TAIL != len(raw):
+        return None
+    return (sec, nsec, *_SIX.unpack_from(raw, pos + 8 * (4 + 9)))
+
+
 def _size(p: Path) -> int:
     try:
         return sum(f.stat().st_size for f in p.iterdir()) if p.is_dir() else p.stat().st_size
@@ -114,26 +140,52 @@ def _read_messages(reader, topic: str, count: int, found: Found, source: str,
     conns = [c for c in reader.connections if c.topic == topic]
     n = 0
     frames: set[str] = set()
+    ros1 = not reader.is2
+    rows: list[tuple] = []  # (sec, nsec, 6 values) per message, into the arrays in blocks
+    block = 65536
+
+    def flush():
+        nonlocal n, count, stamp, recv, vals
+        if not rows:
+            return
+        k = len(rows)
+        if n + k > count:  # more messages than the index says: grow
+            count = max(int(count * 1.5), n + k) + 16
+            stamp = np.resize(stamp, count)
+            recv = np.resize(recv, count)
+            vals = np.concatenate([vals, np.empty((6, count - vals.shape[1]))], axis=1)
+        a = np.array(rows, dtype=np.float64)
+        s = np.array([r[0] for r in rows], dtype=np.int64)
+        ns = np.array([r[1] for r in rows], dtype=np.int64)
+        stamp[n:n + k] = s * 1_000_000_000 + ns
+        recv[n:n + k] = times
+        vals[:, n:n + k] = a[:, 2:].T
+        n += k
+        rows.clear()
+        times.clear()
+
+    times: list[int] = []
+    fast = True  # checked against the library's deserialisation on the first message
     try:
         for conn, t_ns, raw in reader.messages(connections=conns):
-            if n == count:  # more messages than the index says: grow
-                count = int(count * 1.5) + 16
-                stamp.resize(count, refcheck=False)
-                recv.resize(count, refcheck=False)
-                vals = np.concatenate([vals, np.empty((6, count - vals.shape[1]))], axis=1)
-            msg = reader.deserialize(raw, conn.msgtype)
-            h = msg.header
-            stamp[n] = int(h.stamp.sec) * 1_000_000_000 + int(h.stamp.nanosec)
-            recv[n] = t_ns
-            if len(frames) < 4:
+            row = fast_imu(raw, ros1) if fast else None
+            if row is None or not frames:
+                msg = reader.deserialize(raw, conn.msgtype)
+                h, w, a = msg.header, msg.angular_velocity, msg.linear_acceleration
                 frames.add(h.frame_id)
-            w, a = msg.angular_velocity, msg.linear_acceleration
-            vals[:, n] = (w.x, w.y, w.z, a.x, a.y, a.z)
-            n += 1
+                full = (int(h.stamp.sec), int(h.stamp.nanosec), w.x, w.y, w.z, a.x, a.y, a.z)
+                if row is not None and row != full:  # not the standard layout after all
+                    fast = False
+                row = full
+            rows.append(row)
+            times.append(t_ns)
+            if len(rows) == block:
+                flush()
+        flush()
     except InputError:
         raise
     except Exception as e:  # a truncated chunk, a message that does not decode
-        raise InputError(f"{source}: cannot read message {n + 1} of topic {topic!r} "
+        raise InputError(f"{source}: cannot read message {n + len(rows) + 1} of topic {topic!r} "
                          f"({type(e).__name__}: {str(e).splitlines()[0][:100] if str(e) else ''})"
                          "; the bag may be truncated or damaged") from None
     if n == 0:

@@ -278,3 +278,40 @@ def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
     write_output(output, text)
     warnings = [f"left out: {', '.join(summary['left_out'])}"] if summary["left_out"] else []
     _done(output, as_json, {"kind": "env-model", **summary}, warnings)
+
+
+@command.command("scale-factor")
+@click.argument("sf_json", type=str)
+@click.option("-o", "--output", required=True,
+              help="The look-up table (.csv) or C header (.h) to write.")
+@click.option("--rates", default=None,
+              help="Input-rate grid of the .csv, deg/s: start:stop:step or a list "
+                   "(default: -FS to +FS in 101 rows).")
+@click.option("--prefix", default="gyro_sf", show_default=True,
+              help="Prefix of the C functions and macros (.h).")
+@json_option
+def scale_factor_cmd(sf_json, output, rates, prefix, as_json):
+    """The scale-factor model as a firmware look-up table (.csv) or C header (.h).
+
+    SF_JSON is the --json output of 'gyrotest scale-factor'. Model (IEEE 952 §8.3):
+    rate = (I + D)/(1 + 1e-6 eps_K), eps_K = eps_0 + eps_T (T - T_ref) + f(I), with f(I) the
+    rate-dependent terms the data support (asymmetry, powers of I/FS, periodic, lock-in) and
+    T_ref the mean temperature of the runs. The .csv tabulates f, eps_K and the bias-free model
+    output over --rates; the .h holds the coefficients and inline functions
+    <prefix>_eps_k_ppm(I, T) and <prefix>_input_dps(rate, T), the compensated input rate.
+    """
+    from ..export import sflut
+    from ..export.common import read_document, write_output
+    from ..export.envlut import parse_grid
+
+    suf = _check_suffix(output, (".csv", ".h"), "scale-factor")
+    grid = parse_grid(rates, "--rates") if rates else None
+    doc = read_document(sf_json, "scale-factor")
+    if suf == ".csv":
+        text, summary = sflut.lut_csv(doc, grid)
+    else:
+        if rates:
+            raise InputError("--rates applies to the .csv look-up table, not the .h header")
+        text, summary = sflut.c_header(doc, prefix=prefix)
+    write_output(output, text)
+    _done(output, as_json, {"kind": "scale-factor", **summary}, [])

@@ -416,7 +416,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         time=None if synthetic_time and rows is None and timing.duplicates_dropped == 0 else t,
         temperature=temps, field_uT=fields, supply=supply, table_rate=table, position=position,
         extra=extra, site=site, column_map=column_map, units=units, notes=notes,
-        meta={"profile": prof.source, "format": raw.fmt},
+        meta={"profile": prof.source, "format": raw.fmt, **raw.origin},
     )
     return log
 

@@ -507,3 +507,15 @@ def test_fast_imu_parser_equals_rosbags_deserialisation(ros1):
         raw = ser(msg, IMU)
         assert fast_imu(raw, ros1) == (1716200000 + k, 123456789, *w, *a)
         assert fast_imu(bytes(raw) + b"\0" * 8, ros1) is None  # not the standard layout
+
+
+def test_kalibr_from_a_bag_takes_its_topic(tmp_path):
+    yaml = pytest.importorskip("yaml")
+    p = write_bag(tmp_path / "k.bag", topics=("/vehicle/imu",), n=3000)
+    out = tmp_path / "imu.yaml"
+    r = run_cli(["export", "kalibr", p, "-o", out, "-q"])
+    assert r.code == 0, r.err
+    d = yaml.safe_load(out.read_text())
+    assert d["rostopic"] == "/vehicle/imu" and d["update_rate"] == pytest.approx(FS)
+    # white noise of 1e-3 rad/s per sample at 100 Hz: density 1e-3/√100 rad/s/√Hz
+    assert d["gyroscope_noise_density"] == pytest.approx(1e-4, rel=0.05)

@@ -54,8 +54,10 @@ def _split(v: str | None) -> list[str] | None:
     return [x.strip() for x in v.split(",") if x.strip()] or None
 
 
-def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
-    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults."""
+def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool,
+                    log_meta: dict | None = None):
+    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults
+    (its ``meta`` — format, ROS topic — copied into ``log_meta`` when given)."""
     from ..export.common import Document, read_document
 
     if Path(inp).suffix.lower() == ".json":
@@ -65,6 +67,8 @@ def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
 
     parse_duration(skip, what="--skip")
     g = load_log(inp, ingest_opts, announce=not as_json)
+    if log_meta is not None:
+        log_meta.update(g.meta)
     res = analyse_allan(g, skip_s=skip)
     return Document("allan", allan_document([res]), inp)
 
@@ -93,7 +97,9 @@ def _done(output: str, as_json: bool, summary: dict, warnings: list[str]) -> Non
 @command.command("kalibr")
 @click.argument("input", type=str)
 @click.option("-o", "--output", required=True, help="The imu.yaml to write.")
-@click.option("--rostopic", default="/imu0", show_default=True, help="IMU ROS topic.")
+@click.option("--rostopic", default=None,
+              help="IMU ROS topic (default: the bag's Imu topic when INPUT is a ROS bag, "
+                   "else /imu0).")
 @click.option("--update-rate", type=float, default=None,
               help="IMU rate, Hz (default: the log's sample rate 1/tau0).")
 @click.option("--inflate", type=float, default=1.0, show_default=True,
@@ -123,7 +129,9 @@ def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_densit
     from ..export.kalibr import kalibr_yaml
 
     _check_suffix(output, (".yaml", ".yml"), "kalibr")
-    doc = _allan_document(input, skip, ingest_opts, as_json)
+    meta: dict = {}
+    doc = _allan_document(input, skip, ingest_opts, as_json, meta)
+    rostopic = rostopic or meta.get("ros_topic") or "/imu0"
     text, p, warnings = kalibr_yaml(allan_axes(doc, _split(axes)), rostopic=rostopic,
                                     update_rate=update_rate, inflate=inflate,
                                     accel_noise_density=accel_noise_density,

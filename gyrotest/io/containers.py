@@ -82,7 +82,8 @@ def read_container(fmt: str, p: Path, source: str, columns: list[str] | None,
     if names_only:
         schema = pa.schema([(n, pa.float64()) for n in found.names])
         empty = pa.Table.from_batches([], schema=schema)
-        return RawTable(empty, source, fmt, p, units=found.units, notes=found.notes)
+        return RawTable(empty, source, fmt, p, units=found.units, notes=found.notes,
+                        origin=found.origin)
     if columns is not None:
         _check_columns(columns, found.names, source)
     arrays = {n: found.arrays[n] for n in (columns if columns is not None else found.names)}
@@ -90,7 +91,8 @@ def read_container(fmt: str, p: Path, source: str, columns: list[str] | None,
     if table.num_rows == 0:
         raise InputError(f"{source}: no samples in the {found.what}")
     owned = {n: v for n, v in arrays.items() if v.dtype == np.float64 and v.flags.writeable}
-    return RawTable(table, source, fmt, p, units=found.units, notes=found.notes, owned=owned)
+    return RawTable(table, source, fmt, p, units=found.units, notes=found.notes, owned=owned,
+                    origin=found.origin)
 
 
 class Found:
@@ -103,6 +105,7 @@ class Found:
         self.arrays: dict[str, np.ndarray] = {}
         self.units: dict[str, str] = {}
         self.notes: list[str] = []
+        self.origin: dict[str, str] = {}  # e.g. the ROS topic the columns came from
 
 
 def equal_lengths(lengths: dict[str, int], source: str, what: str) -> tuple[list[str], list[str]]:

@@ -79,6 +79,7 @@ def read_bag(p: Path, source: str, columns: list[str] | None, select: str | None
         found = Found(f"Imu topic {topic!r}")
         found.names = list(COLUMNS)
         found.units = dict(UNITS)
+        found.origin = {"ros_topic": topic}
         found.notes.append(f"ROS bag: topic {topic!r} (sensor_msgs/msg/Imu, {count:,} "
                            "messages); rates in rad/s, accelerations in m/s²")
         if names_only:

@@ -48,6 +48,7 @@ class RawTable:
     #: what the reader left out or assumed (shown as notes)
     notes: list[str] = field(default_factory=list)
     compressed: bool = False  # gzip'd text
+    origin: dict = field(default_factory=dict)  # where in a container file (ROS topic ...)
 
     def line_of_row(self, row: int) -> int | None:
         """1-based text line of 0-based data row ``row`` (text files only)."""

@@ -68,7 +68,7 @@ class Timing:
 class GyroConstants:
     """The gyro's output kind and the constants that turn it into rate."""
 
-    output_kind: str  # rate | counts | updown | counter | voltage
+    output_kind: str  # rate | counts | updown | counter | voltage | delta-angle | angle
     scale_factor: float | None = None  # arcsec/pulse (pulse kinds) or (deg/h)/V (voltage)
     scale_factor_unit: str | None = None
     offset_v: float | None = None

@@ -13,6 +13,10 @@ Gyro output kinds (IEEE 952 §8.3 model equation, S0 = scale factor):
 * ``counter``: a cumulative pulse counter that rolls over at 2^bits; unwrapped modulo 2^bits
   (the first sample only sets the origin and is dropped);
 * ``voltage``: analog output; rate = S0[(deg/h)/V] · (V − offset).
+* ``delta-angle``: angle increments per sample (an IMU's Δθ output) in rad/deg/arcsec/mrad/µrad;
+  rate = Δθ / τ0 (the increment of sample k covers one nominal interval);
+* ``angle``: a cumulative (integrated) angle; rate_k = (θ_k − θ_{k−1}) / (t_k − t_{k−1}) (the
+  first sample only sets the origin and is dropped).
 
 Text is parsed with pyarrow's multithreaded CSV reader (whitespace-separated text with pandas'
 C parser); only the columns that are used are converted. Timing: a time column (seconds, or
@@ -39,6 +43,7 @@ from .io.columns import (
     RoleError,
     _ci,
     _unit_from_name,
+    angle_unit_from_name,
     column_guesses,
     resolve_columns,
 )
@@ -75,7 +80,7 @@ from .units import factor, to_internal
 __all__ = [
     "GAP_FACTOR", "JITTER_WARN", "META_KEY", "NULL_VALUES", "RANGE_BYTES", "STREAM_MIN_BYTES",
     "RawTable", "RoleError", "_SUFFIX_UNITS", "_ci", "analyse_timing", "build_log",
-    "column_guesses", "column_names",
+    "column_guesses", "column_names", "describe_columns",
     "log_to_table", "read_log", "read_table", "resolve_columns", "site_from_profile", "write_log",
 ]
 
@@ -107,16 +112,62 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
     source = _source_name(path)
     # names first (cheap) so that only the used columns are parsed
     if str(path) != "-":
-        head = read_table(path, _names_only=True)
+        select = prof.columns.get("topic")
+        head = read_table(path, select=select, _names_only=True)
         if head.fmt in ("parquet", "feather"):
             return _from_binary(head, prof, nan_policy)
+        if select and head.fmt not in CONTAINER_FORMATS:
+            raise InputError(f"{source}: --topic (or [columns] topic) selects a ROS topic, HDF5 "
+                             f"group or MATLAB struct; a {head.fmt.upper()} table has none")
         roles, notes = resolve_columns(head.table.column_names, prof, source)
+        notes[:0] = head.notes
         wanted = _wanted(roles)
-        raw = read_table(path, columns=wanted)
+        raw = read_table(path, columns=wanted, select=select)
+        notes += [n for n in raw.notes if n not in notes]  # found while reading the data
     else:
         raw = read_table(path)
         roles, notes = resolve_columns(raw.table.column_names, prof, source)
     return _naming_file(source, lambda: build_log(raw, roles, prof, notes, nan_policy))
+
+
+def describe_columns(path: str | os.PathLike, *, profile: Profile | None = None,
+                     overrides: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+    """Every column a log file holds, without reading its data: the role its name suggests,
+    the unit the header or the file states, and the role :func:`read_log` would give it with
+    this profile and these options (``assigned``; None for every column when the roles cannot
+    be resolved — ``problem`` then says why). JSON-ready."""
+    prof = merge(profile, overrides or {})
+    source = _source_name(path)
+    select = prof.columns.get("topic")
+    head = read_table(path, select=select, _names_only=True)
+    names = (column_names(path) if head.fmt in ("parquet", "feather")
+             else head.table.column_names)
+    guesses = column_guesses(names)
+    assigned: dict[str, str] = {}
+    problem = None
+    notes = list(head.notes)
+    try:
+        roles, more = resolve_columns(names, prof, source)
+        notes += more
+        if roles.get("time"):
+            assigned[roles["time"]] = "time"
+        for c in roles.get("output") or []:
+            assigned[c] = f"gyro output ({roles['kind']})"
+        for key, label in (("temperature", "temperature"), ("field", "magnetic field"),
+                           ("extra", "extra channel")):
+            for c in roles.get(key) or []:
+                assigned.setdefault(c, label)
+        for key, label in (("supply", "supply voltage"), ("table_rate", "rate-table rate"),
+                           ("position", "position")):
+            if roles.get(key):
+                assigned[roles[key]] = label
+    except InputError as e:
+        problem = str(e)
+    for g in guesses:
+        g["unit"] = prof.units.get(g["column"]) or head.units.get(g["column"]) or g["unit"]
+        g["assigned"] = assigned.get(g["column"])
+    return {"source": source, "format": head.fmt, "columns": guesses, "notes": notes,
+            "problem": problem}
 
 
 def _naming_file(source: str, build: Callable[[], GyroLog]) -> GyroLog:
@@ -140,15 +191,22 @@ def _wanted(roles: dict[str, Any]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
+#: formats read by gyrotest.io.containers (their columns may come with units)
+CONTAINER_FORMATS = ("mat", "hdf5", "rosbag")
+
+
 def _time_unit_from_name(col: str) -> str | None:
     u = _unit_from_name(col)
     return u if u in ("ms", "us", "ns") else None
 
 
-def _unit_for(col: str, prof: Profile, default: str) -> str:
+def _unit_for(col: str, prof: Profile, default: str, stated: dict[str, str] | None = None
+              ) -> str:
+    """A column's unit: the profile's [units], else the file's own (ROS, HDF5 attribute),
+    else the header, else the role default."""
     if col in prof.units:
         return prof.units[col]
-    return _unit_from_name(col) or default
+    return (stated or {}).get(col) or _unit_from_name(col) or default
 
 
 def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[str],
@@ -170,7 +228,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         raise InputError(f"{source}: sample rate must be a positive number of Hz, got {fs}")
     if roles.get("time"):
         tcol = roles["time"]
-        tunit = prof.units.get(tcol) or g.get("time_unit") or _time_unit_from_name(tcol)
+        tunit = (prof.units.get(tcol) or raw.units.get(tcol) or g.get("time_unit")
+                 or _time_unit_from_name(tcol))
         if tunit is not None:
             factor(tunit, "time", what=f"time column {tcol!r}")  # an unknown unit: clean error
         ax = _time_seconds(raw, tcol, tunit, sample_rate_hz=fs)
@@ -314,8 +373,9 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         notes.append(f"irregular sampling: interval jitter {100 * timing.jitter_rel:.2g}% of the "
                      f"nominal {tau0:.6g} s; uniform-sampling analyses assume the nominal interval")
     # ---- gyro conversion
-    rates = _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes)
-    if kind == "counter":
+    rates = _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes, raw.units,
+                            t)
+    if kind in ("counter", "angle"):
         # the first sample only sets the counter origin
         t = t[1:] - t[1]
         timing, _ = analyse_timing(t, source, lambda i: where(i + 1), tau0_given)
@@ -328,24 +388,24 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         position = None if position is None else position[1:]
     # ---- auxiliary units
     for c in list(temps):
-        u = _unit_for(c, prof, "degC")
+        u = _unit_for(c, prof, "degC", raw.units)
         temps[c] = to_internal(temps[c], u, "temperature", what=f"column {c!r}")
         units[c] = u
     for c in list(fields):
-        u = _unit_for(c, prof, "uT")
+        u = _unit_for(c, prof, "uT", raw.units)
         temps_u = to_internal(fields[c], u, "field", what=f"column {c!r}")
         fields[c] = temps_u
         units[c] = u
     if supply is not None:
-        u = _unit_for(roles["supply"], prof, "V")
+        u = _unit_for(roles["supply"], prof, "V", raw.units)
         supply = to_internal(supply, u, "voltage", what=f"column {roles['supply']!r}")
         units[roles["supply"]] = u
     if table is not None:
-        u = _unit_for(roles["table_rate"], prof, "deg/s")
+        u = _unit_for(roles["table_rate"], prof, "deg/s", raw.units)
         table = to_internal(table, u, "rate", what=f"column {roles['table_rate']!r}")
         units[roles["table_rate"]] = u
     for c in extra:
-        units[c] = prof.units.get(c, _unit_from_name(c) or "")
+        units[c] = prof.units.get(c) or raw.units.get(c) or _unit_from_name(c) or ""
     site = site_from_profile(prof, source)
     column_map = {"time": roles.get("time"), "gyro_output": outs, "output_kind": kind,
                   "temperature": list(temps), "field": list(fields),
@@ -356,17 +416,22 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         time=None if synthetic_time and rows is None and timing.duplicates_dropped == 0 else t,
         temperature=temps, field_uT=fields, supply=supply, table_rate=table, position=position,
         extra=extra, site=site, column_map=column_map, units=units, notes=notes,
-        meta={"profile": prof.source, "format": raw.fmt},
+        meta={"profile": prof.source, "format": raw.fmt, **raw.origin},
     )
     return log
 
 
-def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
+def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes, stated=None,
+                    t=None):
     g = prof.gyro
+    stated = stated or {}
     rates: dict[str, np.ndarray] = {}
+    if kind in ("delta-angle", "angle"):
+        return _angle_to_rate(kind, outs, arrays, gyro, prof, source, tau0, units, notes,
+                              stated, t)
     if kind == "rate":
         for c in outs:
-            u = prof.units.get(c) or _unit_from_name(c) or g.get("rate_unit")
+            u = prof.units.get(c) or stated.get(c) or _unit_from_name(c) or g.get("rate_unit")
             if not u:
                 raise RoleError(
                     f"{source}: the unit of rate column {c!r} is not known; give --rate-unit "
@@ -434,6 +499,36 @@ def _convert_output(kind, outs, arrays, gyro, prof, source, tau0, units, notes):
         rates[c] = d * k
         units[c] = f"counter ({bits}-bit)"
     notes.append(f"counter unwrapped modulo 2^{bits}; first sample sets the origin")
+    return rates
+
+
+def _angle_to_rate(kind, outs, arrays, gyro, prof, source, tau0, units, notes, stated, t):
+    """Angle outputs to rate in deg/h (1 arcsec/s = 1 deg/h).
+
+    delta-angle: Ω_k = Δθ_k / τ0, the increment over one nominal sample interval (an IMU's
+    coning/sculling-free Δθ output; the same convention as pulse counts, IEEE 952 §8.3).
+    angle: Ω_k = (θ_k − θ_{k−1}) / (t_k − t_{k−1}), the mean rate over each actual interval;
+    the first sample sets the origin.
+    """
+    g = prof.gyro
+    rates: dict[str, np.ndarray] = {}
+    for c in outs:
+        u = prof.units.get(c) or stated.get(c) or angle_unit_from_name(c) or g.get("angle_unit")
+        if not u:
+            raise RoleError(f"{source}: the unit of {kind} column {c!r} is not known; give "
+                            "--angle-unit (rad, deg, arcsec, mrad, urad) or [gyro] angle_unit")
+        f = factor(u, "angle", what=f"{kind} column {c!r}")  # → arcsec
+        v = arrays[c]
+        if kind == "delta-angle":
+            rates[c] = v * (f / tau0)
+        else:
+            dt = np.diff(t) if t is not None else np.full(len(v) - 1, tau0)
+            rates[c] = np.diff(v) * f / dt
+        units[c] = u
+    gyro.rate_unit = units[outs[0]]
+    notes.append(f"{kind} output ({gyro.rate_unit}) converted to rate: "
+                 + ("Δθ/τ0" if kind == "delta-angle" else "Δθ/Δt between samples, first sample "
+                    "sets the origin"))
     return rates
 
 

@@ -6,13 +6,15 @@ options override it key by key. Example::
     [columns]
     time = "t_s"                   # seconds (any origin) or ISO-8601 timestamps
     counts = "pulses"              # or: rate = "..." (or a list of axes) / voltage = "..." /
-                                   #     up = "...", down = "..." / counter = "..."
+                                   #     up = "...", down = "..." / counter = "..." /
+                                   #     delta_angle = "..." (per sample) / angle = "..." (cumulative)
     temperature = ["T_case_C", "T_coil_C"]
     field = ["Hx_uT", "Hy_uT", "Hz_uT"]
     supply = "vsupply"
     table_rate = "table_dps"       # commanded rate-table rate
     position = "pos"               # multi-position label column (up/down/north/...)
     extra = ["vib_g"]              # free channels
+    topic = "/imu/data"            # ROS bag topic, HDF5 group or MATLAB struct of the columns
 
     [units]                        # per-column units where not the role default
     "table_dps" = "deg/s"
@@ -21,6 +23,8 @@ options override it key by key. Example::
     scale_factor = 0.2             # arcsec/pulse for counts, (deg/h)/V for voltage
     offset_v = 2.5
     rate_unit = "deg/h"            # for a rate column
+    angle_unit = "rad"             # for delta_angle / angle columns: rad, deg, arcsec, mrad, urad
+    # output_kind = "delta-angle"  # read the (auto-detected) gyro columns as rate, delta-angle or angle
     counter_bits = 32
     sample_rate_hz = 10.0          # when there is no time column (else checked against it)
     time_unit = "ns"               # unit of a numeric time column: s, ms, us, ns (else guessed)
@@ -57,16 +61,21 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
         "down": str,
         "counter": (str, list),
         "voltage": (str, list),
+        "delta_angle": (str, list),
+        "angle": (str, list),
         "temperature": (str, list),
         "field": (str, list),
         "supply": str,
         "table_rate": str,
         "position": str,
         "extra": (str, list),
+        "topic": str,  # ROS topic / HDF5 group / MATLAB struct holding the columns
     },
     "units": {},  # free keys: column name -> unit string
     "gyro": {
         "rate_unit": str,
+        "angle_unit": str,
+        "output_kind": str,
         "scale_factor": (float, int),
         "offset_v": (float, int),
         "counter_bits": int,
@@ -87,8 +96,13 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
     },
 }
 
-LIST_KEYS = {"rate", "counts", "counter", "voltage", "temperature", "field", "extra"}
-OUTPUT_KINDS = ("rate", "counts", "updown", "counter", "voltage")
+LIST_KEYS = {"rate", "counts", "counter", "voltage", "delta_angle", "angle", "temperature",
+             "field", "extra"}
+OUTPUT_KINDS = ("rate", "counts", "updown", "counter", "voltage", "delta-angle", "angle")
+#: output kinds whose columns are angles (unit: [gyro] angle_unit / --angle-unit)
+ANGLE_KINDS = ("delta-angle", "angle")
+#: [gyro] output_kind: how the auto-detected (or --rate-col) columns are read
+READ_AS_KINDS = ("rate", "delta-angle", "angle")
 
 
 @dataclass
@@ -109,13 +123,14 @@ class Profile:
     def output_kind(self) -> str | None:
         """Which gyro output kind the columns name, or None when not given."""
         c = self.columns
-        kinds = [k for k in ("rate", "counts", "counter", "voltage") if c.get(k)]
+        kinds = [k.replace("_", "-") for k in
+                 ("rate", "counts", "counter", "voltage", "delta_angle", "angle") if c.get(k)]
         if c.get("up") or c.get("down"):
             kinds.append("updown")
         if len(kinds) > 1:
             raise InputError(
                 f"{self.source or 'options'}: more than one gyro output given ({', '.join(kinds)}); "
-                "name exactly one of rate, counts, up+down, counter, voltage"
+                "name exactly one of rate, counts, up+down, counter, voltage, delta_angle, angle"
             )
         return kinds[0] if kinds else None
 
@@ -160,6 +175,9 @@ def profile_from_dict(data: dict, source: str = "profile") -> Profile:
         for key, value in body.items():
             target[key] = _check(section, key, value, source)
     prof.output_kind()  # validates that at most one output kind is named
+    if prof.gyro.get("output_kind") not in (None, *READ_AS_KINDS):
+        raise InputError(f"{source}: [gyro] output_kind must be one of "
+                         f"{', '.join(READ_AS_KINDS)}, got {prof.gyro['output_kind']!r}")
     if "unit" in prof.display:
         from .display import parse_display_unit
 
@@ -206,7 +224,7 @@ def merge(base: Profile | None, overrides: dict[str, dict[str, Any]]) -> Profile
     applied key by key. Naming a different gyro output kind on the command line replaces
     the profile's output kind."""
     prof = copy.deepcopy(base) if base is not None else Profile()
-    out_keys = {"rate", "counts", "up", "down", "counter", "voltage"}
+    out_keys = {"rate", "counts", "up", "down", "counter", "voltage", "delta_angle", "angle"}
     for section, body in overrides.items():
         target = getattr(prof, section)
         given = {k: v for k, v in body.items() if v is not None and v != [] and v != ()}

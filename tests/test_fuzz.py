@@ -427,3 +427,73 @@ def test_regression_corpus(tmp_path, path):
     out = tmp_path / "out.parquet"
     for cmd in (["info", src], ["ingest", src, "-o", out], ["allan", src, "--rate-unit", "deg/h"]):
         _check(run_cli(cmd), out if cmd[0] == "ingest" else None, (src,), before)
+
+
+# ----------------------------------------------------------------------------- container files
+def _container_seeds(d: Path) -> dict[str, bytes]:
+    """One valid small file per container format, written by the format's own library."""
+    import gzip
+
+    import scipy.io
+
+    t = np.arange(300) / 10.0
+    g = np.sin(t)[:, None] * np.array([1e-3, 2e-3, 3e-3])
+    out = {}
+    scipy.io.savemat(d / "a.mat", {"t": t, "gyro": g, "s": {"x": t}})
+    out[".mat"] = (d / "a.mat").read_bytes()
+    out[".csv.gz"] = gzip.compress(("t,gx_dps\n" + "".join(
+        f"{a},{b}\n" for a, b in zip(t, g[:, 0]))).encode())
+    try:
+        import h5py
+
+        with h5py.File(d / "a.h5", "w") as f:
+            f["t"], f["gyro"] = t, g
+            f["gyro"].attrs["units"] = "rad/s"
+        out[".h5"] = (d / "a.h5").read_bytes()
+    except ImportError:
+        pass
+    try:
+        from test_readers import write_bag
+
+        out[".bag"] = write_bag(d / "a.bag", n=60).read_bytes()
+    except (ImportError, pytest.skip.Exception):
+        pass
+    return out
+
+
+class _Seeds(dict):
+    def __repr__(self) -> str:  # hypothesis prints the arguments of a failing case
+        return f"<seed files {sorted(self)}>"
+
+
+@pytest.fixture(scope="module")
+def container_seeds(tmp_path_factory):
+    return _Seeds(_container_seeds(tmp_path_factory.mktemp("seeds")))
+
+
+MUTATIONS = st.lists(st.tuples(st.sampled_from(["cut", "flip", "junk"]), st.floats(0, 1),
+                               st.binary(min_size=1, max_size=16)), min_size=1, max_size=3)
+
+
+@settings(settings.get_profile(PROFILE), max_examples=60 if PROFILE == "gyrotest-ci" else 1000)
+@given(ext=st.sampled_from([".mat", ".csv.gz", ".h5", ".bag"]), muts=MUTATIONS,
+       opts=st.sampled_from([[], ["--rate-unit", "rad/s"], ["--topic", "s"],
+                             ["--topic", "/imu/data"], ["--output-kind", "delta-angle",
+                                                        "--angle-unit", "rad"]]))
+def test_fuzz_container_files(tmp_path, container_seeds, ext, muts, opts):
+    """Damaged MATLAB, gzip, HDF5 and ROS bag files: exit 0 or 2, one line, no traceback."""
+    if ext not in container_seeds:
+        return
+    data = bytearray(container_seeds[ext])
+    for kind, where, junk in muts:
+        i = int(where * (len(data) - 1))
+        if kind == "cut":
+            data = data[: max(i, 1)]
+        elif kind == "flip":
+            data[i] ^= 0xFF
+        else:
+            data[i:i + len(junk)] = junk
+    src = _fresh(tmp_path, "log" + ext)
+    src.write_bytes(bytes(data))
+    before = (_digest(src),)
+    _check(run_cli(["info", src, *opts]), None, (src,), before)

@@ -31,6 +31,7 @@ from ..errors import GyrotestError  # noqa: E402
 # command name -> module (in the order shown by --help)
 COMMANDS: dict[str, str] = {
     "info": "cmd_info",
+    "columns": "cmd_columns",
     "ingest": "cmd_ingest",
     "bias": "cmd_bias",
     "allan": "cmd_allan",
@@ -48,6 +49,7 @@ COMMANDS: dict[str, str] = {
 # one line per command for `gyrotest --help` (the full text is `gyrotest CMD --help`)
 SHORT_HELP: dict[str, str] = {
     "info": "Summarise a log: duration, rate, channels, gaps.",
+    "columns": "List a log's columns, the role and unit of each.",
     "ingest": "Validate a log, convert it to Parquet/Feather.",
     "bias": "Bias D_F with honest uncertainty, repeatability, positions.",
     "allan": "Allan deviations with CIs, noise-model fit and diagnosis.",

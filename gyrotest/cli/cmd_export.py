@@ -54,8 +54,10 @@ def _split(v: str | None) -> list[str] | None:
     return [x.strip() for x in v.split(",") if x.strip()] or None
 
 
-def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
-    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults."""
+def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool,
+                    log_meta: dict | None = None):
+    """The Allan document of INPUT: read it (.json) or analyse the log with the defaults
+    (its ``meta`` — format, ROS topic — copied into ``log_meta`` when given)."""
     from ..export.common import Document, read_document
 
     if Path(inp).suffix.lower() == ".json":
@@ -65,6 +67,8 @@ def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool):
 
     parse_duration(skip, what="--skip")
     g = load_log(inp, ingest_opts, announce=not as_json)
+    if log_meta is not None:
+        log_meta.update(g.meta)
     res = analyse_allan(g, skip_s=skip)
     return Document("allan", allan_document([res]), inp)
 
@@ -93,7 +97,9 @@ def _done(output: str, as_json: bool, summary: dict, warnings: list[str]) -> Non
 @command.command("kalibr")
 @click.argument("input", type=str)
 @click.option("-o", "--output", required=True, help="The imu.yaml to write.")
-@click.option("--rostopic", default="/imu0", show_default=True, help="IMU ROS topic.")
+@click.option("--rostopic", default=None,
+              help="IMU ROS topic (default: the bag's Imu topic when INPUT is a ROS bag, "
+                   "else /imu0).")
 @click.option("--update-rate", type=float, default=None,
               help="IMU rate, Hz (default: the log's sample rate 1/tau0).")
 @click.option("--inflate", type=float, default=1.0, show_default=True,
@@ -123,7 +129,9 @@ def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_densit
     from ..export.kalibr import kalibr_yaml
 
     _check_suffix(output, (".yaml", ".yml"), "kalibr")
-    doc = _allan_document(input, skip, ingest_opts, as_json)
+    meta: dict = {}
+    doc = _allan_document(input, skip, ingest_opts, as_json, meta)
+    rostopic = rostopic or meta.get("ros_topic") or "/imu0"
     text, p, warnings = kalibr_yaml(allan_axes(doc, _split(axes)), rostopic=rostopic,
                                     update_rate=update_rate, inflate=inflate,
                                     accel_noise_density=accel_noise_density,
@@ -278,3 +286,40 @@ def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
     write_output(output, text)
     warnings = [f"left out: {', '.join(summary['left_out'])}"] if summary["left_out"] else []
     _done(output, as_json, {"kind": "env-model", **summary}, warnings)
+
+
+@command.command("scale-factor")
+@click.argument("sf_json", type=str)
+@click.option("-o", "--output", required=True,
+              help="The look-up table (.csv) or C header (.h) to write.")
+@click.option("--rates", default=None,
+              help="Input-rate grid of the .csv, deg/s: start:stop:step or a list "
+                   "(default: -FS to +FS in 101 rows).")
+@click.option("--prefix", default="gyro_sf", show_default=True,
+              help="Prefix of the C functions and macros (.h).")
+@json_option
+def scale_factor_cmd(sf_json, output, rates, prefix, as_json):
+    """The scale-factor model as a firmware look-up table (.csv) or C header (.h).
+
+    SF_JSON is the --json output of 'gyrotest scale-factor'. Model (IEEE 952 §8.3):
+    rate = (I + D)/(1 + 1e-6 eps_K), eps_K = eps_0 + eps_T (T - T_ref) + f(I), with f(I) the
+    rate-dependent terms the data support (asymmetry, powers of I/FS, periodic, lock-in) and
+    T_ref the mean temperature of the runs. The .csv tabulates f, eps_K and the bias-free model
+    output over --rates; the .h holds the coefficients and inline functions
+    <prefix>_eps_k_ppm(I, T) and <prefix>_input_dps(rate, T), the compensated input rate.
+    """
+    from ..export import sflut
+    from ..export.common import read_document, write_output
+    from ..export.envlut import parse_grid
+
+    suf = _check_suffix(output, (".csv", ".h"), "scale-factor")
+    grid = parse_grid(rates, "--rates") if rates else None
+    doc = read_document(sf_json, "scale-factor")
+    if suf == ".csv":
+        text, summary = sflut.lut_csv(doc, grid)
+    else:
+        if rates:
+            raise InputError("--rates applies to the .csv look-up table, not the .h header")
+        text, summary = sflut.c_header(doc, prefix=prefix)
+    write_output(output, text)
+    _done(output, as_json, {"kind": "scale-factor", **summary}, [])

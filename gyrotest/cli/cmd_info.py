@@ -39,8 +39,10 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
     reported with their times (warning on stderr; "outliers" in --json).
 
-    LOG is a CSV/TSV/whitespace text file with a header, a Parquet or Feather file, or '-'
-    for CSV on stdin. Shows which column was used for what.
+    LOG is a CSV/TSV/whitespace text file with a header (also gzip'd), a Parquet or Feather
+    file, a MATLAB .mat, an HDF5 file, a ROS bag (.bag, .mcap, .db3 or a ROS 2 bag directory;
+    sensor_msgs/Imu), or '-' for CSV on stdin. Shows which column was used for what
+    ('gyrotest columns LOG' lists every column).
 
     \b
     Example:
@@ -83,7 +85,9 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     gy = g.gyro
     kind = {"rate": f"rate ({esc(gy.rate_unit)})", "counts": "pulse counts per sample",
             "updown": "up/down pulse pairs", "counter": f"cumulative {gy.counter_bits}-bit counter",
-            "voltage": "analog voltage"}[gy.output_kind]
+            "voltage": "analog voltage",
+            "delta-angle": f"angle increments per sample ({esc(gy.rate_unit)})",
+            "angle": f"cumulative angle ({esc(gy.rate_unit)})"}[gy.output_kind]
     c.print(f"  gyro output    {kind}")
     c.print(f"  gyro axes      {', '.join(axes)}"
             + (f"  (of {', '.join(g.axes)})" if len(axes) < len(g.axes) else ""))

@@ -151,7 +151,7 @@ INGEST_OPTION_NAMES = (
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
     "time_unit",
     "temp_col", "field_cols", "supply_col", "table_col", "position_col", "latitude", "ia",
-    "nan_policy",
+    "nan_policy", "topic", "delta_angle_col", "angle_col", "angle_unit", "output_kind",
 )
 
 
@@ -171,6 +171,16 @@ def ingest_options(f):
         click.option("--counter-col", default=None, help="Cumulative counter column (rolls over)."),
         click.option("--counter-bits", type=int, default=None, help="Counter width, bits (16, 32)."),
         click.option("--voltage-col", default=None, help="Analog output voltage column."),
+        click.option("--delta-angle-col", default=None,
+                     help="Angle-increment (delta-angle) column(s) per sample; rate = Δθ/τ0."),
+        click.option("--angle-col", default=None,
+                     help="Cumulative-angle column(s); rate = Δθ/Δt between samples."),
+        click.option("--angle-unit", default=None,
+                     help="Unit of angle columns: rad, deg, arcsec, mrad, urad."),
+        click.option("--output-kind", type=click.Choice(["rate", "delta-angle", "angle"]),
+                     default=None,
+                     help="Read the gyro columns (auto-detected or --rate-col) as rates, angle "
+                          "increments per sample or a cumulative angle."),
         click.option("--scale-factor", type=float, default=None,
                      help="S0: arcsec/pulse for pulse outputs, (deg/h)/V for voltage."),
         click.option("--offset", type=float, default=None, help="Voltage offset, V."),
@@ -188,6 +198,9 @@ def ingest_options(f):
         click.option("--latitude", type=float, default=None, help="Site latitude, degrees."),
         click.option("--ia", default=None,
                      help="Input-axis direction: up/down/north/south/east/west or AZ/EL degrees."),
+        click.option("--topic", default=None,
+                     help="ROS bag: the sensor_msgs/Imu topic (needed when there are several); "
+                          "HDF5: the group; MATLAB: the struct holding the columns."),
         click.option("--nan", "nan_policy", type=click.Choice(["error", "gap", "interpolate"]),
                      default="error", show_default=True,
                      help="Missing values: stop, drop rows as gaps, or interpolate channels."),
@@ -211,14 +224,19 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
         "down": opts.get("down_col"),
         "counter": _split_cols(opts.get("counter_col")),
         "voltage": _split_cols(opts.get("voltage_col")),
+        "delta_angle": _split_cols(opts.get("delta_angle_col")),
+        "angle": _split_cols(opts.get("angle_col")),
         "temperature": list(opts.get("temp_col") or []) or None,
         "field": _split_cols(opts.get("field_cols")),
         "supply": opts.get("supply_col"),
         "table_rate": opts.get("table_col"),
         "position": opts.get("position_col"),
+        "topic": opts.get("topic"),
     }
     gyro = {
         "rate_unit": opts.get("rate_unit"),
+        "angle_unit": opts.get("angle_unit"),
+        "output_kind": opts.get("output_kind"),
         "scale_factor": opts.get("scale_factor"),
         "offset_v": opts.get("offset"),
         "counter_bits": opts.get("counter_bits"),

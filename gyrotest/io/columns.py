@@ -12,7 +12,8 @@ from .tables import _missing_column_msg
 
 # ----------------------------------------------------------------------------- auto-detection
 _TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "sec", "elapsed",
-               "elapsed_s", "datetime", "date_time"}
+               "elapsed_s", "datetime", "date_time", "time_ns", "time_us", "time_ms", "t_ns",
+               "timestamp_ns", "timestamp_us", "timestamp_ms", "stamp_ns"}
 _RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps", "omega_dps",
                "rate_rads", "gyro_rate"}
 #: rate columns: rate/omega/gyro/gyr/angvel with an optional axis and unit suffix
@@ -20,6 +21,9 @@ _RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps"
 _RATE_RE = re.compile(
     r"^(?:(?:rate|omega|gyro|gyr|ang_?vel|angular_velocity)_?[xyz123]?|[gw]_?[xyz])"
     r"(?:_(?:d?p[hs]|rads?|rad_?s|rps|deg_?[sh]|mrad_?s))?$")
+#: per-sample angle increments (an IMU's Δθ output): dtheta, dtheta_x, delta_angle_y, dang_z
+_DELTA_ANGLE_RE = re.compile(r"^(?:d_?theta|delta_?angle|delta_?theta|dang)_?[xyz123]?"
+                             r"(?:_(?:rad|deg|mrad|urad|arcsec))?$")
 _COUNT_NAMES = {"counts", "count", "pulses", "pulse", "dn", "delta_n", "n_pulses"}
 _COUNTER_NAMES = {"counter", "cnt", "cum_counts", "pulse_counter"}
 _VOLT_NAMES = {"voltage", "v_out", "vout", "volt", "u_out", "analog"}
@@ -54,6 +58,25 @@ _SUFFIX_UNITS = [
     (re.compile(r"_us$", re.I), "us"),
     (re.compile(r"_ns$", re.I), "ns"),
 ]
+#: angle units from a name suffix: only for delta-angle / angle columns (``gx_rad``)
+_ANGLE_SUFFIX_UNITS = [
+    (re.compile(r"_rad$", re.I), "rad"),
+    (re.compile(r"_mrad$", re.I), "mrad"),
+    (re.compile(r"_urad$", re.I), "urad"),
+    (re.compile(r"_deg$", re.I), "deg"),
+    (re.compile(r"_arcsec$", re.I), "arcsec"),
+]
+
+
+def angle_unit_from_name(col: str) -> str | None:
+    """The angle unit a column header states: bracketed (``dtheta_x [rad]``) or a suffix."""
+    base, unit = split_header_unit(col)
+    if unit:
+        return unit
+    for pat, u in _ANGLE_SUFFIX_UNITS:
+        if pat.search(base):
+            return u
+    return None
 
 
 # ----------------------------------------------------------------------------- roles
@@ -65,6 +88,7 @@ class RoleError(InputError):
 _ROLE_POOLS = [
     ("time", lambda b: b in _TIME_NAMES),
     ("rate", lambda b: b in _RATE_NAMES or bool(_RATE_RE.match(b))),
+    ("delta-angle", lambda b: bool(_DELTA_ANGLE_RE.match(b))),
     ("counts", lambda b: b in _COUNT_NAMES),
     ("counter", lambda b: b in _COUNTER_NAMES),
     ("voltage", lambda b: b in _VOLT_NAMES),
@@ -85,7 +109,8 @@ def column_guesses(names: list[str]) -> list[dict[str, str | None]]:
     for n in names:
         b = base_name(n).lower()
         role = next((r for r, test in _ROLE_POOLS if test(b)), None)
-        out.append({"column": n, "role": role, "unit": _unit_from_name(n)})
+        unit = _unit_from_name(n) or (angle_unit_from_name(n) if role == "delta-angle" else None)
+        out.append({"column": n, "role": role, "unit": unit})
     return out
 
 
@@ -163,7 +188,7 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
     if kind == "updown":
         roles["output"] = [need(cols["up"], "up pulses"), need(cols["down"], "down pulses")]
     elif kind is not None:
-        roles["output"] = [need(c, kind) for c in cols[kind]]
+        roles["output"] = [need(c, kind) for c in cols[kind.replace("-", "_")]]
     else:
         found: dict[str, list[str]] = {}
         for n in names:
@@ -172,6 +197,8 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
             ln = base_name(n).lower()
             if ln in _RATE_NAMES or _RATE_RE.match(ln):
                 found.setdefault("rate", []).append(n)
+            elif _DELTA_ANGLE_RE.match(ln):
+                found.setdefault("delta-angle", []).append(n)
             elif ln in _COUNT_NAMES:
                 found.setdefault("counts", []).append(n)
             elif ln in _COUNTER_NAMES:
@@ -196,6 +223,16 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
         roles["output"] = cs
         used.update(cs)
         notes.append(f"gyro output: {kind} from column(s) {', '.join(map(repr, cs))} (auto-detected)")
+    read_as = prof.gyro.get("output_kind")
+    if read_as and read_as != kind:
+        if read_as not in ("rate", "delta-angle", "angle"):
+            raise InputError(f"{source}: unknown output kind {read_as!r}; use rate, delta-angle "
+                             "or angle")
+        if kind not in ("rate", "delta-angle", "angle"):
+            raise InputError(f"{source}: --output-kind {read_as} reads rate or angle columns, "
+                             f"but the gyro output is {kind} ({', '.join(roles['output'])})")
+        notes.append(f"gyro output read as {read_as} (--output-kind)")
+        kind = read_as
     roles["kind"] = kind
     # auxiliary channels
     if cols.get("temperature"):

@@ -31,7 +31,7 @@ class MetaError(ValueError):
 
 
 _NUM = (int, float)
-_KINDS = ("rate", "counts", "updown", "counter", "voltage")
+_KINDS = ("rate", "counts", "updown", "counter", "voltage", "delta-angle", "angle")
 
 
 def _get(d: Any, key: str, path: str, typ, *, optional: bool = False):

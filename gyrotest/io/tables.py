@@ -10,12 +10,14 @@ from __future__ import annotations
 import contextlib
 import csv
 import difflib
+import gzip
 import io
 import json
 import os
 import re
 import stat
 import sys
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,7 +34,7 @@ class RawTable:
 
     table: pa.Table
     source: str
-    fmt: str  # csv | tsv | whitespace | parquet | feather
+    fmt: str  # csv | tsv | whitespace | parquet | feather | mat | hdf5 | rosbag
     path: Path | None  # None for stdin
     header_line: int = 0  # 1-based line of the header in a text file
     meta: dict | None = None  # gyrotest metadata of a converted Parquet/Feather file
@@ -40,15 +42,22 @@ class RawTable:
     # to the first (only) role that uses them without a copy (see _column_to_float)
     owned: dict[str, np.ndarray] = field(default_factory=dict)
     exclusive: set[str] = field(default_factory=set)
+    #: units the file itself states for columns (a ROS message definition, an HDF5 ``units``
+    #: attribute); a profile's [units] still wins
+    units: dict[str, str] = field(default_factory=dict)
+    #: what the reader left out or assumed (shown as notes)
+    notes: list[str] = field(default_factory=list)
+    compressed: bool = False  # gzip'd text
+    origin: dict = field(default_factory=dict)  # where in a container file (ROS topic ...)
 
     def line_of_row(self, row: int) -> int | None:
         """1-based text line of 0-based data row ``row`` (text files only)."""
-        if self.fmt in ("parquet", "feather"):
+        if self.fmt not in ("csv", "tsv", "whitespace"):
             return None
         if self.path is None:
             return None
         count = -1
-        with open(self.path, "rb") as fh:
+        with (gzip.open(self.path, "rb") if self.compressed else open(self.path, "rb")) as fh:
             for lineno, line in enumerate(fh, 1):
                 if lineno <= self.header_line:
                     continue
@@ -141,18 +150,33 @@ def _sniff_text(head: bytes, source: str) -> tuple[str, int, list[str]]:
 
 
 def read_table(path: str | os.PathLike, columns: list[str] | None = None,
-               *, _names_only: bool = False) -> RawTable:
+               *, select: str | None = None, _names_only: bool = False) -> RawTable:
     """Read a table file (or ``-`` for stdin) into a pyarrow Table, only ``columns`` when
-    given. Errors name the file and the fix."""
+    given. Errors name the file and the fix.
+
+    Besides text and Parquet/Feather: gzip'd text, MATLAB ``.mat``, HDF5 and ROS bags
+    (:mod:`gyrotest.io.containers`); ``select`` names the ROS topic, HDF5 group or MATLAB
+    struct that holds the columns."""
     source = _source_name(path)
     data: bytes | None = None
     p: Path | None = None
+    compressed = False
     if str(path) == "-":
         data = _read_stdin(source)
         head = data[:65536]
     else:
+        from .containers import container_format, read_container
+
         p = Path(path)
-        head = _read_head(p, source)
+        fmt = container_format(p, None)
+        if fmt is None:
+            head = _read_head(p, source)
+            fmt = container_format(p, head)
+        if fmt is not None:
+            return read_container(fmt, p, source, columns, select, names_only=_names_only)
+        if head[:2] == GZIP_MAGIC:
+            compressed = True
+            head = _gzip_head(p, source)
     suffix = p.suffix.lower() if p else ""
     if head[:4] == b"PAR1" or suffix in (".parquet", ".pq"):
         if p is None:
@@ -173,10 +197,15 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     if _names_only:
         # not pa.table/pa.array: they import pandas (≈ 0.4 s) on first use
         empty = pa.Table.from_batches([], schema=pa.schema([(n, pa.float64()) for n in names]))
-        return RawTable(empty, source, "csv", p, skip + 1)
+        return RawTable(empty, source, "csv", p, skip + 1, compressed=compressed)
     if columns is not None:
         _check_columns(columns, names, source)
     fmt = {"\t": "tsv", "whitespace": "whitespace"}.get(delim, "csv")
+    if compressed:
+        table = _read_gzip_text(p, source, delim, skip, columns, names, decimal=decimal)
+        if table.num_rows == 0:
+            raise InputError(f"{source}: header only, no data rows")
+        return RawTable(table, source, fmt, p, header_line=skip + 1, compressed=True)
     if delim == "whitespace":
         table = _read_whitespace(p if p else io.BytesIO(data), source, skip, columns,
                                  decimal=decimal)
@@ -233,6 +262,40 @@ def _read_head(p: Path, source: str) -> bytes:
                          "(chmod u+r) or run as its owner") from None
     except OSError as e:
         raise InputError(f"{source}: cannot read the file ({e.strerror})") from None
+
+
+GZIP_MAGIC = b"\x1f\x8b"
+
+
+def _gzip_head(p: Path, source: str) -> bytes:
+    """The first 64 KiB of a gzip'd text file, decompressed."""
+    try:
+        with gzip.open(p, "rb") as fh:
+            head = fh.read(65536)
+    except (OSError, EOFError, zlib.error) as e:  # BadGzipFile is an OSError
+        raise InputError(f"{source}: not a readable gzip file ({type(e).__name__}: "
+                         f"{str(e)[:100]}); check the file or decompress it with gunzip") from None
+    if not head:
+        raise InputError(f"{source}: the gzip file holds no data")
+    return head
+
+
+def _read_gzip_text(p: Path, source: str, delim: str, skip: int, columns: list[str] | None,
+                    names: list[str], *, decimal: str = ".") -> pa.Table:
+    """A gzip'd text table, decompressed while it is parsed (never a decompressed copy of the
+    whole file in memory or on disk)."""
+    try:
+        if delim == "whitespace":
+            with gzip.open(p, "rb") as fh:
+                return _read_whitespace(fh, source, skip, columns, decimal=decimal)
+        stream = pa.CompressedInputStream(pa.OSFile(str(p)), "gzip")
+        with stream:
+            return _read_csv_arrow(stream, source, delim, skip, columns, names, decimal=decimal)
+    except InputError:
+        raise
+    except (OSError, EOFError, zlib.error, pa.ArrowException) as e:  # truncated or corrupt
+        raise InputError(f"{source}: the gzip stream is damaged or truncated "
+                         f"({str(e).splitlines()[0][:100]}); check the file (gzip -t)") from None
 
 
 def _read_stdin(source: str) -> bytes:

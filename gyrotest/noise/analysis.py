@@ -117,6 +117,9 @@ def input_kind_of(log: GyroLog) -> tuple[str, str]:
         q = log.gyro.angle_quantum_arcsec
         return "increment", (f"pulse output ({kind}, S0 = {q:g} arcsec/pulse): analysed as angle "
                              "increments per sample; σ in arcsec/s = deg/h")
+    if kind in ("delta-angle", "angle"):
+        return "increment", (f"{kind} output ({log.gyro.rate_unit}): analysed as angle increments "
+                             "per sample; σ in arcsec/s = deg/h")
     if kind in ("rate", "voltage"):
         return "rate", f"{kind} output: analysed as rate samples (average rate per interval), deg/h"
     raise InputError(f"{log.source}: output kind {kind!r} cannot be analysed (rate, voltage, "

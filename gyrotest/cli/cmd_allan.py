@@ -59,9 +59,10 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Confidence of the χ² intervals.")
 @click.option("--ci", "ci_kind", type=click.Choice(["stable32", "conservative"]),
               default="stable32", show_default=True,
-              help="Interval columns: Stable32's (identified α and its EDF, as printed by "
-                   "Stable32), or also a conservative one (EDF capped at the white-rate value "
-                   "where α > 0 came from few averages, non-increasing in τ) in its own "
+              help="Interval columns: Stable32's (α identified by Stable32's rule and its "
+                   "EDF, as Stable32 prints them), or also a conservative one (the noise "
+                   "fit's own α, EDF capped at the white-rate value where α > 0 came from "
+                   "few averages, non-increasing in τ) in its own "
                    "alpha_ci/edf_ci/sigma_lo_ci/sigma_hi_ci columns.")
 @click.option("--min-edf", type=float, default=MIN_EDF, show_default=True,
               help="Do not fit τ with fewer equivalent degrees of freedom.")

@@ -38,16 +38,18 @@ that the model under judgment cannot move:
      floor already says the model is incomplete and the question is only which candidate
      explains the gap: the candidate cuts the held-out RMS by ≥ 10 % and the gain is
      consistent across the folds, gain / (fold scatter/√folds) ≥ 2.13 (the one-sided 95 %
-     t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %). Far
+     t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %); the
+     HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its standard error. Far
      from the floor every missing effect inflates the HAC error of every other candidate,
      so the test is a guard only where the model is near the floor.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
    ≥ 10 % of its variance at that frequency) is not accepted: the stimulus acts through a
    channel. Hysteresis widths are searched only above what the sensor can resolve.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
-   nonlinear parameter. Among missing effects whose held-out RMS is within 1 % of the best,
+   nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
-   generic channel < nuisance; within a class the simpler form, x before x²), a lag whose
+   generic channel < nuisance; within a class the one that brings fewer new channels into the
+   model, then the simpler form, x before x²), a lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term, and candidates whose fitted contributions correlate at
    |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log. Candidates the
@@ -110,8 +112,10 @@ FAR_RATIO = 2.0
 FAR_GAIN = 0.10
 FAR_T = 2.13
 FAR_T_NUISANCE = 3.75
+#: ... with the HAC test as a guard: the coefficient exceeds its own standard error
+FAR_Z = 1.0
 #: candidates within this fraction of the best held-out RMS count as equal evidence
-TIE = 0.01
+TIE = 0.02
 EQUIVALENT_R = 0.995
 
 
@@ -232,7 +236,7 @@ class Diagnosis:
                      "clear_gain_pct": 100 * CLEAR_GAIN, "clear_gain_p_trials": CLEAR_P,
                      "clear_gain_p_trials_nuisance": CLEAR_P_NUISANCE,
                      "above_floor_ratio": ABOVE_FLOOR, "at_floor_ratio": AT_FLOOR,
-                     "ranking": "held-out RMS x (1 + params/blocks); ties within 1 % go to "
+                     "ranking": "held-out RMS x (1 + params/blocks); ties within 2 % go to "
                                 "channel-based terms",
                      "significance": "HAC Wald test in the augmented model; p x trials x "
                                      "candidates (strict) or p x trials (clear gain)"},
@@ -351,12 +355,20 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
+        used = {ch for s in base_specs for ch in s.channels}
         chosen = min(tied, key=lambda c: (CLASS_ORDER.get(c.klass, 9),
+                                          _new_channels(c, used),
                                           FORM_ORDER.get(c.spec.key if c.spec else "", 5),
                                           score(c)))
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = _equivalents(chosen, out, base)
     return out, chosen
+
+
+def _new_channels(c: Candidate, used: set[str]) -> int:
+    """How many channels the candidate brings into the model (an explanation through the
+    sensors the model already uses is the simpler one at equal evidence)."""
+    return len(set(c.spec.channels) - used) if c.spec is not None else 0
 
 
 #: within a class, simpler forms first at equal evidence (x before x², a lag before a rate)
@@ -451,6 +463,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                           and p_tr < STRONG_P))
                  and (c.key != "hyst" or t_cv >= HYST_CV_T))
     far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+               and math.isfinite(z) and abs(z) >= FAR_Z
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
                and (c.key != "hyst" or t_cv >= HYST_CV_T))
@@ -526,7 +539,7 @@ def _equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> 
     for c in cands:
         if c is chosen or c._fit is None or not math.isfinite(c.rms_holdout):
             continue
-        if c.rms_holdout > chosen.rms_holdout * (1 + 5 * TIE):
+        if c.rms_holdout > chosen.rms_holdout * 1.05:
             continue
         try:
             x = _contribution(c._fit, c.term)

@@ -69,26 +69,28 @@ def deviation_progress(min_s: float = 2.0):
             deviations.PROGRESS = old
 
 
-def _work(args: tuple[Callable, str, dict, dict]) -> tuple[Any, list[str]]:
-    fn, path, opts, kw = args
+def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]:
+    fn, path, opts, kw, stream = args
     from ..noise import deviations
     from .common import load_log
 
     deviations.PROGRESS = None  # a worker process draws no bar
 
-    log = load_log(path, opts, announce=False)
+    log = load_log(path, opts, announce=False, stream=stream)
     return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]
 
 
 def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None = None,
-             announce: bool = True, **kw) -> list:
+             announce: bool = True, stream: bool = False, **kw) -> list:
     """``[fn(load_log(p), **kw) for p in paths]``, on ``jobs`` worker processes when there is
-    more than one log. ``fn`` must be a module-level function (it is pickled by name)."""
+    more than one log. ``fn`` must be a module-level function (it is pickled by name).
+    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.stream`)."""
     from .common import load_logs, note, progress
 
     n_jobs = min(jobs or default_jobs(), len(paths))
     if n_jobs < 2 or "-" in paths:
-        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce)]
+        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce,
+                                                   stream=stream)]
     from concurrent.futures import ProcessPoolExecutor
 
     method = "fork" if sys.platform.startswith("linux") else None
@@ -96,7 +98,7 @@ def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None
     out = []
     with (progress(f"{len(paths)} logs on {n_jobs} processes", total=len(paths)) as advance,
           ProcessPoolExecutor(max_workers=n_jobs, mp_context=ctx) as ex):
-        for res, notes in ex.map(_work, [(fn, p, opts, kw) for p in paths]):
+        for res, notes in ex.map(_work, [(fn, p, opts, kw, stream) for p in paths]):
             if announce:
                 for m in notes:
                     note(m)

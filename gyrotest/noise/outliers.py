@@ -82,10 +82,11 @@ class OutlierReport:
     excess_kurtosis: float
     unit: str = "deg/h"
     notes: list[str] = field(default_factory=list)
+    count: int | None = None  # set when ``mask`` is not kept (a streamed log)
 
     @property
     def n_outliers(self) -> int:
-        return int(self.mask.sum())
+        return int(self.mask.sum()) if self.count is None else self.count
 
     @property
     def found(self) -> bool:

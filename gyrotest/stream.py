@@ -209,16 +209,21 @@ def stream_log(path: str, *, profile=None, overrides: dict | None = None,
             return None  # damaged metadata: the whole-file reader explains it
         if gmeta["gyro"].get("output_kind") not in _STREAM_KINDS + ("counter",):
             return None
-        return _stream_converted(pf, rows, source, gmeta, prof)
-    if nan_policy != "error":
+        log = _stream_converted(pf, rows, source, gmeta, prof)
+    elif nan_policy != "error":
         return None
-    return _stream_plain(pf, rows, source, prof)
+    else:
+        log = _stream_plain(pf, rows, source, prof)
+    del pf, found
+    _release_memory()
+    return log
 
 
 def _fixed_mmap_threshold() -> None:
     """glibc serves blocks ≥ 1 MiB from mmap from now on (its threshold otherwise grows to
     32 MiB after the first frees, and the freed batch buffers of every later step would stay
-    in the heap, counted in the peak resident memory)."""
+    in the heap, counted in the peak resident memory; Arrow's own pool is emptied by
+    :func:`_release_memory`)."""
     try:
         import ctypes
 
@@ -246,7 +251,6 @@ def _release_memory() -> None:
 
 def _finish(source, integ: dict[str, _Integrator], timing: Timing, gyro: GyroConstants,
             tau0: float, notes: list[str], fmt_meta: dict) -> StreamedLog:
-    _release_memory()
     series: dict[str, AngleSeries] = {}
     means: dict[str, list[float]] = {}
     segs = [(a, b) for a, b in zip([0] + [g.index for g in timing.gaps],

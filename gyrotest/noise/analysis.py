@@ -35,7 +35,7 @@ import numpy as np
 from ..data import GyroLog
 from ..errors import AnalysisError, InputError
 from ..units import format_duration, parse_duration
-from .deviations import DEVIATION_KINDS, DeviationResult, compute_deviation
+from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
     MIN_EDF,
@@ -654,11 +654,15 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         data = rate * tau0 if in_kind == "increment" else rate
 
     def deviation(kind: str, grid, **kw) -> DeviationResult:
-        return compute_deviation(data, tau0, input_kind=in_kind, kind=kind, taus=grid,
+        src = data if kind not in STREAM_DEVS else theta
+        return compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
                                  confidence=confidence, stop_ratio=stop_ratio, segments=segs,
                                  unit="deg/h", **kw)
 
     try:
+        # θ once for the table, the OADEV of the fit and the trend check (same numbers)
+        theta = data if series is not None else angle_series(data, tau0, input_kind=in_kind,
+                                                              segments=segs)
         table_dev = deviation(dev, tau_spec)
     except AnalysisError as e:
         raise AnalysisError(f"{source} [{name}]: {e}") from None

@@ -131,7 +131,7 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
     events: list[OutlierEvent] = []
     count = 0
     if scale > 0:
-        thr = kk * scale
+        thr = kk * scale * (1.0 - 1e-12)  # candidates; then |r/scale| > k exactly as whole
         if cth is None or thr < cth:  # the provisional cut was too high: a second pass
             cand_i, cand_r = [], []
             for g, r in _residual_batches(series, means, window):
@@ -141,7 +141,7 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
                     cand_r.append(r[big])
         idx = np.concatenate(cand_i) if cand_i else np.zeros(0, np.int64)
         val = np.concatenate(cand_r) if cand_r else np.zeros(0)
-        keep = np.abs(val) > thr
+        keep = np.abs(val / scale) > kk
         idx, z = idx[keep], val[keep] / scale
         count = int(idx.size)
         if count:

@@ -176,3 +176,19 @@ def test_converted_file_with_contradicting_time_is_a_clean_error(tmp_path, small
     with pytest.raises(Exception) as ei:
         st.stream_log(str(tmp_path / "bad.parquet"), min_rows=1)
     assert "row 30001" in str(ei.value) and "gyrotest ingest" in str(ei.value)
+
+
+def test_pulse_output_streamed_as_increments(tmp_path, small_batches):
+    """Counts (angle increments, S0 = 0.5 arcsec/pulse) stream into θ of increments."""
+    rng = np.random.default_rng(2)
+    t = (np.arange(30_000) + 1) * TAU0
+    p = tmp_path / "cnt.parquet"
+    pq.write_table(pa.table({"t_s": t, "pulses": rng.poisson(50, t.size).astype(float)}), p,
+                   row_group_size=7_000)
+    ov = {"gyro": {"output_kind": "counts", "scale_factor": 0.5}, "columns": {"output": "pulses"}}
+    s = st.stream_log(str(p), overrides=ov, min_rows=1)
+    assert s.series["pulses"].input_kind == "increment"
+    a, b = analyse_allan(read_log(p, overrides=ov)), analyse_allan(s)
+    assert a.axes[0].input_note == b.axes[0].input_note
+    np.testing.assert_allclose(b.axes[0].dev.sigma, a.axes[0].dev.sigma, rtol=1e-9)
+    assert np.array_equal(a.axes[0].dev.alpha, b.axes[0].dev.alpha)

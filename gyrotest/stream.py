@@ -219,6 +219,14 @@ def stream_log(path: str, *, profile=None, overrides: dict | None = None,
     return log
 
 
+def _progress(done: int, total: int) -> None:
+    """The CLI's progress hook (:data:`gyrotest.noise.deviations.PROGRESS`), per batch."""
+    from .noise import deviations
+
+    if deviations.PROGRESS is not None:
+        deviations.PROGRESS(min(done, total), total, "reading rows")
+
+
 def _fixed_mmap_threshold() -> None:
     """glibc serves blocks ≥ 1 MiB from mmap from now on (its threshold otherwise grows to
     32 MiB after the first frees, and the freed batch buffers of every later step would stay
@@ -318,6 +326,7 @@ def _stream_converted(pf, rows: int, source: str, gmeta: dict, prof) -> Streamed
             if bad:
                 raise InputError(f"{source}: {bad}; re-create the file with 'gyrotest ingest'")
             t_prev = float(t[-1])
+        _progress(pos + k, rows)
         inside = [c - pos for c in cuts if pos < c < pos + k]
         for axis, c in rate_cols.items():
             x = float64_values(batch.column(c))
@@ -458,6 +467,7 @@ def _stream_plain(pf, rows: int, source: str, prof) -> StreamedLog | None:
                 s = c
             it.append(x[s:], sc)
         n += t.size - skip
+        _progress(n + dups, rows)
         t_off += float(t[-1])
         prev = tab.slice(tab.num_rows - 1, 1)
     if n < 2 or gyro is None:

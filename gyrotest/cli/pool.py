@@ -47,20 +47,23 @@ def deviation_progress(min_s: float = 2.0):
         yield
         return
     with contextlib.ExitStack() as stack:
-        state: dict[str, Any] = {"t0": None, "advance": None}
+        state: dict[str, Any] = {"t0": None, "advance": None, "done": 0, "kind": None}
 
         def hook(done: int, total: int, kind: str) -> None:
             now = time.monotonic()
-            if done == 1 or state["t0"] is None:
-                state["t0"] = now
-            if state["advance"] is None and now - state["t0"] >= min_s and done < total:
-                state["advance"] = stack.enter_context(progress(f"{kind.upper()} τ", total))
-                state["advance"](done)
+            if state["t0"] is None or done <= state["done"] or kind != state["kind"]:
+                state.update(t0=now, done=0, kind=kind)  # a new loop
+            label = kind if " " in kind else f"{kind.upper()} τ"  # "reading rows", "OADEV τ"
+            if state["advance"] is None:
+                if now - state["t0"] >= min_s and done < total:
+                    state["advance"] = stack.enter_context(progress(label, total))
+                    state["advance"](done, description=label)
+                state["done"] = done
                 return
-            if state["advance"] is not None:
-                state["advance"](1, total=total, description=f"{kind.upper()} τ")
-                if done == total:
-                    state["advance"](-total)  # reset for the next loop (transient bar)
+            state["advance"](done - state["done"], total=total, description=label)
+            state["done"] = done
+            if done == total:
+                state["advance"](-total)  # reset for the next loop (transient bar)
 
         old, deviations.PROGRESS = deviations.PROGRESS, hook
         try:

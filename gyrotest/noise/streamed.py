@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from . import deviations
 from .deviations import AngleSeries
 from .outliers import (
     FALSE_ALARM,
@@ -111,6 +112,8 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
     p = np.zeros(5)  # Σ r^k, k = 0 … 4
     cth = None
     for g, r in _residual_batches(series, means, window):
+        if deviations.PROGRESS is not None:
+            deviations.PROGRESS(g + r.size, n, "spike check")
         off = (-g) % stride
         sample.append(r[off::stride].copy())
         if cth is None:

@@ -41,7 +41,7 @@ __all__ = ["SCALE_SAMPLE", "detect_outliers_series", "rate_prefixes", "rate_segm
            "welch_psd_series"]
 
 #: residuals kept for the robust scale (every s-th one beyond this count)
-SCALE_SAMPLE = 1 << 21
+SCALE_SAMPLE = 1 << 20
 #: samples per batch of the streamed spike check
 BATCH = 1 << 18
 

@@ -3,14 +3,18 @@
 10⁹ samples on a 24 GB machine). Run once by hand, never in CI:
 
     python benchmarks/bench_huge.py --samples 1e8            # writes /tmp/.../huge.parquet
-    python benchmarks/bench_huge.py --samples 1e7 --samples 1e8   # scaling
+    python benchmarks/bench_huge.py --samples 1e7 --samples 1e8 --whole   # scaling; and the
+        # same logs read whole (streaming off) in the same invocation, for the before/after
+    python benchmarks/bench_huge.py --samples 1e9 --dir /data/huge   # keep/reuse the files
 
 Method: a Parquet log (columns t_s, omega_dph; 100 Hz; white rate noise + rate random walk)
 is written row group by row group (2²⁰ rows each, never the whole record in memory), then
 ``gyrotest allan FILE --rate-unit deg/h --json`` (OADEV 10/decade + noise fit + diagnosis)
 runs in a fresh process; reported: wall and CPU time (getrusage of the child) and the child's
 peak resident memory (``ru_maxrss``) over the float64 record size (8 bytes × samples).
-Check ``free -g`` first: 10⁹ samples need the record (8 GB) several times over today.
+Logs of ≥ 2²² rows are streamed into the integrated angle (``gyrotest/stream.py``);
+``--whole`` also runs each log with streaming off (``GYROTEST_STREAM_MIN_ROWS``), i.e. read
+whole as before. Check ``free -g`` first: 10⁹ samples need 8 GB streamed, ≈ 6× that read whole.
 """
 
 from __future__ import annotations
@@ -48,39 +52,62 @@ def write_parquet(path: str, n: int, tau0: float = 0.01, seed: int = 1) -> None:
             w.write_table(pa.table({"t_s": t, "omega_dph": x}, schema=schema))
 
 
-def run_allan(path: str) -> dict:
+def run_allan(path: str, whole: bool = False) -> dict:
+    """One ``gyrotest allan`` process; its own peak RSS from ``/usr/bin/time -v`` when present
+    (``ru_maxrss`` of RUSAGE_CHILDREN is the largest child so far)."""
     cmd = [sys.executable, "-c", "from gyrotest.cli import main; main()", "-q", "allan", path,
            "--rate-unit", "deg/h", "--json"]
+    timer = os.path.exists("/usr/bin/time")
+    if timer:
+        cmd = ["/usr/bin/time", "-v", *cmd]
+    env = dict(os.environ)
+    if whole:
+        env["GYROTEST_STREAM_MIN_ROWS"] = str(10**15)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                       cwd=ROOT)
+                       cwd=ROOT, env=env)
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     if p.returncode:
         sys.exit(p.stderr)
+    rss = r1.ru_maxrss / 1024
+    if timer:
+        for line in p.stderr.splitlines():
+            if "Maximum resident set size" in line:
+                rss = int(line.split()[-1]) / 1024
     return {"wall": wall, "cpu": r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime,
-            "maxrss_mb": r1.ru_maxrss / 1024}  # the largest child so far (run sizes ascending)
+            "maxrss_mb": rss}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--samples", type=float, action="append", default=None)
     ap.add_argument("--keep", action="store_true", help="keep the Parquet files")
+    ap.add_argument("--dir", default=None, help="write the logs here and reuse existing ones "
+                                                "(implies --keep)")
+    ap.add_argument("--whole", action="store_true",
+                    help="also run each log read whole (streaming off), right after")
     a = ap.parse_args()
-    tmp = tempfile.mkdtemp(prefix="bench_huge_")
+    tmp = a.dir or tempfile.mkdtemp(prefix="bench_huge_")
+    keep = a.keep or a.dir is not None
     for n in sorted(int(s) for s in (a.samples or [1e8])):
         path = os.path.join(tmp, f"huge_{n:.0e}.parquet")
-        t0 = time.perf_counter()
-        write_parquet(path, n)
-        print(f"{n:.3g} samples: wrote {os.path.getsize(path) / 1e9:.2f} GB in "
-              f"{time.perf_counter() - t0:.0f} s (load {os.getloadavg()[0]:.1f})", flush=True)
-        r = run_allan(path)
+        if not os.path.exists(path):
+            t0 = time.perf_counter()
+            write_parquet(path, n)
+            print(f"{n:.3g} samples: wrote {os.path.getsize(path) / 1e9:.2f} GB in "
+                  f"{time.perf_counter() - t0:.0f} s", flush=True)
         rec = n * 8 / 2**20
-        print(f"  gyrotest allan: {r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU, peak RSS "
-              f"{r['maxrss_mb']:.0f} MB = {r['maxrss_mb'] / rec:.2f}× the float64 record "
-              f"({rec:.0f} MB)", flush=True)
-        if not a.keep:
+        for whole in ((False, True) if a.whole else (False,)):
+            load = os.getloadavg()[0]
+            r = run_allan(path, whole)
+            print(f"  {n:.3g} samples, {'read whole' if whole else 'streamed  '}: "
+                  f"{r['wall']:.1f} s wall, {r['cpu']:.1f} s CPU "
+                  f"({1e6 * r['cpu'] / n:.3f} µs/sample), peak RSS {r['maxrss_mb']:.0f} MB = "
+                  f"{r['maxrss_mb'] / rec:.2f}× the float64 record ({rec:.0f} MB); load "
+                  f"{load:.1f}", flush=True)
+        if not keep:
             os.remove(path)
 
 

@@ -75,6 +75,39 @@ def test_allan_on_plain_csv_imports_no_stats_signal_pandas(tmp_path):
                           "deg/h", "--json")
     for m in HEAVY:
         assert m not in mods, f"`gyrotest allan` imports {m}"
+    # the fit's NNLS and profile bounds are numpy (noise.numerics): scipy.optimize only when a
+    # shape parameter is optimised (markov/sine terms, e.g. tried by the diagnosis)
+    mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", str(f), "--rate-unit",
+                          "deg/h", "--json", "--no-diagnose")
+    assert "scipy.optimize" not in mods
+
+
+def test_numerics_match_scipy_optimize():
+    """The fit's NNLS and bracketed root (gyrotest.noise.numerics) against scipy.optimize."""
+    from scipy.optimize import brentq
+    from scipy.optimize import nnls as sp_nnls
+
+    from gyrotest.noise.numerics import nnls, root_bracketed
+
+    rng = np.random.default_rng(11)
+    for i in range(400):
+        m = int(rng.integers(3, 80))
+        n = int(rng.integers(1, min(m, 9) + 1))
+        A = rng.standard_normal((m, n))
+        if i % 2:  # positive, badly scaled columns as in the noise fit
+            A = np.abs(A) * rng.lognormal(0.0, 2.0, n)
+        b = rng.standard_normal(m) * 3
+        x_ref, r_ref = sp_nnls(A, b)
+        x, r = nnls(A, b, maxiter=50 * n)
+        assert np.max(np.abs(x - x_ref)) <= 1e-9 * max(1.0, np.max(np.abs(x_ref)))
+        assert r == pytest.approx(r_ref, rel=1e-9, abs=1e-12)
+    for f, a, b in [(lambda x: x**3 - 2, 0, 3), (lambda x: np.exp(x) - 10, -5, 10),
+                    (lambda x: np.tanh(50 * (x - 0.3)), -1, 2), (lambda x: np.log(x) + x, 0.01, 5),
+                    (lambda x: (x - 1) ** 5 * 1e3 + (x - 1), -3, 4)]:
+        assert root_bracketed(f, a, b, xtol=1e-6) == pytest.approx(brentq(f, a, b, xtol=1e-14),
+                                                                   abs=1e-6)
+    with pytest.raises(ValueError):
+        root_bracketed(lambda x: x * x + 1, -1, 1)
 
 
 @pytest.mark.parametrize("n,nperseg", [(1000, 64), (12345, 1024), (777, 17), (70_000, 4096)])

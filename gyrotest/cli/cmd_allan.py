@@ -127,7 +127,13 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
       gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
     """
-    from ..noise.analysis import allan_document, analyse_allan, parse_detrend, parse_taus
+    from ..noise.analysis import (
+        STREAM_DEVS,
+        allan_document,
+        analyse_allan,
+        parse_detrend,
+        parse_taus,
+    )
     from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
@@ -160,8 +166,13 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
                      for p in logs]
             results = [analyse_allan(g, env_model=env_model, **kw) for g in glogs]
         else:
+            # long Parquet logs are streamed into θ when no option needs the samples themselves
+            stream = (detrend in (None, "none") and outliers == "flag"
+                      and parse_duration(skip, what="--skip") <= 0
+                      and dev_kind in STREAM_DEVS)
             results = map_logs(  # one process per log with --jobs (identical results)
-                analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json, **kw)
+                analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
+                stream=stream, **kw)
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)

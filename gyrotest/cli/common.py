@@ -249,14 +249,23 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
     return {"columns": cols, "gyro": gyro, "site": site}
 
 
-def load_log(path: str, opts: dict, *, announce: bool = True):
-    """Read one log with the shared ingest options; prints the column choices as notes."""
+def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False):
+    """Read one log with the shared ingest options; prints the column choices as notes.
+    ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
+    (its angle series only; see that module)."""
     from ..ingest import read_log
     from ..profile import load_profile
 
     prof = load_profile(opts["profile"]) if opts.get("profile") else None
-    log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
-                   nan_policy=opts.get("nan_policy") or "error")
+    log = None
+    if stream:
+        from ..stream import stream_log
+
+        log = stream_log(path, profile=prof, overrides=ingest_overrides(opts),
+                         nan_policy=opts.get("nan_policy") or "error")
+    if log is None:
+        log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
+                       nan_policy=opts.get("nan_policy") or "error")
     if announce:
         for msg in log.notes:
             note(f"{log.source}: {msg}")
@@ -271,12 +280,13 @@ def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True)
     return naming_terms(lambda: load_log(path, opts, announce=announce), specs)
 
 
-def load_logs(paths: tuple[str, ...] | list[str], opts: dict, *, announce: bool = True) -> list:
+def load_logs(paths: tuple[str, ...] | list[str], opts: dict, *, announce: bool = True,
+              stream: bool = False) -> list:
     if not paths:
         raise InputError("no log file given")
     if sum(1 for p in paths if p == "-") > 1:
         raise InputError("stdin ('-') can be read only once")
-    return [load_log(p, opts, announce=announce) for p in paths]
+    return [load_log(p, opts, announce=announce, stream=stream) for p in paths]
 
 
 def with_ingest(func):

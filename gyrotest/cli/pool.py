@@ -47,20 +47,23 @@ def deviation_progress(min_s: float = 2.0):
         yield
         return
     with contextlib.ExitStack() as stack:
-        state: dict[str, Any] = {"t0": None, "advance": None}
+        state: dict[str, Any] = {"t0": None, "advance": None, "done": 0, "kind": None}
 
         def hook(done: int, total: int, kind: str) -> None:
             now = time.monotonic()
-            if done == 1 or state["t0"] is None:
-                state["t0"] = now
-            if state["advance"] is None and now - state["t0"] >= min_s and done < total:
-                state["advance"] = stack.enter_context(progress(f"{kind.upper()} τ", total))
-                state["advance"](done)
+            if state["t0"] is None or done <= state["done"] or kind != state["kind"]:
+                state.update(t0=now, done=0, kind=kind)  # a new loop
+            label = kind if " " in kind else f"{kind.upper()} τ"  # "reading rows", "OADEV τ"
+            if state["advance"] is None:
+                if now - state["t0"] >= min_s and done < total:
+                    state["advance"] = stack.enter_context(progress(label, total))
+                    state["advance"](done, description=label)
+                state["done"] = done
                 return
-            if state["advance"] is not None:
-                state["advance"](1, total=total, description=f"{kind.upper()} τ")
-                if done == total:
-                    state["advance"](-total)  # reset for the next loop (transient bar)
+            state["advance"](done - state["done"], total=total, description=label)
+            state["done"] = done
+            if done == total:
+                state["advance"](-total)  # reset for the next loop (transient bar)
 
         old, deviations.PROGRESS = deviations.PROGRESS, hook
         try:
@@ -69,26 +72,28 @@ def deviation_progress(min_s: float = 2.0):
             deviations.PROGRESS = old
 
 
-def _work(args: tuple[Callable, str, dict, dict]) -> tuple[Any, list[str]]:
-    fn, path, opts, kw = args
+def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]:
+    fn, path, opts, kw, stream = args
     from ..noise import deviations
     from .common import load_log
 
     deviations.PROGRESS = None  # a worker process draws no bar
 
-    log = load_log(path, opts, announce=False)
+    log = load_log(path, opts, announce=False, stream=stream)
     return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]
 
 
 def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None = None,
-             announce: bool = True, **kw) -> list:
+             announce: bool = True, stream: bool = False, **kw) -> list:
     """``[fn(load_log(p), **kw) for p in paths]``, on ``jobs`` worker processes when there is
-    more than one log. ``fn`` must be a module-level function (it is pickled by name)."""
+    more than one log. ``fn`` must be a module-level function (it is pickled by name).
+    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.stream`)."""
     from .common import load_logs, note, progress
 
     n_jobs = min(jobs or default_jobs(), len(paths))
     if n_jobs < 2 or "-" in paths:
-        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce)]
+        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce,
+                                                   stream=stream)]
     from concurrent.futures import ProcessPoolExecutor
 
     method = "fork" if sys.platform.startswith("linux") else None
@@ -96,7 +101,7 @@ def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None
     out = []
     with (progress(f"{len(paths)} logs on {n_jobs} processes", total=len(paths)) as advance,
           ProcessPoolExecutor(max_workers=n_jobs, mp_context=ctx) as ex):
-        for res, notes in ex.map(_work, [(fn, p, opts, kw) for p in paths]):
+        for res, notes in ex.map(_work, [(fn, p, opts, kw, stream) for p in paths]):
             if announce:
                 for m in notes:
                     note(m)

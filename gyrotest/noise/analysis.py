@@ -35,7 +35,7 @@ import numpy as np
 from ..data import GyroLog
 from ..errors import AnalysisError, InputError
 from ..units import format_duration, parse_duration
-from .deviations import DEVIATION_KINDS, DeviationResult, compute_deviation
+from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
     MIN_EDF,
@@ -59,6 +59,12 @@ from .spectral import (
     welch_psd,
 )
 from .warnings import KrobkaWarning, krobka_checks
+
+#: samples of a streamed log's rate rebuilt for the axis cross-correlation
+STREAM_PREFIX = 1 << 24
+#: deviations a streamed log (θ only) supports: those computed from θ here
+STREAM_DEVS = ("oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev",
+                "hkdev")
 
 __all__ = ["AllanAnalysis", "AxisAnalysis", "allan_document", "analyse_allan", "input_kind_of",
            "parse_taus"]
@@ -347,6 +353,52 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                          "longest τ)"}
 
 
+def _outliers_streamed(log, name: str):
+    """The spike check of a streamed log's axis (flag mode: report and warn only)."""
+    from .streamed import detect_outliers_series
+
+    rep = detect_outliers_series(log.series[name], log.means[name], log.tau0, channel=name)
+    return _outlier_report(rep, "flag"), None if not rep.found else _outlier_warning(rep, "flag")
+
+
+def _cross_streamed(log, names, notes: list[str]):
+    """Axis cross-correlation of a streamed log from the first samples of its segments."""
+    from .streamed import rate_prefixes
+
+    rates, segs, left = {}, None, 0
+    for a in names:
+        rates[a], segs, left = rate_prefixes(log.series[a], log.means[a],
+                                             per_segment=STREAM_PREFIX, total=STREAM_PREFIX)
+    if left:
+        notes.append(f"axis cross-correlation from the first {log.n - left} samples (streamed "
+                     "log)")
+    return cross_correlation(rates, log.tau0, segments=segs)
+
+
+def _outlier_report(rep, mode: str) -> dict[str, Any]:
+    info = rep.to_dict()
+    info["mode"] = mode
+    return info
+
+
+def _outlier_warning(rep, mode: str) -> KrobkaWarning:
+    what = {"flag": "analysed as recorded (--outliers remove or robust to treat them)",
+            "remove": "each replaced by its running median before the analysis "
+                      "(--outliers remove)",
+            "robust": "each clipped to the threshold before the analysis "
+                      "(--outliers robust)"}[mode]
+    info = rep.to_dict()
+    return KrobkaWarning(
+        code="OUTLIERS", title="spikes in the rate",
+        message=f"{rep.summary()}; {what}",
+        reason="isolated spikes (data link, ADC, shock) are not gyro noise: one 40σ sample "
+               "in 10^6 raises the short-τ Allan deviation and N; detected with a Hampel "
+               "filter (running median, robust scale; Pearson, IEEE Trans. Control Syst. "
+               "Technol. 10, 2002)",
+        evidence={"n_outliers": rep.n_outliers, "n_events": len(rep.events),
+                  "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
+
+
 def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
     """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
     None, the rate after the ``mode`` treatment)."""
@@ -354,24 +406,10 @@ def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
 
     rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
                           segments=segs)
-    info = rep.to_dict()
-    info["mode"] = mode
+    info = _outlier_report(rep, mode)
     warn = None
     if rep.found:
-        what = {"flag": "analysed as recorded (--outliers remove or robust to treat them)",
-                "remove": "each replaced by its running median before the analysis "
-                          "(--outliers remove)",
-                "robust": "each clipped to the threshold before the analysis "
-                          "(--outliers robust)"}[mode]
-        warn = KrobkaWarning(
-            code="OUTLIERS", title="spikes in the rate",
-            message=f"{rep.summary()}; {what}",
-            reason="isolated spikes (data link, ADC, shock) are not gyro noise: one 40σ sample "
-                   "in 10^6 raises the short-τ Allan deviation and N; detected with a Hampel "
-                   "filter (running median, robust scale; Pearson, IEEE Trans. Control Syst. "
-                   "Technol. 10, 2002)",
-            evidence={"n_outliers": rep.n_outliers, "n_events": len(rep.events),
-                      "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
+        warn = _outlier_warning(rep, mode)
         rate = apply_outliers(rate, rep, mode, segments=segs)
     return info, warn, rate
 
@@ -408,6 +446,10 @@ def _long_taus(tau: np.ndarray, count: int = 8) -> list[float]:
     t = np.asarray(tau, float)
     sel = t[t >= t.max() / 30.0]
     return sel[-count:].tolist()
+
+
+def _skip_seconds(skip: float | str) -> float:
+    return parse_duration(skip, what="--skip") if isinstance(skip, str) else float(skip)
 
 
 def _skip_warmup(log: GyroLog, skip: float | str) -> GyroLog:
@@ -500,7 +542,13 @@ def analyse_allan(
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
     """
-    log = _skip_warmup(log, skip_s)
+    streamed = getattr(log, "series", None) is not None  # gyrotest.stream.StreamedLog: θ only
+    if streamed and (_skip_seconds(skip_s) > 0 or detrend not in (None, "none")
+                     or env_model is not None or outliers != "flag"
+                     or dev not in STREAM_DEVS):
+        raise InputError(f"{log.source}: a streamed log supports no --skip, --detrend, --model, "
+                         f"--outliers {outliers} or --dev {dev}; read it whole")
+    log = _skip_warmup(log, skip_s) if not streamed else log
     if dev not in DEVIATION_KINDS:
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)
@@ -533,7 +581,7 @@ def analyse_allan(
     quantum = log.gyro.angle_quantum_arcsec
     names = list(axes) if axes else log.axes
     for a in names:
-        if a not in log.rates:
+        if a not in log.axes:
             raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
     results: list[AxisAnalysis] = []
     rates_used: dict[str, np.ndarray] = {}
@@ -551,6 +599,21 @@ def analyse_allan(
                      f"{model_info['drift_rms_dph']:.4g} deg/h, peak-to-peak "
                      f"{model_info['drift_p2p_dph']:.4g} deg/h)")
     for name in names:
+        if streamed:
+            series, means = log.series[name], log.means[name]
+            out_info, out_warn = _outliers_streamed(log, name)
+            results.append(_analyse_axis(
+                name, None, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
+                tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
+                confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+                run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
+                horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
+                record_s=log.duration_s, det_info=None, source=log.source, fit_model=fit_model,
+                ci=ci, series=series, means=means))
+            results[-1].outliers = out_info
+            if out_warn is not None:
+                results[-1].warnings.insert(0, out_warn)
+            continue
         rate = np.asarray(log.rates[name], dtype=np.float64)
         det_info = None
         out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
@@ -570,7 +633,9 @@ def analyse_allan(
         if out_warn is not None:
             results[-1].warnings.insert(0, out_warn)
     cross = None
-    if len(names) > 1:
+    if len(names) > 1 and streamed:
+        cross = _cross_streamed(log, names, notes)
+    elif len(names) > 1:
         cross = cross_correlation(rates_used, log.tau0, segments=segs)
     settings = {
         "deviation": dev, "taus": tau_spec if isinstance(tau_spec, str) else list(tau_spec),
@@ -587,16 +652,24 @@ def analyse_allan(
 def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau_spec, keys,
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
-                  source, fit_model=True, ci="stable32") -> AxisAnalysis:
+                  source, fit_model=True, ci="stable32", series=None,
+                  means=None) -> AxisAnalysis:
     notes: list[str] = []
-    data = rate * tau0 if in_kind == "increment" else rate
+    if series is not None:  # a streamed log: θ is all there is (the rate rebuilt from it)
+        data = series
+    else:
+        data = rate * tau0 if in_kind == "increment" else rate
 
     def deviation(kind: str, grid, **kw) -> DeviationResult:
-        return compute_deviation(data, tau0, input_kind=in_kind, kind=kind, taus=grid,
+        src = data if kind not in STREAM_DEVS else theta
+        return compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
                                  confidence=confidence, stop_ratio=stop_ratio, segments=segs,
                                  unit="deg/h", **kw)
 
     try:
+        # θ once for the table, the OADEV of the fit and the trend check (same numbers)
+        theta = data if series is not None else angle_series(data, tau0, input_kind=in_kind,
+                                                              segments=segs)
         table_dev = deviation(dev, tau_spec)
     except AnalysisError as e:
         raise AnalysisError(f"{source} [{name}]: {e}") from None
@@ -630,15 +703,28 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     lines: list[SpectralLine] = []
     acf = None
     if spectral:
+        f_min = 1.0 / max(float(fit_dev.tau.max()), tau0)
         try:
-            psd = welch_psd(rate, tau0, segments=segs, f_min=1.0 / max(float(fit_dev.tau.max()),
-                                                                       tau0))
+            if series is not None:
+                from .streamed import welch_psd_series
+
+                psd = welch_psd_series(series, means, tau0, f_min=f_min)
+            else:
+                psd = welch_psd(rate, tau0, segments=segs, f_min=f_min)
             lines = find_lines(psd)
         except ValueError:
             psd = None
         longest = max(segs, key=lambda s: s[1] - s[0])
-        acf = autocorrelation(rate[longest[0]:longest[1]], tau0, max_samples=1 << 20,
-                              max_lag=min(100_000, (longest[1] - longest[0]) // 10))
+        n_long = longest[1] - longest[0]
+        if series is not None:
+            from .streamed import rate_segment
+
+            j = segs.index(longest)
+            x_acf = rate_segment(series, means, j, 0, min(n_long, 1 << 20))
+        else:
+            x_acf = rate[longest[0]:longest[1]]
+        acf = autocorrelation(x_acf, tau0, max_samples=1 << 20,
+                              max_lag=min(100_000, n_long // 10))
     hints = [ln.f_hz for ln in lines]
     fit = None
     if fit_model:

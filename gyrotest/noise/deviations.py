@@ -1017,7 +1017,8 @@ def compute_deviation(
 
     Parameters
     ----------
-    data : 1-D array of rate, increment or angle samples (no NaN: use ``segments`` for gaps).
+    data : 1-D array of rate, increment or angle samples (no NaN: use ``segments`` for gaps),
+        or an :class:`AngleSeries` already built from them (then ``segments`` is ignored).
     tau0 : sample interval, s.
     input_kind : "rate" | "increment" | "angle" (required; see the module docstring).
     kind : one of :data:`DEVIATION_KINDS` (default "oadev", the IEEE 952 Annex C estimator).
@@ -1054,7 +1055,13 @@ def compute_deviation(
     _check_kind(input_kind)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
-    series = angle_series(data, tau0, input_kind=input_kind, segments=segments)
+    if isinstance(data, AngleSeries):  # θ already built (a streamed log): no copy
+        series = data
+        if series.input_kind != input_kind or not math.isclose(series.tau0, tau0):
+            raise InputError(f"angle series of {series.input_kind} input at τ0 = {series.tau0:g} "
+                             f"s given for {input_kind} input at τ0 = {tau0:g} s")
+    else:
+        series = angle_series(data, tau0, input_kind=input_kind, segments=segments)
     parts = series.parts()
     grid = tau_grid(taus, n_data=series.n_longest, tau0=series.tau0, kind=kind, stop_ratio=stop_ratio)
     notes = list(series.notes) + list(grid.notes)

@@ -71,11 +71,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import optimize, special
-from scipy.optimize import nnls
+from scipy import special
 
 from ..errors import AnalysisError, InputError
 from ..units import format_number
+from .numerics import nnls, root_bracketed  # numpy: scipy.optimize only for shape parameters
 from .terms import (
     BIAS_INSTABILITY_PLATEAU,
     blue_markov_derivative_avar,
@@ -139,6 +139,13 @@ UNCERTAINTY_METHOD = ("1 sigma from the sandwich covariance A^-1 B A^-1 of that 
 STATUS_RULE = ("identified when dropping the term raises -2 log-likelihood/design effect by >= "
                "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue); else upper bound only (printed "
                "with '<=')")
+
+
+def _optimize():
+    """scipy.optimize, imported on first use (≈ 0.15 s)."""
+    from scipy import optimize
+
+    return optimize
 
 
 def parse_terms(spec: str | Sequence[str] | None) -> list[str]:
@@ -475,7 +482,7 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
             cols[i].shape = math.exp(v)
             return _solve_state(eng, [cols[j] for j in active]).D
 
-        res = optimize.minimize_scalar(f1, bounds=(max(lg - step, math.log(col.lo)),
+        res = _optimize().minimize_scalar(f1, bounds=(max(lg - step, math.log(col.lo)),
                                                    min(lg + step, math.log(col.hi))),
                                        method="bounded", options={"xatol": 1e-4})
         cols[i].shape = math.exp(res.x) if res.fun <= best[0] else best[1]
@@ -492,7 +499,7 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
             return _solve_state(eng, cols).D
 
         D0 = fm(x0)
-        res = optimize.minimize(fm, x0, method="Nelder-Mead",
+        res = _optimize().minimize(fm, x0, method="Nelder-Mead",
                                 options={"xatol": 1e-4, "fatol": 1e-6, "maxiter": 400})
         v = np.clip(res.x, lo, hi) if res.fun < D0 else x0
         for k, i in enumerate(nl):
@@ -517,11 +524,11 @@ def _refine_shapes(eng: _Engine, cols_in: list[_Col]) -> _State:
     x0 = np.array([math.log(cols[i].shape) for i in nl])
     D0 = fm(x0)
     if len(nl) == 1:
-        res = optimize.minimize_scalar(lambda v: fm(np.array([v])), bounds=(lo[0], hi[0]),
+        res = _optimize().minimize_scalar(lambda v: fm(np.array([v])), bounds=(lo[0], hi[0]),
                                        method="bounded", options={"xatol": 1e-3})
         best = np.array([res.x]) if res.fun < D0 else x0
     else:
-        res = optimize.minimize(fm, x0, method="Nelder-Mead",
+        res = _optimize().minimize(fm, x0, method="Nelder-Mead",
                                 options={"xatol": 1e-3, "fatol": 1e-4, "maxiter": 200})
         best = np.clip(res.x, lo, hi) if res.fun < D0 else x0
     fm(best)
@@ -1265,7 +1272,7 @@ def _upper_bound(eng: _Engine, st: _State, j: int, deff: float) -> float:
             elif excess(lo) > 0:  # only if c0 is not the optimum: fall back to it
                 cu = max(c0, c_hard * 1e-12)
             else:
-                cu = math.exp(optimize.brentq(excess, lo, hi, xtol=1e-3))
+                cu = math.exp(root_bracketed(excess, lo, hi, xtol=1e-5))
         except (ValueError, RuntimeError):
             cu = c_hard
         val = _reported(col.key, cu, shp)[_MAIN[col.key]]

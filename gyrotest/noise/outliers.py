@@ -82,10 +82,11 @@ class OutlierReport:
     excess_kurtosis: float
     unit: str = "deg/h"
     notes: list[str] = field(default_factory=list)
+    count: int | None = None  # set when ``mask`` is not kept (a streamed log)
 
     @property
     def n_outliers(self) -> int:
-        return int(self.mask.sum())
+        return int(self.mask.sum()) if self.count is None else self.count
 
     @property
     def found(self) -> bool:
@@ -150,19 +151,35 @@ def _running_median(x: np.ndarray, window: int) -> np.ndarray:
     return out
 
 
+def _median_quantile(a: np.ndarray, q: float) -> tuple[float, float]:
+    """(np.median(a), np.quantile(a, q)) — the same numbers (numpy's linear interpolation,
+    reproduced) from one in-place partition of ``a`` instead of two partitioned copies."""
+    n = a.size
+    vi = (n - 1) * q  # numpy's virtual index, method="linear"
+    lo = min(max(int(math.floor(vi)), 0), n - 1)
+    hi = min(lo + 1, n - 1)
+    kth = sorted({(n - 1) // 2, n // 2, lo, hi})
+    a.partition(kth)
+    med = float(a[n // 2]) if n % 2 else float((a[n // 2 - 1] + a[n // 2]) / 2.0)
+    x0, x1, g = float(a[lo]), float(a[hi]), vi - math.floor(vi)
+    d = x1 - x0
+    quant = x1 - d * (1 - g) if g >= 0.5 else x0 + d * g
+    return med, quant
+
+
 def _scale(r: np.ndarray) -> tuple[float, str]:
     a = np.abs(r)
-    med = float(np.median(a))
+    med, q_abs = _median_quantile(a, TAIL_Q)
     if med > 0:
         s_mad = 1.4826 * med
-        s_q = float(np.quantile(a, TAIL_Q)) / Z_TAIL
+        s_q = q_abs / Z_TAIL
         if s_q > TAIL_RATIO_NOTE * s_mad:
             return s_q, (f"99 % quantile of |residual|/2.576 (heavy-bodied noise: "
                          f"{s_q / s_mad:.3g}× 1.4826·MAD)")
         return max(s_mad, s_q), "max(1.4826·MAD, 99 % quantile of |residual|/2.576)"
     mad_mean = float(np.mean(np.abs(r - np.mean(r))))
     if mad_mean > 0:
-        s_q = float(np.quantile(a, TAIL_Q)) / Z_TAIL
+        s_q = q_abs / Z_TAIL
         return max(math.sqrt(math.pi / 2.0) * mad_mean, s_q), (
             "max(√(π/2)·mean absolute deviation, 99 % quantile of |residual|/2.576) (MAD = 0: "
             "coarse quantization)")
@@ -183,19 +200,19 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
     n = x.size
     window = max(3, int(window) | 1)
     segs = segments or [(0, n)]
-    med = np.empty_like(x)
+    r = np.empty_like(x)  # the running median, then x − median in place
     for a, b in segs:
         w = min(window, (b - a) | 1) if b - a >= 3 else 1
-        med[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
-    r = x - med
+        r[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
+    np.subtract(x, r, out=r)
     scale, how = _scale(r)
     kk = threshold_k(n, false_alarm, k_min) if k is None else float(k)
     if scale <= 0:
         mask = np.zeros(n, dtype=bool)
-        z = np.zeros(n)
-    else:
-        z = r / scale
-        mask = np.abs(z) > kk
+    else:  # |r/scale| > kk, without a full-size z array
+        mask = np.abs(r) > kk * scale * (1.0 - 1e-12)  # a superset; the exact test below
+        cand = np.flatnonzero(mask)
+        mask[cand] = np.abs(r[cand] / scale) > kk
     events: list[OutlierEvent] = []
     if mask.any():
         idx = np.flatnonzero(mask)
@@ -203,16 +220,19 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
         starts = np.concatenate([[idx[0]], idx[breaks + 1]])
         stops = np.concatenate([idx[breaks] + 1, [idx[-1] + 1]])
         for a, b in zip(starts, stops):
-            seg = z[a:b]
+            seg = r[a:b] / scale
             j = int(np.argmax(np.abs(seg)))
             events.append(OutlierEvent(int(a), int(b), float(t0 + a * tau0), float(seg[j])))
-    rc = r[~mask] if scale > 0 else r
+    n_clean = n - int(mask.sum()) if scale > 0 else n
     kurt = math.nan
-    if r.size > 3 and float(np.var(r)) > 0:
-        rr = r - r.mean()
-        kurt = float(np.mean(rr**4) / np.mean(rr**2) ** 2 - 3.0)
+    if r.size > 3:
+        r -= r.mean()  # r is not needed any more: central moments in place
+        m2 = float(np.dot(r, r)) / n
+        if m2 > 0:
+            np.multiply(r, r, out=r)
+            kurt = float(np.dot(r, r) / n / m2 ** 2 - 3.0)
     notes = []
-    if scale > 0 and rc.size and not mask.any() and math.isfinite(kurt) and kurt > 10:
+    if scale > 0 and n_clean and not mask.any() and math.isfinite(kurt) and kurt > 10:
         notes.append(f"heavy tails without isolated spikes (excess kurtosis {kurt:.3g})")
     return OutlierReport(channel=channel, n=n, scale=scale, scale_method=how, k=kk,
                          window=window, mask=mask, events=events, excess_kurtosis=kurt,

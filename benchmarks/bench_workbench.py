@@ -478,7 +478,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                 continue
             bu = _resid(mags[e.name]["block"], X_base)
             rs = []
-            for lab, x in contrib.items():
+            for x in contrib.values():
                 xu = _resid(x, X_base)
                 rs.append(max(_corr(xu, bu), _corr(xu, comb) if comb is not None else 0.0))
             t["equiv_r"] = max(rs) if rs else None

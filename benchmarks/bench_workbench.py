@@ -414,7 +414,8 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                 break
             top = found[0]
             if top.replaces:
-                terms = [s for s in terms if s.label != top.replaces]
+                gone = set(top.replaces.split("; "))
+                terms = [s for s in terms if s.label not in gone]
             terms = terms + [top.spec]
         else:
             stage = "final fit"

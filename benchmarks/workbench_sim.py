@@ -65,7 +65,9 @@ Method
    exist: ``Tlag(c)``, ``warmup``, ``sin``, ``Hx,Hy,Hz``). ``accept`` lists the candidate names
    (``key(channels)``) that name the effect correctly, including the generic channel forms
    (``chan``, ``chan2``, ``dchan``, ``chanlag``, ``dchanlag``, ``chanprod``, ``chanabs``) and
-   the new field/acceleration keys (``Hsq``, ``Hprod``, ``Hmag2``, ``gprod``, ``dTlagdt``);
+   the new field/acceleration keys (``Hsq``, ``Hprod``, ``Hmag2``, ``gprod``, ``dTlagdt``;
+   ``Hvec`` and ``Hquad``, every field axis at once, which represent a field effect exactly
+   whatever the rotation);
    ``sin``, ``hyst``, ``ramp`` and ``warmup`` are never accepted for a channel-driven effect.
 
 Things the simulator deliberately does not model: the earth-rate change when a tilt table
@@ -786,6 +788,7 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
         for j in run.moving_axes:
             if abs(wc[j]) >= 0.5 * np.max(np.abs(wc[run.moving_axes])):
                 acc += [f"H{'xyz'[j]}({run.field_cols[j]})", f"chan({run.field_cols[j]})"]
+        acc.append("Hvec")  # every field axis at once: exact for any rotation
         user = ",".join(f"H{'xyz'[j]}({run.field_cols[j]})" for j in run.moving_axes)
         return [Effect(f"field sensitivity (mostly {'xyz'[i]})", "Hlin", f"hlin:{expr}", user,
                        acc, signal=x, params={"weights_coil_frame": wc.tolist()})]
@@ -794,7 +797,7 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
         wc = run.rot[i, :]  # gyro-frame component i of R B
         x, expr = _field_combo(run, wc / 100.0)
         col = run.field_cols[i]
-        acc = [f"Hsq({col})", f"chan2({col})"]
+        acc = [f"Hsq({col})", f"chan2({col})", "Hquad"]  # Hquad: exact for any rotation
         if len(run.moving_axes) == 1:
             acc.append("Hmag2")
         return [Effect(f"field squared along {'xyz'[i]}", "Hsq", f"hsq:{expr}**2",
@@ -802,7 +805,7 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
     if key == "Hmag2":
         x = (run.field_true ** 2).sum(axis=0) / 1e4
         expr = "hmag:(" + " + ".join(f"field.{c}**2" for c in run.field_cols) + ")/10000"
-        acc = ["Hmag2"]
+        acc = ["Hmag2", "Hquad"]
         if len(run.moving_axes) == 1:
             col = run.field_cols[run.moving_axes[0]]
             acc += [f"Hsq({col})", f"chan2({col})"]
@@ -815,7 +818,7 @@ def _effect(run: _Run, cls: str, rng: np.random.Generator) -> list[Effect]:
         ci, cj = run.field_cols[i], run.field_cols[j]
         expr = f"hprod:{ei}*{ej}"
         return [Effect(f"field product {'xyz'[i]}{'xyz'[j]}", "Hprod", expr, expr,
-                       [f"Hprod({ci},{cj})", f"chanprod({ci},{cj})"], library=False,
+                       [f"Hprod({ci},{cj})", f"chanprod({ci},{cj})", "Hquad"], library=False,
                        signal=xi * xj - (xi * xj).mean())]
     if key in ("g", "g2"):
         c = chans[0]

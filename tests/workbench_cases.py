@@ -170,6 +170,7 @@ def user_loop(wd, base: list[str], max_steps: int = 5):
             steps.append((d, None))
             break
         top = d.found[0]
-        specs = [s for s in specs if s.label != top.replaces] + [top.spec]
+        gone = set(top.replaces.split("; ")) if top.replaces else set()
+        specs = [s for s in specs if s.label not in gone] + [top.spec]
         steps.append((d, top.spec))
     return steps, specs

@@ -111,6 +111,34 @@ def field_magnitude_square(components_ut: list[np.ndarray], h0_ut: float = H0_UT
     return sum((np.asarray(c, float) / h0_ut) ** 2 for c in components_ut)
 
 
+def field_vector(components_ut: list[np.ndarray], h0_ut: float = H0_UT) -> np.ndarray:
+    """First-order magnetic sensitivity along every axis at once: a gyro whose axes are not
+    the coils' (or a field not fixed in the gyro frame) sees each coil through a rotation, so
+    one fitted sensitivity per component is needed.
+
+    Formula: columns H_x/H0, H_y/H0, H_z/H0 (H0 = 100 uT); Δω = Σ_i w_i·H_i/H0. Units:
+    dimensionless; coefficients deg/h per 100 uT. Source: Antonova & Matveev eq. (2), m = 1,
+    with the sensitivity vector w = R·w_gyro of a rotated frame.
+    """
+    return np.column_stack([np.asarray(c, float) / h0_ut for c in components_ut])
+
+
+def field_quadratic(components_ut: list[np.ndarray], h0_ut: float = H0_UT) -> np.ndarray:
+    """Full second-order magnetic sensitivity: every square and cross product of the
+    components, which a rotated frame mixes (H_a·H_b of the gyro's own axes is a combination
+    of all H_i·H_j of the coil axes).
+
+    Formula: columns H_i·H_j/H0² for i ≤ j (xx, yy, zz, xy, xz, yz for three components);
+    Δω = Σ_{i≤j} w_ij·H_i·H_j/H0². Units: dimensionless; coefficients deg/h per (100 uT)².
+    Source: Antonova & Matveev eq. (2), m = 2, for a symmetric second-order tensor in a
+    rotated frame.
+    """
+    c = [np.asarray(x, float) / h0_ut for x in components_ut]
+    cols = [x * x for x in c]
+    cols += [c[i] * c[j] for i in range(len(c)) for j in range(i + 1, len(c))]
+    return np.column_stack(cols)
+
+
 def acceleration_product(g_a: np.ndarray, g_b: np.ndarray) -> np.ndarray:
     """Anisoelastic (g·g) sensitivity between two acceleration components.
 
@@ -194,6 +222,10 @@ def _build(frame: EnvFrame, spec: TermSpec, theta: dict, refs: Refs) -> np.ndarr
                           refs.h0_ut)
     elif k == "Hmag2":
         x = field_magnitude_square(list(frame.field_uT.values()), refs.h0_ut)
+    elif k == "Hvec":
+        return field_vector([frame.field_uT[c] for c in spec.channels], refs.h0_ut)
+    elif k == "Hquad":
+        return field_quadratic([frame.field_uT[c] for c in spec.channels], refs.h0_ut)
     elif k == "gprod":
         x = acceleration_product(_vals(frame, spec, 0), _vals(frame, spec, 1))
     elif k == "chan":
@@ -251,6 +283,24 @@ _reg(Effect("Hprod", "magnetic cross term (second order)", "H_i·H_j/H0²", ("w_
 _reg(Effect("Hmag2", "field magnitude squared (second order)", "|H|²/H0²", ("w_Hmag2",),
             "deg/h per (100 uT)^2", "Antonova–Matveev eq.(2), m = 2 in |H|", "fieldall",
             field_magnitude_square, build=_build))
+def _vec_names(chans: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(f"w[{c}]" for c in chans)
+
+
+def _quad_names(chans: tuple[str, ...]) -> tuple[str, ...]:
+    sq = [f"w[{c}^2]" for c in chans]
+    return tuple(sq + [f"w[{chans[i]}*{chans[j]}]" for i in range(len(chans))
+                       for j in range(i + 1, len(chans))])
+
+
+_reg(Effect("Hvec", "magnetic sensitivity along every field axis (gyro axes not the coils')",
+            "H_i/H0 for each listed field channel", ("w_H",), "deg/h per 100 uT",
+            "Antonova–Matveev eq.(2), m = 1, in a rotated frame", "fieldlist", field_vector,
+            build=_build, coef_names_fn=_vec_names))
+_reg(Effect("Hquad", "full second-order magnetic sensitivity (rotated axes)",
+            "H_i·H_j/H0², i ≤ j, of the listed field channels", ("w_HH",),
+            "deg/h per (100 uT)^2", "Antonova–Matveev eq.(2), m = 2, in a rotated frame",
+            "fieldlist", field_quadratic, build=_build, coef_names_fn=_quad_names))
 _reg(Effect("gprod", "anisoelastic g·g sensitivity", "g_i·g_j", ("w_gg",), "deg/h/g^2",
             "IEEE 952 §8.3; Antonova–Matveev eq.(1), m = 2", "any2", acceleration_product,
             build=_build))

@@ -42,6 +42,13 @@ that the model under judgment cannot move:
      HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its standard error. Far
      from the floor every missing effect inflates the HAC error of every other candidate,
      so the test is a guard only where the model is near the floor.
+   When no single candidate qualifies and the model is at least 2 × the floor, groups
+   that only explain the data together are tried the same way: the field sensitivity
+   along every axis (``Hvec``) and the full second-order field sensitivity (``Hquad``),
+   which a gyro whose axes are not the coils' needs; they replace the model's own
+   per-component field terms.
+   A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
+   missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
    ≥ 10 % of its variance at that frequency) is not accepted: the stimulus acts through a
    channel. Hysteresis widths are searched only above what the sensor can resolve.
@@ -76,7 +83,14 @@ from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .prepare import prepare_log
-from .screen import CLASS_ORDER, NUISANCE, candidate_terms, period_match, term_class
+from .screen import (
+    CLASS_ORDER,
+    NUISANCE,
+    block_candidates,
+    candidate_terms,
+    period_match,
+    term_class,
+)
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
 
 ALPHA = 0.001
@@ -351,6 +365,14 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
 
     out.sort(key=score)
     sig = [c for c in out if c.significant]
+    if not sig and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio >= FAR_RATIO:
+        # no single term explains the gap: groups that only work together (a gyro whose
+        # axes are not the coils' needs every field component at once)
+        for spec, repl in block_candidates(wd.frame, base.specs):
+            out.append(_judge(wd, base, base_specs, spec, thetas0, n_c, base_ratio, alpha,
+                              min_improvement, folds, replaces_labels=repl))
+        sig = [c for c in out if c.significant]
     chosen = None
     if sig:
         best = sig[0]
@@ -425,9 +447,12 @@ def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
 
 
 def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
-           min_improvement, folds) -> Candidate:
+           min_improvement, folds, replaces_labels: list[str] | None = None) -> Candidate:
     replaces = None
     specs = list(base_specs)
+    if replaces_labels:
+        specs = [s for s in specs if s.label not in replaces_labels]
+        replaces = "; ".join(replaces_labels)
     if c.key == "Tlag":
         plain = TermSpec("T", c.channels)
         if any(s.label == plain.label for s in specs):
@@ -475,6 +500,11 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
             rejected = (f"its period {1 / theta['f_Hz']:.4g} s is that of the logged stimulus "
                         f"{m[0]} (R² {m[1]:.2f}): an effect of that channel, not a periodic "
                         "disturbance")
+    if rejected is None and (strict or clear) and base_ratio <= AT_FLOOR and impr < BIG_GAIN:
+        # a model at the floor is complete: only a gain it could not give (>= 20 %) says
+        # the floor is wrong
+        rejected = (f"the model is at the noise floor (held-out/floor {base_ratio:.2f}) and "
+                    f"the gain ({100 * impr:.1f} %) is below {100 * BIG_GAIN:.0f} %")
     sig = (strict or clear or far) and rejected is None
     route = (("strict" if strict else "clear gain" if clear else "far above the floor")
              if sig else None)
@@ -607,7 +637,7 @@ def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
     fitter = r._fitter  # type: ignore[attr-defined]
     th = r._thetas  # type: ignore[attr-defined]
     X = fitter.X(th)
-    if replaces is None:
+    if replaces is None or c.key != "Tlag":
         idx = [i for i, cf in enumerate(r.coefficients)
                if cf.term == c.label and cf.kind == "linear"]
         beta = np.array([r.coefficients[i].value for i in idx])

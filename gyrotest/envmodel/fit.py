@@ -461,7 +461,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
         a, b = offs[s.label]
         e = s.effect
         unit = e.coef_unit if s.key != "custom" else "deg/h per unit of expression"
-        for j, (nm, sym) in enumerate(zip(s.coef_labels(), e.coef_names)):
+        for j, (nm, sym) in enumerate(zip(s.coef_labels(), s.coef_symbols)):
             coefs.append(Coefficient(nm, sym, s.label, float(beta[a + j]), float(se[a + j]),
                                      float(se_ols[a + j]), unit))
         mt = ModelTerm(s, dict(thetas.get(s.label, {})), {}, [float(v) for v in beta[a:b]],

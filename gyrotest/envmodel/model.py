@@ -46,7 +46,7 @@ class ModelTerm:
         d["source"] = e.source
         d["coefficients"] = [
             {"name": n, "symbol": s, "value": v, "stderr": u, "unit": e.coef_unit}
-            for n, s, v, u in zip(self.spec.coef_labels(), e.coef_names, self.coef,
+            for n, s, v, u in zip(self.spec.coef_labels(), self.spec.coef_symbols, self.coef,
                                   self.coef_stderr)
         ]
         if self.theta:

@@ -27,7 +27,8 @@ CLASS_ORDER = {"library": 0, "second-order": 1, "channel": 2, "nuisance": 3}
 NUISANCE = ("ramp", "warmup", "sin", "hyst")
 #: products are screened between at most this many generic channels (pairs grow as n²)
 MAX_PRODUCT_CHANNELS = 6
-SECOND_ORDER = ("T2", "T3", "Hsq", "Hprod", "Hmag2", "g2", "gprod", "Tlag", "dTlagdt")
+SECOND_ORDER = ("T2", "T3", "Hsq", "Hprod", "Hmag2", "Hquad", "g2", "gprod", "Tlag",
+                "dTlagdt")
 
 
 def term_class(spec: TermSpec) -> str:
@@ -130,6 +131,34 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
                 and c.key in keys_present):
             continue
         out.append(c)
+    return out
+
+
+def block_candidates(frame: EnvFrame, present: list[TermSpec]
+                     ) -> list[tuple[TermSpec, list[str]]]:
+    """Groups of terms that only explain the data together, tried when no single candidate
+    does and the model is far above the floor: the field sensitivity along every axis
+    (``Hvec``, when at most one of Hx, Hy, Hz is in the model) and the full second-order
+    field sensitivity (``Hquad``), which a gyro not aligned with the coils needs (one
+    rotated component mixes every coil axis), over the field components the run moves
+    (range ≥ 5 % of the largest). Returns (spec, labels of the model's terms it replaces)
+    pairs."""
+    fields = {n: np.asarray(v, float) for i, (n, v) in enumerate(frame.field_uT.items())
+              if i < 3 and _varies(v)}
+    span = {n: float(np.ptp(v)) for n, v in fields.items()}
+    # the components the run moves (a held coil shows only the magnetometer's noise)
+    moving = tuple(n for n in fields if span[n] >= 0.05 * max(span.values(), default=0.0))
+    if len(moving) < 2:
+        return []
+    keys = {s.key for s in present}
+    out: list[tuple[TermSpec, list[str]]] = []
+    lin = [s for s in present if s.key in ("Hx", "Hy", "Hz") and s.channels[0] in moving]
+    if "Hvec" not in keys and len(lin) < len(moving):
+        out.append((TermSpec("Hvec", moving), [s.label for s in lin]))
+    if "Hquad" not in keys:
+        out.append((TermSpec("Hquad", moving), [
+            s.label for s in present if s.key in ("Hsq", "Hprod", "Hmag2")
+            and all(c in moving for c in (s.channels or moving))]))
     return out
 
 

@@ -94,6 +94,9 @@ class Effect:
     #: builder (frame, spec, theta, refs) -> (n, n_coef) array for effects defined outside
     #: this module (:mod:`gyrotest.envmodel.channel_terms`)
     build: Callable | None = None
+    #: coefficient names from the term's channels, for effects with one column per channel
+    #: or channel pair (``Hvec``, ``Hquad``); None: ``coef_names``
+    coef_names_fn: Callable | None = None
 
 
 EFFECTS: dict[str, Effect] = {}
@@ -188,17 +191,23 @@ class TermSpec:
         return self.label
 
     @property
+    def coef_symbols(self) -> tuple[str, ...]:
+        """The coefficient names (the effect's, or derived from the channels)."""
+        e = self.effect
+        return tuple(e.coef_names_fn(self.channels)) if e.coef_names_fn else e.coef_names
+
+    @property
     def n_coef(self) -> int:
-        return len(self.effect.coef_names)
+        return len(self.coef_symbols)
 
     def coef_labels(self) -> list[str]:
-        e = self.effect
         if self.key == "custom":
             return [f"c[{self.name}]"]
         base = self.label
-        if len(e.coef_names) == 1:
+        names = self.coef_symbols
+        if len(names) == 1:
             return [base]
-        return [f"{base}.{c}" for c in e.coef_names]
+        return [f"{base}.{c}" for c in names]
 
     def to_dict(self) -> dict:
         d: dict[str, Any] = {"key": self.key, "label": self.label}
@@ -264,7 +273,7 @@ def parse_term(text: str) -> list[TermSpec]:
         raise InputError(f"term {s!r}: unknown term {key!r} (known: {known}, or "
                          "name:expression)")
     need = {"temperature2": 2, "table+temp": 1, "field2": 2, "any2": 2,
-            "fieldall": 0, "earth": 0}.get(EFFECTS[key].needs, 1)
+            "fieldall": 0, "earth": 0, "fieldlist": 3}.get(EFFECTS[key].needs, 1)
     if EFFECTS[key].needs in ("none", "fieldall", "earth") and chans:
         raise InputError(f"term {s!r}: {key} takes no channel")
     if len(chans) > need:
@@ -374,6 +383,19 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
             if chans:
                 _check_channel(frame.field_uT[chans[0]] * frame.field_uT[chans[1]],
                                f"term {label!r}", f"{chans[0]}·{chans[1]}", src)
+        elif e.needs == "fieldlist":
+            have = list(frame.field_uT)
+            if not have:
+                raise InputError(f"term {label!r}: {src} has no magnetic-field channels; "
+                                 "name them with --field-cols X,Y,Z")
+            chans = list(chans) or have[:3]
+            if len(set(chans)) != len(chans):
+                raise InputError(f"term {label!r}: a field channel is named twice")
+            for c in chans:
+                if c not in frame.field_uT:
+                    raise InputError(f"term {label!r}: {src} has no field channel {c!r} "
+                                     f"(field channels: {', '.join(have)})")
+                _check_channel(frame.field_uT[c], f"term {label!r}", c, src)
         elif e.needs in ("any", "any2"):
             from .channel_terms import find_channel
 

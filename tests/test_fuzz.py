@@ -30,6 +30,9 @@ from gyrotest.units import factor, parse_duration
 
 from cliutil import run_cli
 
+#: a traceback printed from a pyarrow callback ("Exception ignored in ...") is a failure
+pytestmark = pytest.mark.filterwarnings("error::pytest.PytestUnraisableExceptionWarning")
+
 settings.register_profile(
     "gyrotest-ci", derandomize=True, max_examples=150, deadline=None, database=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture,

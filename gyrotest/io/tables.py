@@ -214,7 +214,8 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         if p and decimal == ".":
             from ..fastcsv import arrow_table, read_numeric  # plain numbers: fast path
 
-            owned = read_numeric(p, delim, skip, names, columns)
+            with _quiet_invalid_row_handler():
+                owned = read_numeric(p, delim, skip, names, columns)
             if owned is not None and any(
                     v.size and np.nanmax(np.abs(v), initial=0.0) >= 2.0 ** 53
                     for v in owned.values()):
@@ -372,7 +373,8 @@ def _quiet_invalid_row_handler():
     old = sys.unraisablehook
 
     def hook(unraisable):
-        if unraisable.object is not _skip_comment_rows:
+        # this module's handler or the fast path's (gyrotest.fastcsv) of the same name
+        if getattr(unraisable.object, "__name__", None) != "_skip_comment_rows":
             old(unraisable)
 
     sys.unraisablehook = hook

@@ -370,6 +370,44 @@ def test_mtotdev_fast_vs_direct(noise):
         assert fast == pytest.approx(ref, rel=1e-10), m
 
 
+@pytest.mark.parametrize("budget", [4, 13, 64, 301])
+def test_mtotdev_streamed_chunks_vs_direct(monkeypatch, budget):
+    """The streamed kernel with tiny chunk buffers (boundaries everywhere: chunks shorter than
+    m, offsets straddling them, carries resumed and restarted, batches of several blocks)
+    against the direct definition, on awkward lengths and m (remainder blocks, n_sub = 1)."""
+    from gyrotest.noise import mtot
+
+    monkeypatch.setattr(mtot, "BATCH_ELEMS", budget)
+    rng = np.random.default_rng(40 + budget)
+    for n_pts, ms in ((97, (2, 5, 11, 32)), (250, (3, 17, 29, 41, 62, 83))):
+        e = rng.standard_normal(n_pts)
+        for x in (e, np.cumsum(e) + 0.21 * np.arange(n_pts), np.cumsum(np.cumsum(e))):
+            for m in ms:
+                fast, n = dv._mtot_sum(x, m)
+                assert n == n_pts - 3 * m + 1
+                ref = direct_mtot(x, m) * 12.0 * m**3 * n
+                assert fast == pytest.approx(ref, rel=1e-10), (budget, n_pts, m)
+
+
+def test_mtotdev_working_set_bounded():
+    """The kernel's traced peak allocation stays a few chunk buffers (not block-length arrays)
+    for m near N/3, N/4 and N/12 (the block-length arrays made it 11–19× the record)."""
+    import tracemalloc
+
+    from gyrotest.noise import mtot
+
+    n = 300_000
+    x = np.cumsum(np.random.default_rng(8).standard_normal(n))
+    bound = 45 * 8 * mtot._budget(n) + 2**20  # ≈ 45 chunk buffers + small change
+    for m in ((n - 1) // 3, n // 4, n // 12):
+        tracemalloc.start()
+        dv._mtot_sum(x, m)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert peak < bound, (m, peak, bound)
+        assert peak < 1.2 * 8 * n, (m, peak)
+
+
 def test_mtotdev_public_vs_direct_with_segments():
     rng = np.random.default_rng(9)
     y = np.cumsum(rng.standard_normal(400)) * 1e-3 + 50.0

@@ -408,6 +408,23 @@ def test_mtotdev_working_set_bounded():
         assert peak < 1.2 * 8 * n, (m, peak)
 
 
+def test_mtotdev_public_working_set_with_threads(monkeypatch):
+    """Through compute_deviation, τ values on the thread pool at once: the traced peak stays
+    within θ + 1.2× the record (each kernel's buffers shrink with the number of threads)."""
+    import tracemalloc
+
+    monkeypatch.setattr(dv, "PARALLEL_MIN_SAMPLES", 0)
+    n = 600_000  # large enough that the 4 Ki-element floor of the buffers does not dominate
+    y = np.random.default_rng(12).standard_normal(n)
+    taus = [float(m) for m in (n // 12, n // 4, (n - 1) // 3)]
+    tracemalloc.start()
+    r = compute_deviation(y, 1.0, input_kind="rate", kind="mtotdev", taus=taus, noise_id=False)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert list(r.m) == [int(t) for t in taus]
+    assert peak < 8 * (n + 1) + 1.2 * 8 * n, peak
+
+
 def test_mtotdev_public_vs_direct_with_segments():
     rng = np.random.default_rng(9)
     y = np.cumsum(rng.standard_normal(400)) * 1e-3 + 50.0

@@ -12,11 +12,14 @@ the two to 1e-10) and O(N) per τ.
 Memory: every prefix sum a block needs (C, Σ C·tᵏ, the stride-2 sums) is streamed along the
 block in chunks of L positions by :class:`_Stream` cursors that resume from carries saved
 every L positions, so nothing of the block's length is held. The working set is a few dozen
-buffers of ``_budget(N)`` float64 elements (≈ N/64, between 4 Ki and 64 Ki elements): ≈ 0.3–0.7×
-the record at 10⁶–10⁷ points, and at most ≈ 25 MB whatever N (benchmarks/bench_mtot_memory.py).
+buffers of ``_budget(N)`` float64 elements (≈ N/64 divided among the τ values computed at once,
+between 4 Ki and 64 Ki elements): on 2 cores ≈ 0.1–0.4× the record per τ at 10⁶–10⁷ points,
+and at most ≈ 25 MB per τ whatever N (benchmarks/bench_mtot_memory.py).
 """
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -33,9 +36,13 @@ BATCH_ELEMS: int | None = None
 
 
 def _budget(n: int) -> int:
+    """Elements per chunk buffer: ≈ N/64 shared by the τ values that run at once (the τ loop
+    of ``deviations._raw_variances`` runs up to min(cores, 4) of them on threads), between
+    4 Ki and 64 Ki."""
     if BATCH_ELEMS is not None:
         return max(4, int(BATCH_ELEMS))
-    return int(min(1 << 16, max(1 << 12, n // 64)))
+    concurrent = min(os.cpu_count() or 1, 4)
+    return int(min(1 << 16, max(1 << 12, n // (64 * concurrent))))
 
 
 def mtot_direct(v: np.ndarray, m: int) -> float:
@@ -252,14 +259,18 @@ def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) ->
     fwd_off = (0, m, 2 * m)
     bwd_off = (m, 2 * m, 3 * m)
     fs = (0, 3 * m)
-    cur = {o: _Cursor(stream) for o in (0, m, 2 * m, 3 * m, h, 3 * m - h)}
+    cur = {o: _Cursor(stream) for o in (0, m, 2 * m, 3 * m, h)}  # h ≤ 3m − h ≤ h + 1
     cur_e = {(b, side): _Cursor(stream) for b in bwd_off for side in (0, 1)}
     acc: dict = {}
 
     def add(key, val: float) -> None:
         acc[key] = acc.get(key, 0.0) + val
 
+    one_row = starts.size == 1
+
     def dot(x: np.ndarray, y: np.ndarray, wgt: np.ndarray | None = None) -> float:
+        if one_row:  # the streamed case: BLAS on the single row (≈ 5× einsum's speed)
+            return float(np.dot(x[0] * wgt if wgt is not None else x[0], y[0]))
         if wgt is None:
             return float(np.einsum("ij,ij->", x, y))
         return float(np.einsum("ij,ij,j->", x, y, wgt))
@@ -274,11 +285,11 @@ def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) ->
             for o in (0, m, 2 * m, 3 * m):
                 c, p, _ = cur[o].take(x0 + o, x0 + o + nn + 1, want_p=True)
                 Cn[o], Pn[o] = c, p
-            ch = cur[h].take(x0 + h, x0 + h + nn)[0]
-            cd = cur[3 * m - h].take(x0 + 3 * m - h, x0 + 3 * m - h + nn)[0]
+            chd = cur[h].take(x0 + h, x0 + 3 * m - h + nn)[0]
+            ch, cd = chd[:, :nn], chd[:, 3 * m - 2 * h : 3 * m - 2 * h + nn]
             CF = {0: Cn[0][:, :nn], 3 * m: Cn[3 * m][:, :nn]}
             s = ((CF[3 * m] - cd) - (ch - CF[0])) / (h * D)
-            del ch, cd
+            del ch, cd, chd
             nf = np.arange(x0, x0 + nn, dtype=float)
             for f in fs:
                 for g in fs:

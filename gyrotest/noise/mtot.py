@@ -121,7 +121,9 @@ class _Stream:
     (0 past the block: MTOT is invariant to that straight line, and it keeps every quantity of
     the size of the local fluctuation), C_j = Σ_{i<j} X_i, P_k(j) = Σ_{i<j} C_i·iᵏ (k = 0, 1, 2)
     and the stride-2 sums E_j = Σ_{i<j, i ≡ j (mod 2)} C_i. The carries (C, P_k, E_j, E_{j+1})
-    are saved every L positions in one first pass; :meth:`run` rebuilds any range from a carry.
+    are saved every K ≈ L/4 positions in one first pass (one cumulative sum of X per stretch;
+    the carries of P_k and E are dot products and sums); :meth:`run` rebuilds any range from a
+    carry.
     """
 
     def __init__(self, v: np.ndarray, starts: np.ndarray, Lx: int, L: int):
@@ -141,12 +143,28 @@ class _Stream:
         if self.end <= L:  # one chunk: keep it whole (the small-m batches)
             self.whole = self.run(state, 0, self.end, True, True)
             return
-        n_ck = (self.end - 1) // L + 1
+        self.K = K = max(4, L // 4)
+        n_ck = (self.end - 1) // K + 1
         self.ck = [state]
         for c in range(1, n_ck):
-            p = (c - 1) * L
-            C, P, E = self.run(self.ck[-1], p, c * L + 2, True, True)
-            self.ck.append(self.state_at(C, P, E, L))
+            self.ck.append(self._advance(self.ck[-1], (c - 1) * K, c * K))
+
+    def _advance(self, state, p: int, q: int):
+        """The carries at q from those at p."""
+        c0, p0, e0, e1 = state
+        X = self._x(p, q)
+        C = np.empty_like(X)  # C at p … q−1
+        C[:, 0] = c0
+        np.cumsum(X[:, :-1], axis=1, out=C[:, 1:])
+        C[:, 1:] += c0[:, None]
+        t = np.arange(p, q, dtype=float)
+        pk = (p0[0] + C.sum(axis=1), p0[1] + C @ t, p0[2] + C @ (t * t))
+        ev, od = C[:, 0::2].sum(axis=1), C[:, 1::2].sum(axis=1)  # positions ≡ p, ≡ p + 1
+        if (q - p) % 2 == 0:
+            eq, eq1 = e0 + ev, e1 + od
+        else:
+            eq, eq1 = e1 + od, e0 + ev
+        return (C[:, -1] + X[:, -1], pk, eq, eq1)
 
     @staticmethod
     def state_at(C, P, E, i: int):
@@ -213,15 +231,15 @@ class _Cursor:
         if s.whole is not None:
             C, P, E = s.whole
             return C[:, q0:q1], (P[:, :, q0:q1] if want_p else None), (E[:, q0:q1] if want_e else None)
-        L = s.L
+        K = s.K
         st = self.state
         ok = (
-            st is not None and self.p <= q0 and (q0 // L) * L <= self.p
+            st is not None and self.p <= q0 and (q0 // K) * K <= self.p
             and (st[1] is not None or not want_p) and (st[2] is not None or not want_e)
         )
         if not ok:
-            self.p = (q0 // L) * L
-            st = s.ck[q0 // L]
+            self.p = (q0 // K) * K
+            st = s.ck[q0 // K]
         C, P, E = s.run(st, self.p, q1, want_p, want_e)
         r = q1 - 2 - self.p
         if r >= 0:

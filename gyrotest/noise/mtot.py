@@ -29,6 +29,8 @@ __all__ = ["mtot_direct", "mtot_sum"]
 
 _EPS3 = (-1.0, 3.0, -3.0, 1.0)  # A = F(j+3m) − 3F(j+2m) + 3F(j+m) − F(j): coefficients on F(j+tm)
 _DIRECT_MAX_M = 1
+#: subsequences per block = BLOCK_FACTOR·m (see :func:`mtot_sum`)
+BLOCK_FACTOR = 4
 
 #: Elements (rows × positions) of one chunk buffer; None = :func:`_budget` of the record length.
 #: The tests set a small value to put chunk boundaries everywhere.
@@ -296,13 +298,16 @@ def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) ->
     for x0 in range(0, W, L):
         x1 = min(W, x0 + L)
         nx = x1 - x0
+        # C (and P where n-part) at x + o over the chunk: one take per cursor and chunk, so
+        # every cursor moves forward only
+        Cu, Pu = {}, {}
+        for o in fwd_off:
+            Cu[o], Pu[o], _ = cur[o].take(x0 + o, x1 + o + 1, want_p=x0 < B)
         # --- n-part: n ∈ [x0, x1') ---------------------------------------------------------
         if x0 < B:
             nn = min(x1, B) - x0
-            Cn, Pn = {}, {}
-            for o in (0, m, 2 * m, 3 * m):
-                c, p, _ = cur[o].take(x0 + o, x0 + o + nn + 1, want_p=True)
-                Cn[o], Pn[o] = c, p
+            Cn, Pn = dict(Cu), dict(Pu)
+            Cn[3 * m], Pn[3 * m], _ = cur[3 * m].take(x0 + 3 * m, x0 + 3 * m + nn + 1, want_p=True)
             chd = cur[h].take(x0 + h, x0 + 3 * m - h + nn)[0]
             ch, cd = chd[:, :nn], chd[:, 3 * m - 2 * h : 3 * m - 2 * h + nn]
             CF = {0: Cn[0][:, :nn], 3 * m: Cn[3 * m][:, :nn]}
@@ -332,12 +337,12 @@ def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) ->
                 for k in range(3):
                     add(("sH", a, k), dot(s, H[k]))
             del Cn, Pn, CF, s, S0, S1, S2, G, H
+        del Pu
         # --- u-part: u ∈ [x0, x1) ----------------------------------------------------------
         u = np.arange(x0, x1)
         cU = np.minimum(np.minimum(u + 1, m), np.minimum(B, B + m - 1 - u)).astype(float)
         vv = u - (m - 1)
         cV = (np.minimum(m - 1, B - 1 - vv) - np.maximum(0, -vv) + 1).astype(float)
-        Cu = {o: cur[o].take(x0 + o, x1 + o + 1)[0] for o in fwd_off}
         CA = {a: Cu[a][:, :nx] for a in fwd_off}
         CV = {a: Cu[a - m][:, 1 : nx + 1] for a in bwd_off}  # C[u + a − (m − 1)]
         for a in fwd_off:
@@ -427,7 +432,7 @@ def mtot_sum(v: np.ndarray, m: int) -> tuple[float, int]:
     if m <= _DIRECT_MAX_M:
         return mtot_direct(v, m), n_sub
     budget = _budget(N)
-    B = min(4 * m, n_sub)
+    B = min(BLOCK_FACTOR * m, n_sub)
     n_full = n_sub // B
     rem = n_sub - n_full * B
     total = 0.0

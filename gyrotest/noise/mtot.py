@@ -185,7 +185,7 @@ class _Stream:
         return out
 
     def run(self, state, p: int, q: int, want_p: bool, want_e: bool):
-        """C, P (3 × nb × n or None), E over positions [p, q) from the carries at p."""
+        """C, P (three nb × n arrays, or None), E over positions [p, q) from the carries at p."""
         c0, p0, e0, e1 = state
         n = q - p
         C = np.empty((self.nb, n))
@@ -195,7 +195,9 @@ class _Stream:
             C[:, 1:] += c0[:, None]
         P = None
         if want_p:
-            P = np.empty((3, self.nb, n))
+            # three arrays, not one 3 × nb × n block: each stays under glibc's mmap threshold
+            # (pinned at 1 MiB by gyrotest.stream), so buffers are reused instead of faulted in
+            P = [np.empty((self.nb, n)) for _ in range(3)]
             t = np.arange(p, q - 1, dtype=float)
             for k in range(3):
                 P[k][:, 0] = p0[k]
@@ -232,7 +234,8 @@ class _Cursor:
         s = self.s
         if s.whole is not None:
             C, P, E = s.whole
-            return C[:, q0:q1], (P[:, :, q0:q1] if want_p else None), (E[:, q0:q1] if want_e else None)
+            return (C[:, q0:q1], tuple(pk[:, q0:q1] for pk in P) if want_p else None,
+                    E[:, q0:q1] if want_e else None)
         K = s.K
         st = self.state
         ok = (
@@ -250,7 +253,7 @@ class _Cursor:
         else:
             self.state, base = st, self.p
         o = q0 - base
-        return C[:, o:], (P[:, :, o:] if want_p else None), (E[:, o:] if want_e else None)
+        return C[:, o:], (tuple(pk[:, o:] for pk in P) if want_p else None), (E[:, o:] if want_e else None)
 
 
 def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) -> dict:

@@ -66,7 +66,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", action="append", type=float, help="record length (repeatable)")
     ap.add_argument("--m", action="append", type=int,
-                    help="averaging factor (repeatable; default: N//3, N//3 − 7, N//4, N//12, 1000)")
+                    help="averaging factor (repeatable; default: N//3, N//3 − 7, N//4, N//12, N//30, "
+                         "N//300, 1000)")
     ap.add_argument("--kind", action="append", choices=("mtotdev", "totdev"))
     ap.add_argument("--impl", action="append",
                     help="directory put first on PYTHONPATH (repeatable; default: this checkout)")
@@ -75,7 +76,7 @@ def main() -> None:
     for kind in a.kind or ["mtotdev", "totdev"]:
         for nf in a.n or [1e6, 1e7]:
             n = int(nf)
-            ms = a.m or [(n - 1) // 3, (n - 1) // 3 - 7, n // 4, n // 12, 1000]
+            ms = a.m or [(n - 1) // 3, (n - 1) // 3 - 7, n // 4, n // 12, n // 30, n // 300, 1000]
             for m in ms:
                 vals = []
                 for impl in impls:

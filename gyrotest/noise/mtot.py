@@ -12,14 +12,14 @@ the two to 1e-10) and O(N) per τ.
 Memory: every prefix sum a block needs (C, Σ C·tᵏ, the stride-2 sums) is streamed along the
 block in chunks of L positions by :class:`_Stream` cursors that resume from carries saved
 every L positions, so nothing of the block's length is held. The working set is a few dozen
-buffers of ``_budget(N)`` float64 elements (≈ N/64 divided among the τ values computed at once,
-between 4 Ki and 64 Ki elements): on 2 cores ≈ 0.1–0.4× the record per τ at 10⁶–10⁷ points,
-and at most ≈ 25 MB per τ whatever N (benchmarks/bench_mtot_memory.py).
+buffers of ``_budget(N)`` float64 elements (≈ N/64, between 4 Ki and 64 Ki elements):
+≈ 0.1–0.8× the record at 10⁶–10⁷ points, and at most ≈ 25 MB whatever N
+(benchmarks/bench_mtot_memory.py). The kernel makes many numpy calls on small buffers, so the
+τ loop runs its τ values one at a time: on threads they contend for the GIL (measured: more
+CPU time and more wall time than serial).
 """
 
 from __future__ import annotations
-
-import os
 
 import numpy as np
 
@@ -38,13 +38,11 @@ BATCH_ELEMS: int | None = None
 
 
 def _budget(n: int) -> int:
-    """Elements per chunk buffer: ≈ N/64 shared by the τ values that run at once (the τ loop
-    of ``deviations._raw_variances`` runs up to min(cores, 4) of them on threads), between
-    4 Ki and 64 Ki."""
+    """Elements per chunk buffer: ≈ N/64, between 4 Ki and 64 Ki (one τ at a time: the τ loop
+    of ``deviations._raw_variances`` does not put MTOTDEV on threads)."""
     if BATCH_ELEMS is not None:
         return max(4, int(BATCH_ELEMS))
-    concurrent = min(os.cpu_count() or 1, 4)
-    return int(min(1 << 16, max(1 << 12, n // (64 * concurrent))))
+    return int(min(1 << 16, max(1 << 12, n // 64)))
 
 
 def mtot_direct(v: np.ndarray, m: int) -> float:

@@ -302,6 +302,27 @@ def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
     assert all(c[1] == n and c[2] == "oadev" for c in calls[:n])
 
 
+def test_mtotdev_progress_within_each_tau(monkeypatch):
+    """MTOTDEV reports progress inside a τ too (fractional ``done``), still in order."""
+    from gyrotest.noise import deviations, mtot
+
+    calls = []
+    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(mtot, "STEP_INTERVAL_S", 0.0)
+    monkeypatch.setattr(mtot, "BATCH_ELEMS", 512)  # many chunks and batches
+    x = np.random.default_rng(6).standard_normal(20_000)
+    r = deviations.compute_deviation(x, 0.01, input_kind="rate", kind="mtotdev", taus="octave",
+                                     noise_id=False)
+    n = calls[-1][1]  # τ values in the loop (one more than the table's last τ here)
+    assert n >= len(r.tau)
+    done = [c[0] for c in calls]
+    assert all(b > a for a, b in zip(done, done[1:]))  # strictly increasing
+    assert [d for d in done if d == int(d)] == list(range(1, n + 1))
+    assert sum(d != int(d) for d in done) > n  # fractions in between
+    assert all(c[1] == n and c[2] == "mtotdev" for c in calls) and done[-1] == n
+    assert mtot.STEP is None  # reset after the loop
+
+
 def test_no_progress_text_when_piped(tmp_path):
     from cliutil import run_cli
 

@@ -745,8 +745,9 @@ def _pooled_edf(kind: str, alpha: int, m: int, parts: Sequence[np.ndarray], ns: 
 #: below this many samples the τ loop runs in one thread (thread start-up would dominate)
 PARALLEL_MIN_SAMPLES = 200_000
 #: optional ``hook(done, total, kind)`` called after each τ of the τ loop, in the calling
-#: thread (the CLI's progress display sets it; the core never prints)
-PROGRESS: Callable[[int, int, str], None] | None = None
+#: thread (the CLI's progress display sets it; the core never prints); for MTOTDEV also within
+#: a τ, with a fractional ``done`` (i + fraction of τ number i + 1's work)
+PROGRESS: Callable[[float, int, str], None] | None = None
 
 
 def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> list:
@@ -762,8 +763,13 @@ def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> 
     out: list = []
     workers = min(os.cpu_count() or 1, 4, len(ms))
     if workers < 2 or longest < PARALLEL_MIN_SAMPLES or kind == "mtotdev":
-        for m in ms:
-            out.append(_raw_variance(kind, parts, m))
+        for i, m in enumerate(ms):
+            if hook is not None and kind == "mtotdev":  # progress within a τ too (long records)
+                _mtot.STEP = lambda f, i=i: hook(i + f, len(ms), kind)
+            try:
+                out.append(_raw_variance(kind, parts, m))
+            finally:
+                _mtot.STEP = None
             if hook is not None:
                 hook(len(out), len(ms), kind)
         return out

@@ -21,6 +21,9 @@ CPU time and more wall time than serial).
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
+
 import numpy as np
 
 from . import edf as _edf
@@ -35,6 +38,33 @@ BLOCK_FACTOR = 4
 #: Elements (rows × positions) of one chunk buffer; None = :func:`_budget` of the record length.
 #: The tests set a small value to put chunk boundaries everywhere.
 BATCH_ELEMS: int | None = None
+
+
+#: optional ``hook(fraction)`` of the current τ's subsequences done (0 ≤ fraction < 1), called
+#: at most every ``STEP_INTERVAL_S`` from the calling thread while one τ runs (the τ loop of
+#: ``deviations._raw_variances`` sets it for the CLI's progress bar)
+STEP: Callable[[float], None] | None = None
+STEP_INTERVAL_S = 0.25
+
+
+class _Steps:
+    """Throttled calls of :data:`STEP` with the fraction of the n_sub subsequences done."""
+
+    def __init__(self, n_sub: int):
+        self.fn, self.n_sub, self.base, self.size = STEP, n_sub, 0, 0
+        self.t, self.last = time.monotonic(), 0.0
+
+    def batch(self, base: int, size: int) -> None:
+        self.base, self.size = base, size
+
+    def tick(self, frac: float) -> None:
+        if self.fn is None:
+            return
+        now = time.monotonic()
+        f = min(0.999, (self.base + frac * self.size) / self.n_sub)
+        if now - self.t >= STEP_INTERVAL_S and f > self.last:  # strictly increasing
+            self.t, self.last = now, f
+            self.fn(f)
 
 
 def _budget(n: int) -> int:
@@ -254,7 +284,8 @@ class _Cursor:
         return C[:, o:], (tuple(pk[:, o:] for pk in P) if want_p else None), (E[:, o:] if want_e else None)
 
 
-def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) -> dict:
+def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int,
+                   steps: _Steps | None = None) -> dict:
     """The inner products of shifted prefix sums that Σ_{n,r} A² of a batch of blocks needs.
 
     Each block gets local prefix sums C of its own stretch of θ (minus the straight line
@@ -366,14 +397,17 @@ def _mtot_products(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) ->
                 win = vals if win is None else win - vals
             for a in fwd_off:
                 add(("UW", a, b), dot(CA[a], win))
+        if steps is not None:
+            steps.tick(x1 / W)
     return acc
 
 
-def _mtot_blocks(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int) -> float:
+def _mtot_blocks(v: np.ndarray, m: int, starts: np.ndarray, B: int, L: int,
+                 steps: _Steps | None = None) -> float:
     """Σ over subsequences n ∈ [start, start+B) of Σ_j A_j(n)², for a batch of blocks: the
     products of :func:`_mtot_products` combined with the coefficients of each sixth of the j
     range (``_block_terms``)."""
-    acc = _mtot_products(v, m, starts, B, L)
+    acc = _mtot_products(v, m, starts, B, L, steps)
     fwd_off = (0, m, 2 * m)
     bwd_off = (m, 2 * m, 3 * m)
     fs = (0, 3 * m)
@@ -437,6 +471,7 @@ def mtot_sum(v: np.ndarray, m: int) -> tuple[float, int]:
     n_full = n_sub // B
     rem = n_sub - n_full * B
     total = 0.0
+    steps = _Steps(n_sub)
 
     def chunk_of(Bk: int, nb: int) -> int:  # positions per chunk for nb rows of Bk + 3m + 2
         return Bk + 3 * m + 2 if nb > 1 or Bk + 3 * m + 2 <= budget else budget
@@ -445,7 +480,10 @@ def mtot_sum(v: np.ndarray, m: int) -> tuple[float, int]:
         per_batch = max(1, budget // (B + 3 * m + 2))
         for i0 in range(0, n_full, per_batch):
             starts = np.arange(i0, min(n_full, i0 + per_batch), dtype=np.int64) * B
-            total += _mtot_blocks(v, m, starts, B, chunk_of(B, starts.size))
+            steps.batch(i0 * B, starts.size * B)
+            total += _mtot_blocks(v, m, starts, B, chunk_of(B, starts.size), steps)
     if rem:
-        total += _mtot_blocks(v, m, np.array([n_full * B], dtype=np.int64), rem, chunk_of(rem, 1))
+        steps.batch(n_full * B, rem)
+        total += _mtot_blocks(v, m, np.array([n_full * B], dtype=np.int64), rem, chunk_of(rem, 1),
+                              steps)
     return total, n_sub

@@ -22,13 +22,14 @@ The peer ("the script a lab would write"):
     allantools.oadev(df[col].to_numpy(), rate=1/tau0, data_type="freq", taus="octave")
 
 gyrotest runs as the installed console script does (``from gyrotest.cli import main; main()``,
-stdout to a file): ``allan FILE --rate-unit deg/h`` prints everything the command prints (deviation table
+stdout to a file, its modules byte-compiled first as ``pip install`` does): ``allan FILE --rate-unit deg/h`` prints everything the command prints (deviation table
 with CIs, fit, diagnosis, warnings, impact); ``--json`` the same as JSON.
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
 import math
 import os
 import resource
@@ -58,11 +59,11 @@ for a, b in zip(t, dev):
 GY = [sys.executable, "-c", "from gyrotest.cli import main; main()"]  # = the console script
 
 
-def run(cmd: list[str], out=subprocess.DEVNULL, env=None) -> tuple[float, float]:
+def run(cmd: list[str], out=subprocess.DEVNULL, env=None, cwd=ROOT) -> tuple[float, float]:
     """(wall s, CPU s) of one child process."""
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    p = subprocess.run(cmd, stdout=out, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+    p = subprocess.run(cmd, stdout=out, stderr=subprocess.PIPE, text=True, cwd=cwd, env=env)
     wall = time.perf_counter() - t0
     r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     if p.returncode != 0:
@@ -85,12 +86,12 @@ def write_csv(path: str, rows: int, tau0: float = 0.01, seed: int = 1) -> None:
 
 
 def paired(label_a: str, cmd_a: list[str], label_b: str, cmd_b: list[str], pairs: int,
-           out_a=None) -> dict:
+           out_a=None, cwd_b=ROOT, env_b=None) -> dict:
     """Alternate a and b ``pairs`` times (+1 discarded warm-up pair); medians and ratio b/a."""
     res: dict[str, list] = {"a": [], "b": []}
     for i in range(pairs + 1):
         wa = run(cmd_a, out=open(out_a, "w") if out_a else subprocess.DEVNULL)
-        wb = run(cmd_b)
+        wb = run(cmd_b, cwd=cwd_b, env=env_b)
         if i:
             res["a"].append(wa)
             res["b"].append(wb)
@@ -113,7 +114,7 @@ def solo(label: str, cmd: list[str], n: int) -> tuple[float, float]:
     return w, c
 
 
-def startup(pairs: int, tmp: str) -> None:
+def startup(pairs: int, tmp: str, before: str | None = None) -> None:
     small = os.path.join(tmp, "small.csv")
     write_csv(small, 12_000)
     print(f"start-up ({os.path.getsize(small) / 1e3:.0f} kB, 12 000 rows; load "
@@ -123,6 +124,12 @@ def startup(pairs: int, tmp: str) -> None:
     paired("gyrotest allan small.csv", [*GY, "allan", small, "--rate-unit", "deg/h"],
            "peer pandas.read_csv + allantools.oadev", [sys.executable, "-c", PEER, small], pairs,
            out_a=os.path.join(tmp, "out.txt"))
+    if before:  # another checkout (e.g. ``git archive`` of an older commit), paired with this one
+        compileall.compile_dir(os.path.join(before, "gyrotest"), quiet=1)
+        env = dict(os.environ, PYTHONPATH=before)
+        paired("gyrotest allan small.csv", [*GY, "allan", small, "--rate-unit", "deg/h"],
+               "before: gyrotest allan small.csv", [*GY, "allan", small, "--rate-unit", "deg/h"],
+               pairs, cwd_b=before, env_b=env)
 
 
 def big(rows: int, pairs: int, tmp: str) -> None:
@@ -192,12 +199,18 @@ def main() -> None:
     ap.add_argument("--parse", action="store_true", help="only the CSV vs Parquet parse stage")
     ap.add_argument("--rows", type=float, default=1e7)
     ap.add_argument("--pairs", type=int, default=5)
+    ap.add_argument("--before", metavar="DIR",
+                    help="with --startup: also pair `allan small.csv` against the gyrotest in DIR")
     a = ap.parse_args()
     if not (a.startup or a.big or a.parse):
         a.startup = a.big = True
     tmp = tempfile.mkdtemp(prefix="bench_speed_")
+    # byte-compile this checkout, as ``pip install`` does: the peer's modules in site-packages
+    # have their .pyc, and with PYTHONDONTWRITEBYTECODE set (as on the reference VM) a source
+    # checkout would otherwise recompile every gyrotest module in every run
+    compileall.compile_dir(os.path.join(ROOT, "gyrotest"), quiet=1)
     if a.startup:
-        startup(a.pairs, tmp)
+        startup(a.pairs, tmp, a.before)
     if a.big:
         big(int(a.rows), a.pairs, tmp)
     elif a.parse:

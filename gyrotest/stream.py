@@ -231,11 +231,16 @@ def _fixed_mmap_threshold() -> None:
     """glibc serves blocks ≥ 1 MiB from mmap from now on (its threshold otherwise grows to
     32 MiB after the first frees, and the freed batch buffers of every later step would stay
     in the heap, counted in the peak resident memory; Arrow's own pool is emptied by
-    :func:`_release_memory`)."""
+    :func:`_release_memory`). The heap's trim threshold goes to 32 MiB with it: pinning the
+    mmap threshold also pins the trim threshold at 128 KiB, and the heap top was then handed
+    back and faulted in again for every chunk buffer of the later steps (MTOTDEV on 10⁷
+    samples spent a third of its time in the kernel; benchmarks/README.md)."""
     try:
         import ctypes
 
-        ctypes.CDLL("libc.so.6").mallopt(-3, 1 << 20)  # M_MMAP_THRESHOLD
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 1 << 20)  # M_MMAP_THRESHOLD
+        libc.mallopt(-1, 32 << 20)  # M_TRIM_THRESHOLD
     except (OSError, AttributeError):  # pragma: no cover - not glibc
         pass
 

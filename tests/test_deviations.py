@@ -370,6 +370,61 @@ def test_mtotdev_fast_vs_direct(noise):
         assert fast == pytest.approx(ref, rel=1e-10), m
 
 
+@pytest.mark.parametrize("budget", [4, 13, 64, 301])
+def test_mtotdev_streamed_chunks_vs_direct(monkeypatch, budget):
+    """The streamed kernel with tiny chunk buffers (boundaries everywhere: chunks shorter than
+    m, offsets straddling them, carries resumed and restarted, batches of several blocks)
+    against the direct definition, on awkward lengths and m (remainder blocks, n_sub = 1)."""
+    from gyrotest.noise import mtot
+
+    monkeypatch.setattr(mtot, "BATCH_ELEMS", budget)
+    rng = np.random.default_rng(40 + budget)
+    for n_pts, ms in ((97, (2, 5, 11, 32)), (250, (3, 17, 29, 41, 62, 83))):
+        e = rng.standard_normal(n_pts)
+        for x in (e, np.cumsum(e) + 0.21 * np.arange(n_pts), np.cumsum(np.cumsum(e))):
+            for m in ms:
+                fast, n = dv._mtot_sum(x, m)
+                assert n == n_pts - 3 * m + 1
+                ref = direct_mtot(x, m) * 12.0 * m**3 * n
+                assert fast == pytest.approx(ref, rel=1e-10), (budget, n_pts, m)
+
+
+def test_mtotdev_working_set_bounded():
+    """The kernel's traced peak allocation stays a few chunk buffers (not block-length arrays)
+    for m near N/3, N/4 and N/12 (the block-length arrays made it 11–19× the record)."""
+    import tracemalloc
+
+    from gyrotest.noise import mtot
+
+    n = 300_000
+    x = np.cumsum(np.random.default_rng(8).standard_normal(n))
+    bound = 45 * 8 * mtot._budget(n) + 2**20  # ≈ 45 chunk buffers + small change
+    for m in ((n - 1) // 3, n // 4, n // 12):
+        tracemalloc.start()
+        dv._mtot_sum(x, m)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert peak < bound, (m, peak, bound)
+        assert peak < 1.2 * 8 * n, (m, peak)
+
+
+def test_mtotdev_public_working_set(monkeypatch):
+    """Through compute_deviation, with the τ thread pool enabled for long records (MTOTDEV's τ
+    values run one at a time anyway): the traced peak stays within θ + 1.2× the record."""
+    import tracemalloc
+
+    monkeypatch.setattr(dv, "PARALLEL_MIN_SAMPLES", 0)
+    n = 600_000  # large enough that the 4 Ki-element floor of the buffers does not dominate
+    y = np.random.default_rng(12).standard_normal(n)
+    taus = [float(m) for m in (n // 12, n // 4, (n - 1) // 3)]
+    tracemalloc.start()
+    r = compute_deviation(y, 1.0, input_kind="rate", kind="mtotdev", taus=taus, noise_id=False)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert list(r.m) == [int(t) for t in taus]
+    assert peak < 8 * (n + 1) + 1.2 * 8 * n, peak
+
+
 def test_mtotdev_public_vs_direct_with_segments():
     rng = np.random.default_rng(9)
     y = np.cumsum(rng.standard_normal(400)) * 1e-3 + 50.0

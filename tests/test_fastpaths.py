@@ -75,10 +75,11 @@ def test_allan_on_plain_csv_imports_no_stats_signal_pandas(tmp_path):
                           "deg/h", "--json")
     for m in HEAVY:
         assert m not in mods, f"`gyrotest allan` imports {m}"
-    # the fit's NNLS and profile bounds are numpy (noise.numerics): scipy.optimize only when a
-    # shape parameter is optimised (markov/sine terms, e.g. tried by the diagnosis)
+    # the fit's NNLS, profile bounds and shape optimisation are numpy (noise.numerics): no
+    # scipy.optimize, even when the diagnosis tries markov/sine/blue candidates
+    assert "scipy.optimize" not in mods
     mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", str(f), "--rate-unit",
-                          "deg/h", "--json", "--no-diagnose")
+                          "deg/h", "--json", "--terms", "N,markov,sine")
     assert "scipy.optimize" not in mods
 
 
@@ -108,6 +109,48 @@ def test_numerics_match_scipy_optimize():
                                                                    abs=1e-6)
     with pytest.raises(ValueError):
         root_bracketed(lambda x: x * x + 1, -1, 1)
+
+
+def test_shape_minimisers_match_scipy_optimize():
+    """Brent's bounded minimiser and Nelder–Mead (gyrotest.noise.numerics) follow the same
+    iterates as scipy.optimize's: the same minimum and value to the last bit, on smooth,
+    multimodal, flat and kinked functions in 1–3 variables."""
+    from scipy.optimize import minimize, minimize_scalar
+
+    from gyrotest.noise.numerics import minimize_bounded, nelder_mead
+
+    rng = np.random.default_rng(5)
+    for i in range(150):
+        c = rng.normal(0, 2, 4)
+        w = rng.uniform(0.5, 8)
+        funcs = [lambda x, c=c, w=w: (x - c[0]) ** 2 + c[1] * np.sin(w * x),
+                 lambda x, c=c: abs(x - c[0]) + 0.1 * c[2] * x,
+                 lambda x, c=c: np.floor(3 * x) * 0.1 + (x - c[1]) ** 4,
+                 lambda x: 1.0]
+        f = funcs[i % 4]
+        a, b = sorted(rng.uniform(-5, 5, 2))
+        tol = float(10.0 ** rng.uniform(-6, -2))
+        ref = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": tol})
+        x, fx = minimize_bounded(f, a, b, xatol=tol)
+        assert (x, fx) == (float(ref.x), float(ref.fun)), i
+    for i in range(60):
+        n = 1 + i % 3
+        A = rng.normal(size=(n, n))
+        ctr = rng.normal(0, 2, n)
+        w = rng.uniform(0.5, 4)
+
+        def g(v, A=A, ctr=ctr, w=w, kink=(i % 5 == 0)):
+            d = A @ (v - ctr)
+            return float(d @ d + 0.3 * np.sum(np.cos(w * v)) + (abs(v[0]) if kink else 0.0))
+
+        x0 = rng.normal(0, 2, n)
+        if i % 7 == 0:
+            x0[0] = 0.0  # the zero-coordinate vertex of the initial simplex
+        xatol, fatol, maxiter = (1e-4, 1e-6, 400) if i % 2 else (1e-3, 1e-4, 200)
+        ref = minimize(g, x0, method="Nelder-Mead",
+                       options={"xatol": xatol, "fatol": fatol, "maxiter": maxiter})
+        x, fx = nelder_mead(g, x0, xatol=xatol, fatol=fatol, maxiter=maxiter)
+        assert np.array_equal(x, ref.x) and fx == ref.fun, i
 
 
 @pytest.mark.parametrize("n,nperseg", [(1000, 64), (12345, 1024), (777, 17), (70_000, 4096)])
@@ -257,6 +300,27 @@ def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
     n = len(r.tau)
     assert [c[0] for c in calls[:n]] == list(range(1, n + 1))
     assert all(c[1] == n and c[2] == "oadev" for c in calls[:n])
+
+
+def test_mtotdev_progress_within_each_tau(monkeypatch):
+    """MTOTDEV reports progress inside a τ too (fractional ``done``), still in order."""
+    from gyrotest.noise import deviations, mtot
+
+    calls = []
+    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(mtot, "STEP_INTERVAL_S", 0.0)
+    monkeypatch.setattr(mtot, "BATCH_ELEMS", 512)  # many chunks and batches
+    x = np.random.default_rng(6).standard_normal(20_000)
+    r = deviations.compute_deviation(x, 0.01, input_kind="rate", kind="mtotdev", taus="octave",
+                                     noise_id=False)
+    n = calls[-1][1]  # τ values in the loop (one more than the table's last τ here)
+    assert n >= len(r.tau)
+    done = [c[0] for c in calls]
+    assert all(b > a for a, b in zip(done, done[1:]))  # strictly increasing
+    assert [d for d in done if d == int(d)] == list(range(1, n + 1))
+    assert sum(d != int(d) for d in done) > n  # fractions in between
+    assert all(c[1] == n and c[2] == "mtotdev" for c in calls) and done[-1] == n
+    assert mtot.STEP is None  # reset after the loop
 
 
 def test_no_progress_text_when_piped(tmp_path):

@@ -75,7 +75,7 @@ from scipy import special
 
 from ..errors import AnalysisError, InputError
 from ..units import format_number
-from .numerics import nnls, root_bracketed  # numpy: scipy.optimize only for shape parameters
+from .numerics import minimize_bounded, nelder_mead, nnls, root_bracketed  # no scipy.optimize
 from .terms import (
     BIAS_INSTABILITY_PLATEAU,
     blue_markov_derivative_avar,
@@ -139,13 +139,6 @@ UNCERTAINTY_METHOD = ("1 sigma from the sandwich covariance A^-1 B A^-1 of that 
 STATUS_RULE = ("identified when dropping the term raises -2 log-likelihood/design effect by >= "
                "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue); else upper bound only (printed "
                "with '<=')")
-
-
-def _optimize():
-    """scipy.optimize, imported on first use (≈ 0.15 s)."""
-    from scipy import optimize
-
-    return optimize
 
 
 def parse_terms(spec: str | Sequence[str] | None) -> list[str]:
@@ -482,10 +475,9 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
             cols[i].shape = math.exp(v)
             return _solve_state(eng, [cols[j] for j in active]).D
 
-        res = _optimize().minimize_scalar(f1, bounds=(max(lg - step, math.log(col.lo)),
-                                                   min(lg + step, math.log(col.hi))),
-                                       method="bounded", options={"xatol": 1e-4})
-        cols[i].shape = math.exp(res.x) if res.fun <= best[0] else best[1]
+        rx, rf = minimize_bounded(f1, max(lg - step, math.log(col.lo)),
+                                  min(lg + step, math.log(col.hi)), xatol=1e-4)
+        cols[i].shape = math.exp(rx) if rf <= best[0] else best[1]
         placed.append(i)
     if len(nl) > 1:
         x0 = np.array([math.log(cols[i].shape) for i in nl])
@@ -499,9 +491,8 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
             return _solve_state(eng, cols).D
 
         D0 = fm(x0)
-        res = _optimize().minimize(fm, x0, method="Nelder-Mead",
-                                options={"xatol": 1e-4, "fatol": 1e-6, "maxiter": 400})
-        v = np.clip(res.x, lo, hi) if res.fun < D0 else x0
+        rx, rf = nelder_mead(fm, x0, xatol=1e-4, fatol=1e-6, maxiter=400)
+        v = np.clip(rx, lo, hi) if rf < D0 else x0
         for k, i in enumerate(nl):
             cols[i].shape = float(math.exp(v[k]))
     return _solve_state(eng, cols)
@@ -524,13 +515,11 @@ def _refine_shapes(eng: _Engine, cols_in: list[_Col]) -> _State:
     x0 = np.array([math.log(cols[i].shape) for i in nl])
     D0 = fm(x0)
     if len(nl) == 1:
-        res = _optimize().minimize_scalar(lambda v: fm(np.array([v])), bounds=(lo[0], hi[0]),
-                                       method="bounded", options={"xatol": 1e-3})
-        best = np.array([res.x]) if res.fun < D0 else x0
+        rx, rf = minimize_bounded(lambda v: fm(np.array([v])), lo[0], hi[0], xatol=1e-3)
+        best = np.array([rx]) if rf < D0 else x0
     else:
-        res = _optimize().minimize(fm, x0, method="Nelder-Mead",
-                                options={"xatol": 1e-3, "fatol": 1e-4, "maxiter": 200})
-        best = np.clip(res.x, lo, hi) if res.fun < D0 else x0
+        rx, rf = nelder_mead(fm, x0, xatol=1e-3, fatol=1e-4, maxiter=200)
+        best = np.clip(rx, lo, hi) if rf < D0 else x0
     fm(best)
     return _solve_state(eng, cols)
 

@@ -40,7 +40,11 @@ NULL_VALUES = ["", "NA", "N/A", "null", "NULL", "-"]
 
 def _skip_comment_rows(row):
     """pyarrow invalid-row handler: skip ``#`` comment lines in the middle of a file."""
-    if row.text.lstrip().startswith("#") or not row.text.strip():
+    try:
+        text = row.text
+    except UnicodeDecodeError:  # undecodable bytes in the row: pyarrow reports the row
+        return "error"
+    if text.lstrip().startswith("#") or not text.strip():
         return "skip"
     return "error"
 

@@ -297,26 +297,16 @@ def _finish(source, integ: dict[str, _Integrator], timing: Timing, gyro: GyroCon
 def _stream_converted(pf, rows: int, source: str, gmeta: dict, prof) -> StreamedLog:
     """A file written by ``gyrotest ingest``: timing and gaps from its metadata, rate columns
     in deg/h; the time column (if any) is checked batch by batch against the metadata."""
+    from .io.meta import gyro_from_meta, timing_from_meta
+
     cols = gmeta["columns"]
-    tm = gmeta["timing"]
-    gaps = [Gap(int(g["index"]), float(g["time_s"]), float(g["duration_s"]),
-                int(g["missing_samples"])) for g in tm["gaps"]]
-    timing = Timing(n=tm["samples"], tau0=tm["tau0_s"], duration_s=tm["duration_s"],
-                    source=tm["time_source"], gaps=gaps, jitter_rel=tm["jitter_rel"],
-                    irregular=tm["irregular"], duplicates_dropped=tm["duplicates_dropped"],
-                    start=tm.get("start"))
-    gm = gmeta["gyro"]
-    gyro = GyroConstants(**{k: gm.get(k) for k in (
-        "output_kind", "scale_factor", "scale_factor_unit", "offset_v", "rate_unit",
-        "counter_bits", "model", "serial", "type")})
-    for k in ("model", "serial", "type"):
-        if prof.gyro.get(k):
-            setattr(gyro, k, prof.gyro[k])
+    timing = timing_from_meta(gmeta)
+    gyro = gyro_from_meta(gmeta, prof)
     tau0 = float(gmeta["tau0_s"])
     increment = gyro.output_kind in ("counts", "updown", "counter")
     rate_cols = dict(cols["rates"])
     integ = {axis: _Integrator(rows + _SLACK, increment) for axis in rate_cols}
-    cuts = [g.index for g in gaps]
+    cuts = [g.index for g in timing.gaps]
     tcol = cols.get("time")
     from .fastcsv import float64_values
 

@@ -139,6 +139,30 @@ def read_gyrotest_table(path: Path, source: str, fmt: str):
     return _read_parquet(path, source, None) if fmt == "parquet" else _read_feather(path, source, None)
 
 
+def timing_from_meta(meta: dict) -> Timing:
+    """The :class:`Timing` (gaps included) stored in a converted file's metadata."""
+    tm = meta["timing"]
+    gaps = [Gap(int(g["index"]), float(g["time_s"]), float(g["duration_s"]),
+                int(g["missing_samples"])) for g in tm["gaps"]]
+    return Timing(n=tm["samples"], tau0=tm["tau0_s"], duration_s=tm["duration_s"],
+                  source=tm["time_source"], gaps=gaps, jitter_rel=tm["jitter_rel"],
+                  irregular=tm["irregular"], duplicates_dropped=tm["duplicates_dropped"],
+                  start=tm.get("start"))
+
+
+def gyro_from_meta(meta: dict, prof: Profile) -> GyroConstants:
+    """The :class:`GyroConstants` stored in a converted file's metadata; the profile's model,
+    serial and type win."""
+    gm = meta["gyro"]
+    gyro = GyroConstants(**{k: gm.get(k) for k in (
+        "output_kind", "scale_factor", "scale_factor_unit", "offset_v", "rate_unit",
+        "counter_bits", "model", "serial", "type")})
+    for k in ("model", "serial", "type"):
+        if prof.gyro.get(k):
+            setattr(gyro, k, prof.gyro[k])
+    return gyro
+
+
 def _from_gyrotest(raw, source: str, fmt: str, meta: dict, prof: Profile) -> GyroLog:
     """A GyroLog from a converted file whose metadata passed :func:`validate_meta`; a non-finite
     value in a data column raises :class:`MetaError` too (the caller reads the columns by name
@@ -156,20 +180,8 @@ def _from_gyrotest(raw, source: str, fmt: str, meta: dict, prof: Profile) -> Gyr
     for c, v in [*zip(cols["rates"].values(), rates.values()), (cols.get("time"), time)]:
         if v is not None and not np.isfinite(v).all():
             raise MetaError(f"columns ({c})", "holds NaN/±inf values a converted file never has")
-    gaps = [Gap(int(g["index"]), float(g["time_s"]), float(g["duration_s"]),
-                int(g["missing_samples"])) for g in meta["timing"]["gaps"]]
-    tm = meta["timing"]
-    timing = Timing(n=tm["samples"], tau0=tm["tau0_s"], duration_s=tm["duration_s"],
-                    source=tm["time_source"], gaps=gaps, jitter_rel=tm["jitter_rel"],
-                    irregular=tm["irregular"], duplicates_dropped=tm["duplicates_dropped"],
-                    start=tm.get("start"))
-    gm = meta["gyro"]
-    gyro = GyroConstants(**{k: gm.get(k) for k in (
-        "output_kind", "scale_factor", "scale_factor_unit", "offset_v", "rate_unit",
-        "counter_bits", "model", "serial", "type")})
-    for k in ("model", "serial", "type"):
-        if prof.gyro.get(k):
-            setattr(gyro, k, prof.gyro[k])
+    timing = timing_from_meta(meta)
+    gyro = gyro_from_meta(meta, prof)
     site = None
     if meta.get("site"):
         s = meta["site"]

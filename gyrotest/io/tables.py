@@ -25,6 +25,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..errors import InputError
+from ..fastcsv import _skip_comment_rows  # the one invalid-row handler of both CSV readers
 
 META_KEY = b"gyrotest"  # schema-metadata key of gyrotest's own converted files
 
@@ -373,8 +374,7 @@ def _quiet_invalid_row_handler():
     old = sys.unraisablehook
 
     def hook(unraisable):
-        # this module's handler or the fast path's (gyrotest.fastcsv) of the same name
-        if getattr(unraisable.object, "__name__", None) != "_skip_comment_rows":
+        if unraisable.object is not _skip_comment_rows:
             old(unraisable)
 
     sys.unraisablehook = hook
@@ -382,17 +382,6 @@ def _quiet_invalid_row_handler():
         yield
     finally:
         sys.unraisablehook = old
-
-
-def _skip_comment_rows(row):
-    """pyarrow invalid-row handler: skip ``#`` comment lines in the middle of a file."""
-    try:
-        text = row.text
-    except UnicodeDecodeError:  # undecodable bytes in the row: pyarrow reports the row
-        return "error"
-    if text.lstrip().startswith("#") or not text.strip():
-        return "skip"
-    return "error"
 
 
 def _csv_options(delim: str, skip: int, names: list[str], columns: list[str] | None,

@@ -81,6 +81,23 @@ def _ranges(fh, start: int, nbuf: int, step: int):
         yield view[:cut]
 
 
+def int64_values(chunked) -> np.ndarray:
+    """int64 numpy values of a null-free integer pyarrow (Chunked)Array (ns epochs keep every
+    digit), without Arrow's ``to_numpy`` (which imports pandas on first use)."""
+    import pyarrow as pa
+
+    chunks = chunked.chunks if hasattr(chunked, "chunks") else [chunked]
+    parts = []
+    for chunk in chunks:
+        if chunk.type != pa.int64():
+            chunk = chunk.cast(pa.int64())
+        buf = chunk.buffers()[1]
+        parts.append(np.zeros(len(chunk), np.int64) if buf is None else
+                     np.frombuffer(buf, dtype=np.int64, count=len(chunk),
+                                   offset=chunk.offset * 8))
+    return np.concatenate(parts) if parts else np.empty(0, np.int64)
+
+
 def float64_values(chunked) -> np.ndarray:
     """float64 numpy values of a numeric pyarrow (Chunked)Array, nulls as NaN, without Arrow's
     ``to_numpy`` (which imports pandas, ≈ 0.4 s, on first use). Zero-copy (read-only) for a

@@ -605,11 +605,12 @@ def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
     arr = raw.table.column(col)
     t = arr.type
     if pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t):
-        if pa.types.is_floating(t) and t != pa.float64():
-            arr = arr.cast(pa.float64())
-        out = arr.to_numpy() if arr.null_count == 0 else arr.to_numpy(zero_copy_only=False)
-        out = np.asarray(out, dtype=np.float64)
-        if not out.flags.writeable:
+        from ..fastcsv import float64_values  # Arrow's to_numpy would import pandas
+
+        out = float64_values(arr)
+        # a zero-copy view of an Arrow buffer can be writeable (buffers decoded from
+        # Parquet are mutable): callers shift and scale in place, so always own the data
+        if out.base is not None or not out.flags.writeable:
             out = out.copy()
         return out
     if pa.types.is_null(t):

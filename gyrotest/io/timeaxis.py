@@ -143,7 +143,9 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             ints = num.to_numpy(dtype=np.int64)
         v = np.array(num.to_numpy(dtype=np.float64))  # a writeable copy: shifted in place
     elif pa.types.is_integer(t) and arr.null_count == 0:
-        ints = np.asarray(arr.to_numpy(zero_copy_only=False), dtype=np.int64)
+        from ..fastcsv import int64_values  # Arrow's to_numpy would import pandas
+
+        ints = int64_values(arr)
         v = None
     else:
         v = _column_to_float(raw, col, "time")

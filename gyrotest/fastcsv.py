@@ -108,7 +108,7 @@ def float64_values(chunked) -> np.ndarray:
     parts = []
     for chunk in chunks:
         if chunk.type != pa.float64():
-            chunk = chunk.cast(pa.float64())
+            chunk = chunk.cast(pa.float64(), safe=False)  # ints beyond 2^53 round, as numpy
         if chunk.null_count:
             chunk = chunk.fill_null(float("nan"))
         buf = chunk.buffers()[1]

@@ -129,3 +129,18 @@ def test_column_guesses():
     assert g == {"timestamp": ("time", None), "gx [deg/s]": ("rate", "deg/s"),
                  "Hx_uT": ("magnetic field", "uT"), "T_case_C": ("temperature", "degC"),
                  "vcc": ("supply voltage", None), "foo": (None, None)}
+
+
+def test_integer_column_beyond_float64_digits(tmp_path):
+    """An int64 column with values past 2^53 (a counter, say) reads as float64 rounded like
+    numpy would, not as an internal error (found by the Parquet fuzz test)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = tmp_path / "big.parquet"
+    big = 2 ** 53 + 1
+    pq.write_table(pa.table({"t": np.arange(200) * 0.1,
+                             "rate": pa.array([big + i for i in range(200)], pa.int64())}), p)
+    log = read_log(p, overrides={"gyro": {"rate_unit": "deg/h"}})
+    x = next(iter(log.rates.values()))
+    np.testing.assert_array_equal(x, np.array([big + i for i in range(200)], dtype=np.float64))

@@ -15,11 +15,16 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError, InputError
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import bench_noise_id  # noqa: E402
+
+from gyrotest.errors import AnalysisError, InputError  # noqa: E402
 from gyrotest.noise import edf as E
 from gyrotest.noise.deviations import angle_series
 
@@ -254,19 +259,8 @@ def test_edf_for_methods():
 
 
 def power_law_rate(alpha: int, n: int, seed: int) -> np.ndarray:
-    """Rate samples with PSD ∝ f^α: exact differences/sums for even α, FFT shaping for odd."""
-    rng = np.random.default_rng(seed)
-    w = rng.standard_normal(n + 1)
-    if alpha == 2:
-        return np.diff(w)
-    if alpha == 0:
-        return w[:n]
-    if alpha == -2:
-        return np.cumsum(w[:n])
-    f = np.fft.rfftfreq(2 * n)
-    f[0] = f[1]
-    spec = np.fft.rfft(rng.standard_normal(2 * n)) * f ** (alpha / 2.0)
-    return np.fft.irfft(spec, 2 * n)[:n]
+    """Rate samples with PSD ∝ f^α (the noise-identification campaign's generator)."""
+    return bench_noise_id.power_law_rate(alpha, n, np.random.default_rng(seed))
 
 
 def test_lag1_acf_against_allantools():

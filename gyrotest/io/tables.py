@@ -422,13 +422,9 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
     except OSError:
         return None
     try:
-        head = fh.read(1 << 22)
-        pos = 0
-        for _ in range(skip + 1):  # comment lines and the header
-            pos = head.index(b"\n", pos) + 1
-        body_sample = head[pos:]
-        per_row = len(body_sample) / max(body_sample.count(b"\n"), 1)
-        cap = int((size - pos) / max(per_row, 1.0) * 1.02) + 1024
+        from ..fastcsv import data_start_and_capacity
+
+        pos, cap = data_start_and_capacity(fh.read(1 << 22), skip, size)
         out = {c: np.empty(cap) for c in cols}
         read_opts = pcsv.ReadOptions(column_names=names, use_threads=True, block_size=1 << 22)
         parse_opts = pcsv.ParseOptions(delimiter=delim, invalid_row_handler=_skip_comment_rows,

@@ -133,6 +133,37 @@ def test_model_free_floor_matches_pure_noise():
         assert floor.white_N == pytest.approx(N, rel=0.05)
 
 
+def test_model_free_floor_ignores_dense_stimulus_steps():
+    """A Helmholtz sequence stepping every 60 s with a large (quadratic) field effect and
+    supply steps: the differences across the logged channels' steps are left out, so the
+    floor stays the pure noise's (it was 3-6x too high when dense steps counted as flicker),
+    and the basis says which channels were stepped."""
+    from test_envmodel_helpers import make_log
+    from workbench_cases import helmholtz
+
+    from gyrotest.envmodel.floor import stimulus_steps
+
+    rng = np.random.default_rng(5)
+    n = 4 * 3600
+    H = helmholtz(n, dwell=60)
+    H = H + rng.normal(scale=0.05, size=H.shape)
+    V = 28.0 + 0.5 * (np.arange(n) // 900 % 3) + rng.normal(scale=0.002, size=n)
+    nz = 0.3 * rng.normal(size=n)
+    rate = 2.0 + 0.004 * H[0] + 2e-4 * H[1] ** 2 + 0.3 * (V - 28) + nz
+    log = make_log(rate, 1.0, field={"Hx": H[0], "Hy": H[1], "Hz": H[2]}, supply=V)
+    wd = prepare(log)
+    floor = model_free_floor(wd)
+    pure = prepare(make_log(nz, 1.0), resolution=wd.resolution_s,
+                   smoothing_s=wd.refs.smoothing_s)
+    truth = float(np.std(pure.y))
+    assert floor.rms_dph == pytest.approx(truth, rel=0.3), (floor.rms_dph, truth)
+    assert "left out" in floor.basis and "Hx" in floor.basis
+    # the step mask: steps of the stepped channels only, a small share of the samples
+    mask, names = stimulus_steps({"Hx": H[0], "noise": rng.normal(size=n),
+                                  "ramp": np.linspace(20, 30, n)}, [(0, n)], n)
+    assert names == ["Hx"] and 0 < mask.mean() < 0.1
+
+
 def test_robust_deviations_equal_allan_on_gaussian_noise():
     """For white noise the robust (MAD) Allan and Hadamard deviations equal the classical
     Allan deviation N/√τ; for flicker the Hadamard plateau is 0.811 of the Allan one."""

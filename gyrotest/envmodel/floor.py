@@ -176,8 +176,71 @@ def _robust_scale(d: np.ndarray) -> float:
     return float(np.std(d[keep]) / math.sqrt(_TRUNC4))
 
 
+#: a logged channel "steps" where one sample-to-sample change exceeds this many robust σ of
+#: its changes and :data:`STEP_RANGE_FRAC` of its range
+STEP_SIGMA = 8.0
+STEP_RANGE_FRAC = 0.02
+#: samples kept out after a step (coil-current settling, the gyro's response)
+STEP_SETTLE = 3
+#: a channel whose changes are "steps" more often than this is not stepped but noisy: ignored
+STEP_MAX_FRAC = 0.10
+#: fewest clean differences for a τ to count
+MIN_CLEAN_DIFFS = 30
+
+
+def stimulus_steps(channels: dict[str, np.ndarray], segments: list[tuple[int, int]],
+                   n: int) -> tuple[np.ndarray, list[str]]:
+    """Samples at and just after a step of any logged channel (Helmholtz-coil or supply steps,
+    tilt-table moves, chamber set-point jumps): a sample-to-sample change larger than
+    ``STEP_SIGMA`` robust σ of the channel's changes (1.4826·MAD) and ``STEP_RANGE_FRAC`` of
+    its 0.5–99.5 % range, marked with the ``STEP_SETTLE`` samples after it. Channels whose
+    changes are steps more often than ``STEP_MAX_FRAC`` (noise, not a stepped stimulus) are
+    ignored. Returns (boolean mask over the n samples, names of the stepped channels)."""
+    mask = np.zeros(n, dtype=bool)
+    names = []
+    for name, x in channels.items():
+        x = np.asarray(x, float)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            continue
+        lo, hi = np.percentile(x, [0.5, 99.5])
+        rng = float(hi - lo)
+        if not rng > 0:
+            continue
+        hit = np.zeros(n, dtype=bool)
+        for a, b in segments:
+            if b - a < 3:
+                continue
+            d = np.abs(np.diff(x[a:b]))
+            sig = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+            big = d > max(STEP_SIGMA * sig, STEP_RANGE_FRAC * rng)
+            hit[a + 1:b] |= big
+        frac = hit.mean()
+        if frac == 0 or frac > STEP_MAX_FRAC:
+            continue
+        idx = np.flatnonzero(hit)
+        for k in range(STEP_SETTLE + 1):
+            mask[np.minimum(idx + k, n - 1)] = True
+        mask[np.maximum(idx - 1, 0)] = True
+        names.append(name)
+    return mask, names
+
+
+def frame_channels(fr) -> dict[str, np.ndarray]:
+    """Every logged stimulus channel of an :class:`~gyrotest.envmodel.frame.EnvFrame`
+    (temperatures, field, supply, table rate, extra channels, earth-rate projection)."""
+    out: dict[str, np.ndarray] = {}
+    for group in (fr.temperature, fr.field_uT, fr.extra):
+        out.update(group)
+    for name in ("supply", "table_rate", "earth_dph"):
+        v = getattr(fr, name, None)
+        if v is not None:
+            out[name] = v
+    return out
+
+
 def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
-                max_frac: float = 0.25, hadamard: bool = False
+                max_frac: float = 0.25, hadamard: bool = False,
+                exclude: np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping Allan (or Hadamard) deviation with a robust scale: σ(τ) = s(d)/√2 over the
     differences d = ȳ_{k+m} − ȳ_k of adjacent overlapping τ-averages (Hadamard:
@@ -195,6 +258,11 @@ def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
     Annex C (Allan variance); Riley, Handbook of Frequency Stability Analysis (NIST SP 1065,
     2008) §5.2.8 (Hadamard variance); robust scale: Rousseeuw & Croux (1993) (MAD consistency
     factor 1.4826).
+
+    ``exclude`` (boolean per sample, :func:`stimulus_steps`): differences whose window holds
+    an excluded sample are left out, so that stimulus steps too dense to be "sparse" for the
+    robust scale (a Helmholtz sequence stepping every minute) do not count as noise; a τ with
+    fewer than ``MIN_CLEAN_DIFFS`` clean differences is skipped.
     """
     rate = np.asarray(rate, float)
     longest = max((b - a for a, b in segments), default=0)
@@ -202,6 +270,7 @@ def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
     m = 1
     while m <= max_frac * longest:
         parts = []
+        span = (3 if hadamard else 2) * m
         for a, b in segments:
             x = rate[a:b]
             if len(x) < 2 * m + 1:
@@ -211,10 +280,15 @@ def robust_avar(rate: np.ndarray, dt: float, segments: list[tuple[int, int]],
             if hadamard:
                 if len(avg) <= 2 * m:
                     continue
-                parts.append(avg[2 * m:] - 2.0 * avg[m:-m] + avg[:-2 * m])
+                d = avg[2 * m:] - 2.0 * avg[m:-m] + avg[:-2 * m]
             else:
-                parts.append(avg[m:] - avg[:-m])
-        if parts:
+                d = avg[m:] - avg[:-m]
+            if exclude is not None:
+                ce = np.concatenate([[0], np.cumsum(exclude[a:b], dtype=np.int64)])
+                d = d[(ce[span:] - ce[:-span])[:len(d)] == 0]
+            parts.append(d)
+        if parts and sum(len(p) for p in parts) >= (MIN_CLEAN_DIFFS if exclude is not None
+                                                    else 1):
             d = np.concatenate(parts)
             taus.append(m * dt)
             sigs.append(_robust_scale(d) / math.sqrt(6.0 if hadamard else 2.0))
@@ -227,7 +301,9 @@ def model_free_floor(wd) -> st.NoiseFloor:
     short-τ noise of its raw rate; see the module docstring. The result does not depend on
     any model."""
     fr = wd.frame
-    tau, sig = robust_avar(fr.rate, fr.dt, fr.bounds, hadamard=True)
+    steps, stepped = stimulus_steps(frame_channels(fr), fr.bounds, fr.n)
+    tau, sig = robust_avar(fr.rate, fr.dt, fr.bounds, hadamard=True,
+                           exclude=steps if stepped else None)
     ok = np.isfinite(sig) & (sig > 0) & (tau <= wd.duration_s / 4.0)
     tau, sig = tau[ok], sig[ok]
     t_eff = getattr(wd, "t_eff", wd.resolution_s)
@@ -240,7 +316,8 @@ def model_free_floor(wd) -> st.NoiseFloor:
     basis = (f"white and flicker noise of the raw rate (robust Hadamard deviation over τ = "
              f"{tau[0]:.3g}–{t_lo:.3g} s, before environmental stimuli add to it; flicker "
              f"{'capped by the lowest excess up to ' + format(t_hi, '.3g') + ' s' if B > 0 else 'not detected'}"
-             f"), independent of the model; random walk not included; at T_eff = "
+             + (f"; windows across steps of {', '.join(stepped)} left out" if stepped else "")
+             + f"), independent of the model; random walk not included; at T_eff = "
              f"{t_eff:.3g} s over {wd.duration_s:.0f} s")
     return st.NoiseFloor(rms, N, B, (float(tau[0]), float(t_hi)), basis)
 

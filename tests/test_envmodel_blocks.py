@@ -93,3 +93,69 @@ def test_rotated_gyro_reaches_the_floor_through_the_user_loop():
                           f"{w[2] / 100:.8g}*field.Bz)"])
     got = fit_model(wd, final)
     assert got.rms_holdout <= 1.1 * true.rms_holdout, (got.rms_holdout, true.rms_holdout)
+
+
+# ---------------------------------------------------------------- support-aware fold fits
+def _old_rule(X, y, train, beta_full, frac=0.02):
+    full = X - X.mean(axis=0)
+    xt = X[train] - X[train].mean(axis=0)
+    v_all, v_tr = (full * full).sum(0), (xt * xt).sum(0)
+    fixed = (v_all > 0) & (v_tr < frac * v_all)
+    if not fixed.any():
+        return np.linalg.lstsq(X[train], y[train], rcond=None)[0]
+    b = np.array(beta_full, float)
+    yt = y[train] - X[train][:, fixed] @ beta_full[fixed]
+    b[~fixed] = np.linalg.lstsq(X[train][:, ~fixed], yt, rcond=None)[0]
+    return b
+
+
+def test_fold_coefficients_support_directions():
+    """Fold coefficients are free only along directions the training blocks support: plain
+    least squares when every direction is supported, the one-column rule (a transient living
+    in the held-out chunk keeps its full-data coefficient) reproduced, and a *combination*
+    of columns that moves only in the held-out chunk (two field axes swept together once)
+    kept at its full-data value instead of being extrapolated."""
+    from gyrotest.envmodel.fit import _fold_coefficients
+
+    rng = np.random.default_rng(3)
+    n = 400
+    t = np.arange(n, dtype=float)
+    train = np.ones(n, bool)
+    train[300:360] = False
+    # 1. every direction supported: ordinary least squares on the training blocks
+    X = np.column_stack([np.ones(n), rng.normal(size=n), np.sin(t / 30)])
+    y = X @ [1.0, 2.0, -0.5] + rng.normal(scale=0.1, size=n)
+    bf = np.linalg.lstsq(X, y, rcond=None)[0]
+    np.testing.assert_allclose(_fold_coefficients(X, y, train, bf),
+                               np.linalg.lstsq(X[train], y[train], rcond=None)[0], atol=1e-10)
+    # 2. a transient that lives only in the held-out chunk: the one-column rule
+    tr = np.where((t >= 300) & (t < 350), np.exp(-(t - 300) / 5.0), 0.0)
+    X2 = np.column_stack([np.ones(n), rng.normal(size=n), tr])
+    y2 = X2 @ [0.3, 1.0, 4.0] + rng.normal(scale=0.1, size=n)
+    bf2 = np.linalg.lstsq(X2, y2, rcond=None)[0]
+    # (equal to the one-column rule up to the slight correlation of the columns, which
+    # tilts the unsupported direction)
+    np.testing.assert_allclose(_fold_coefficients(X2, y2, train, bf2),
+                               _old_rule(X2, y2, train, bf2), rtol=2e-3)
+    assert _fold_coefficients(X2, y2, train, bf2)[2] == pytest.approx(bf2[2], rel=2e-3)
+    # 3. two columns that each vary in training, but their difference only in the held-out
+    #    chunk: the combination keeps its full-data value
+    a = np.sin(t / 7.0)
+    b = a.copy()
+    b[300:360] += 3.0 * np.hanning(60)
+    X3 = np.column_stack([np.ones(n), a, b])
+    y3 = X3 @ [0.0, 1.0, 2.0] + rng.normal(scale=0.05, size=n)
+    bf3 = np.linalg.lstsq(X3, y3, rcond=None)[0]
+    bfold = _fold_coefficients(X3, y3, train, bf3)
+    # along the supported direction (a + b move together) the training data decide; the
+    # held-out prediction of the unsupported bump is the full-data one, not an extrapolation
+    held = ~train
+    bump = X3[held] - X3[held].mean(0)
+    pred_fold = bump @ bfold
+    pred_full = bump @ bf3
+    assert np.sqrt(np.mean((pred_fold - pred_full) ** 2)) < 0.05 * np.sqrt(np.mean(pred_full ** 2))
+    # the old one-column rule extrapolates the combination freely (ill-determined): the new
+    # one is never worse on the held-out blocks here
+    e_new = np.sqrt(np.mean((y3[held] - X3[held] @ bfold) ** 2))
+    e_old = np.sqrt(np.mean((y3[held] - X3[held] @ _old_rule(X3, y3, train, bf3)) ** 2))
+    assert e_new <= e_old + 1e-9

@@ -530,22 +530,57 @@ MIN_FOLD_SUPPORT = 0.02
 
 def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
                        beta_full: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients on the training blocks of a fold. A regressor that lives
-    almost only in the held-out chunk (a warm-up transient shorter than a chunk: its
-    variation over the training blocks below :data:`MIN_FOLD_SUPPORT` of its variation over
-    the record) cannot be estimated without it; it keeps its full-data coefficient, as the
-    time constants do, instead of being extrapolated from its tail."""
+    """Least-squares coefficients on the training blocks of a fold, free only along the
+    directions the training blocks support.
+
+    A direction v of coefficient space is supported when the training blocks carry at least
+    :data:`MIN_FOLD_SUPPORT` of the variation the whole record carries along it:
+    vᵀ·A_train·v ≥ MIN_FOLD_SUPPORT·vᵀ·A·v, with A = X_cᵀX_c the (column-centred) design's
+    information. The supported directions are the generalised eigenvectors of (A_train, A)
+    with eigenvalue ≥ MIN_FOLD_SUPPORT; along the others the coefficients keep their
+    full-data values, as the time constants do. A regressor (or a combination of them) that
+    lives almost only in the held-out chunk -- a warm-up transient shorter than a chunk, the
+    one Helmholtz sweep that moves two field axes together -- cannot be estimated without it
+    and would otherwise be extrapolated from what is left; with one such column this is the
+    plain rule "variation over the training blocks below 2 % of the record's". The
+    intercept (a constant column) is always free.
+    """
+    n_col = X.shape[1]
     full = X - X.mean(axis=0)
-    xt = X[train] - X[train].mean(axis=0)
     v_all = np.sum(full * full, axis=0)
-    v_tr = np.sum(xt * xt, axis=0)
-    fixed = (v_all > 0) & (v_tr < MIN_FOLD_SUPPORT * v_all)
-    if not fixed.any():
+    const = v_all <= 0
+    cols = np.flatnonzero(~const)
+    if len(cols) == 0:
         return st.lstsq(X[train], y[train])[0]
-    free = ~fixed
-    yt = y[train] - X[train][:, fixed] @ beta_full[fixed]
-    b = np.array(beta_full, dtype=float)
-    b[free] = st.lstsq(X[train][:, free], yt)[0]
+    xt = X[train][:, cols] - X[train][:, cols].mean(axis=0)
+    v_tr = np.sum(xt * xt, axis=0)
+    if np.all(v_tr >= MIN_FOLD_SUPPORT * v_all[cols]) and len(cols) == 1:
+        return st.lstsq(X[train], y[train])[0]
+    scale = np.sqrt(v_all[cols])
+    F = full[:, cols] / scale
+    T = xt / scale
+    A = F.T @ F
+    At = T.T @ T
+    s, Q = np.linalg.eigh(A)
+    keep = s > 1e-10 * max(float(s.max()), 1e-300)
+    W = Q[:, keep] / np.sqrt(s[keep])           # A-whitening: Wᵀ A W = I
+    lam, U = np.linalg.eigh(W.T @ At @ W)
+    V = W @ U[:, lam >= MIN_FOLD_SUPPORT]       # supported directions (scaled coefficients)
+    if V.shape[1] == len(cols) and keep.all():
+        return st.lstsq(X[train], y[train])[0]
+    base = np.array(beta_full, dtype=float)
+    Xtr = X[train]
+    yt = y[train] - Xtr @ base
+    D = [Xtr[:, cols] @ (V / scale[:, None])] if V.shape[1] else []
+    D += [Xtr[:, np.flatnonzero(const)]]
+    Dm = np.column_stack(D)
+    c = st.lstsq(Dm, yt)[0]
+    b = base
+    k = V.shape[1]
+    if k:
+        b[cols] += (V / scale[:, None]) @ c[:k]
+    b[np.flatnonzero(const)] += c[k:]
+    assert b.shape == (n_col,)
     return b
 
 

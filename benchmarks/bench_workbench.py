@@ -734,10 +734,10 @@ def markdown(s: dict, *, title: str = "") -> str:
 
 # ============================================================================ campaign
 def _job(args: tuple) -> dict:
-    seed, kind, max_hours, max_steps, loop, reference = args
+    seed, kind, max_hours, max_steps, loop, reference, null = args
     t0 = time.perf_counter()
     try:
-        case = ws.make_case(seed, kind, max_hours=max_hours)
+        case = ws.make_case(seed, kind, max_hours=max_hours, null=null)
     except Exception as e:  # noqa: BLE001 - a simulator bug must not stop the campaign
         return {"seed": seed, "kind": kind or "?", "status": "crash", "crash_stage": "simulate",
                 "error": _fmt_err(e), "traceback": traceback.format_exc(limit=6),
@@ -750,9 +750,12 @@ def _job(args: tuple) -> dict:
 
 def run_campaign(seeds: list[int], *, kinds: list[str] | None = None, jobs: int = 1,
                  max_hours: float | None = None, max_steps: int = MAX_STEPS, loop: bool = True,
-                 progress: bool = True, reference: bool = False) -> list[dict]:
-    """Run every seed (in a multiprocessing Pool when ``jobs`` > 1); rows in seed order."""
-    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference) for s in seeds]
+                 progress: bool = True, reference: bool = False, nulls: bool = False
+                 ) -> list[dict]:
+    """Run every seed (in a multiprocessing Pool when ``jobs`` > 1); rows in seed order.
+    ``nulls``: every case has nothing missing (false alarms only)."""
+    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference, nulls)
+             for s in seeds]
     rows: list[dict] = []
     t0 = time.perf_counter()
 
@@ -833,6 +836,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--reference", action="store_true",
                     help="give every case a static reference run of the same simulated gyro "
                          "(the floor then comes from it, as with --reference LOG)")
+    ap.add_argument("--nulls", action="store_true",
+                    help="null cases only (nothing missing): a larger sample of false alarms")
     ap.add_argument("--validate", action="store_true",
                     help="harness check only: fit the true model, no diagnosis loop")
     a = ap.parse_args(argv)
@@ -852,7 +857,8 @@ def main(argv: list[str] | None = None) -> int:
     state = gyrotest_state()
     t0 = time.perf_counter()
     rows = run_campaign(seeds, kinds=kinds, jobs=a.jobs, max_hours=max_hours,
-                        max_steps=a.max_steps, loop=not a.validate, reference=a.reference)
+                        max_steps=a.max_steps, loop=not a.validate, reference=a.reference,
+                        nulls=a.nulls)
     wall = time.perf_counter() - t0
     s = summarise(rows)
     rng = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else \
@@ -864,6 +870,7 @@ def main(argv: list[str] | None = None) -> int:
                        "summary": s, "rows": rows}, fh, indent=1, default=_json_default)
     print(markdown(s, title=f"Seeds {rng}" + (f", kinds {','.join(kinds)}" if kinds else "")
                    + (f", <= {max_hours:g} h" if max_hours else "")
+                   + (", null cases only" if a.nulls else "")
                    + f", {a.jobs} job(s), wall {wall:.0f} s"
                    + (" (validate: true model only)" if a.validate else "")
                    + f"; gyrotest {state.get('head', '?')}, envmodel "

@@ -888,9 +888,12 @@ def _id(name: str) -> str:
 
 
 # ============================================================================ the case
-def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = None) -> Case:
+def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = None,
+              null: bool = False) -> Case:
     """Simulate one case (see the module docstring). ``kind`` one of :data:`KINDS` (default:
-    drawn from the seed); ``max_hours`` caps the record length (the quick campaign)."""
+    drawn from the seed); ``max_hours`` caps the record length (the quick campaign);
+    ``null`` forces a case with nothing missing (the same run, noise and number of present
+    effects as the seed would draw otherwise: a larger sample of false alarms)."""
     rng = np.random.default_rng([int(seed), 20261124])
     if kind is None:
         kind = str(rng.choice(KINDS, p=KIND_WEIGHTS))
@@ -917,6 +920,8 @@ def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = N
     ndesc["floor_nominal_dph"] = floor
     # ---- draw the effects
     u = rng.random()
+    if null:
+        u = 0.0
     n_missing = 0 if u < 0.25 else 1 if u < 0.65 else 2 if u < 0.9 else 3
     n_present = int(rng.integers(1, 4)) if n_missing == 0 else int(rng.integers(0, 3))
     pool = list(run.pool)

@@ -11,7 +11,8 @@ means**:
    alike, a model linear in its coefficients stays exact, and the dT/dt regressor
    d(S_W T)/dt = S_W(dT/dt) carries no smoothing bias however large W is; W only costs time
    resolution. W = max(60 s, the window at which the noisiest temperature sensor's derivative
-   noise falls to 1 % of its dT/dt RMS) (:func:`choose_smoothing`);
+   noise falls to 1–5 % of its dT/dt RMS: 1 % when the rate follows that dT/dt strongly, up
+   to 5 % when its derivative noise would not show in the model) (:func:`choose_smoothing`);
 3. everything is averaged over consecutive blocks of T_b inside each gap-free segment (the
    smoother's reach, 2·W, is left out at each segment end).
 
@@ -49,6 +50,13 @@ NICE_STEPS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 30.0, 
 MAX_BLOCKS = 20000
 MIN_BLOCKS_RES = 300
 MAX_RES_S = 60.0
+#: the smoother makes the derivative noise of a temperature sensor at most this fraction of its
+#: dT/dt RMS (a regressor noise r attenuates a dT/dt coefficient by r²) ...
+DERIV_NOISE_FRAC = (0.05, 0.03, 0.02, 0.01)
+#: ... the largest fraction whose prediction noise, fraction × (an upper estimate of the rate
+#: variation that follows that sensor's dT/dt), stays below this share of the white-noise
+#: floor at W; 1 % when the rate follows dT/dt strongly
+DERIV_NOISE_SHARE = 0.25
 
 
 # ============================================================================ working data
@@ -177,14 +185,19 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
 
     Rule: W = max(60 s, 4·dt_f, W_noise), W_noise = the window at which the derivative noise of
     the noisiest temperature sensor, σ_T·√(2·dt/W³)·3600 degC/h (σ_T from second differences
-    on the fine grid), falls to 1 % of the RMS of that sensor's dT/dt (sensors whose dT/dt is at
-    the noise level are ignored); at most duration/20.
+    on the fine grid), falls to a fraction f of the RMS of that sensor's dT/dt (sensors whose
+    dT/dt is at the noise level are ignored); at most duration/20. f is the largest of 5, 3, 2
+    and 1 % for which f × (an upper estimate of how much of the gyro rate follows that dT/dt,
+    :func:`_rate_effect_bound`) stays below a quarter of the white-noise floor at W: the
+    regressor noise then costs the model nothing measurable, and a log whose rate hardly
+    follows dT/dt (a Helmholtz or tilt run) keeps a short window and its time resolution.
     Because S_W is applied to the gyro rate and to every regressor alike, W costs time
     resolution but never biases a coefficient.
     """
     w0 = max(60.0, 4.0 * frame.dt)
     need = w0
     why = "at least 60 s"
+    s1 = _white_sigma(frame)
     for name, x in frame.temperature.items():
         x = np.asarray(x, float)
         if len(x) < 8 or not np.all(np.isfinite(x)):
@@ -204,15 +217,74 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
         noise0 = sig * 3600.0 * math.sqrt(2 * frame.dt / w0 ** 3)
         if not (rms > 0 and sig > 0) or rms < 3.0 * noise0:
             continue  # no measurable temperature change: nothing to resolve
-        w = (sig * 3600.0 * math.sqrt(2 * frame.dt) / (0.01 * rms)) ** (2.0 / 3.0)
+        effect = _rate_effect_bound(frame, rate, inner, w0)
+        for frac in DERIV_NOISE_FRAC:
+            w = (sig * 3600.0 * math.sqrt(2 * frame.dt) / (frac * rms)) ** (2.0 / 3.0)
+            floor_w = s1 * math.sqrt(frame.dt / max(w, w0))
+            if frac * effect <= DERIV_NOISE_SHARE * floor_w:
+                break
         if w > need:
             need = w
-            why = (f"derivative noise of {name} (σ ≈ {sig:.2g} °C per {frame.dt:g} s) below 1 % "
-                   f"of its dT/dt RMS ({rms:.3g} °C/h)")
+            why = (f"derivative noise of {name} (σ ≈ {sig:.2g} °C per {frame.dt:g} s) below "
+                   f"{100 * frac:g} % of its dT/dt RMS ({rms:.3g} °C/h); the rate follows "
+                   f"its dT/dt by at most ≈ {effect:.2g} deg/h")
     cap = max(w0, duration_s / 20.0)
     W = min(need, cap)
     W = float(np.ceil(W / frame.dt - 1e-9) * frame.dt)
     return W, f"smoothing window W = {W:g} s ({why})"
+
+
+def _white_sigma(frame: EnvFrame) -> float:
+    """White-noise σ of the gyro rate per fine sample (deg/h): the robust scale of its first
+    differences / √2 (steps and drifts do not count)."""
+    r = np.asarray(frame.rate, float)
+    d = np.concatenate([np.diff(r[a:b]) for a, b in frame.bounds if b - a > 1] or [[0.0]])
+    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+
+
+def _rate_effect_bound(frame: EnvFrame, trate: np.ndarray, inner: np.ndarray,
+                       w0: float) -> float:
+    """Upper estimate (deg/h) of the RMS of the gyro-rate variation that follows one sensor's
+    dT/dt: the rate, smoothed over ``w0``, regressed on a constant, that dT/dt (``trate``,
+    degC/h) and the level of every logged channel, on samples one window apart;
+    (|D| + 2·SE(D))·RMS(dT/dt). Only the size matters: it decides how finely the smoother
+    must suppress that sensor's derivative noise."""
+    step = max(1, int(round(w0 / frame.dt)))
+    idx = np.flatnonzero(inner)[::step]
+    if len(idx) < 12:
+        return math.inf
+    y = smooth(np.asarray(frame.rate, float), frame.dt, w0, frame.bounds)[idx]
+    cols = [np.ones(len(idx)), trate[idx]]
+    for group in (frame.temperature, frame.field_uT, frame.extra):
+        for v in group.values():
+            v = np.asarray(v, float)
+            if v.shape == trate.shape and np.all(np.isfinite(v[idx])):
+                cols.append(smooth(v, frame.dt, w0, frame.bounds)[idx])
+    fields = [np.asarray(v, float) for v in frame.field_uT.values()
+              if np.shape(v) == trate.shape and np.all(np.isfinite(v))]
+    for i, a in enumerate(fields):  # second-order field terms (Antonova-Matveev m = 2)
+        for b in fields[i:]:
+            cols.append(smooth(a * b, frame.dt, w0, frame.bounds)[idx])
+    if frame.supply is not None:
+        cols.append(smooth(np.asarray(frame.supply, float), frame.dt, w0, frame.bounds)[idx])
+    X = np.column_stack(cols)
+    X[:, 2:] -= X[:, 2:].mean(axis=0)
+    sd = X.std(axis=0)
+    keep = np.ones(X.shape[1], bool)
+    keep[2:] = sd[2:] > 0
+    X = X[:, keep]
+    if len(idx) < X.shape[1] + 8:
+        X = X[:, :2]
+    beta, res, rank, _ = np.linalg.lstsq(X, y, rcond=None)
+    e = y - X @ beta
+    dof = max(1, len(idx) - X.shape[1])
+    s2 = float(e @ e) / dof
+    try:
+        cov = s2 * np.linalg.pinv(X.T @ X)
+    except np.linalg.LinAlgError:
+        return math.inf
+    se = math.sqrt(max(float(cov[1, 1]), 0.0))
+    return (abs(float(beta[1])) + 2.0 * se) * float(np.sqrt(np.mean(trate[idx] ** 2)))
 
 
 def prepare(log, *, axis: str | None = None, resolution: float | None = None,

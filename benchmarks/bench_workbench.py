@@ -578,6 +578,12 @@ def summarise(rows: list[dict]) -> dict:
                 sum(r["noise"].get("type") == "real" for r in nulls)),
             "false_alarms_spurious": _frac(sum(r.get("alarm_spurious", False) for r in nulls),
                                            len(nulls)),
+            # nulls whose true model, written on the logged channels, reaches the floor (the
+            # others leave something the starting model cannot express: a lagging or noisy
+            # sensor's dT/dt, so a refinement of a present term is not a false alarm there)
+            "false_alarms_true_at_floor": _frac(
+                sum(r["alarm"] for r in nulls if r["true_over_floor"] <= TRUE_AT_FLOOR),
+                sum(r["true_over_floor"] <= TRUE_AT_FLOOR for r in nulls)),
             "final_ok": _frac(sum(r["final_over_true"] <= FINAL_OK for r in fin), len(fin)),
             "floor_ok": _frac(sum(1 / FLOOR_FACTOR <= r["floor_check_factor"] <= FLOOR_FACTOR
                                   for r in flo), len(flo)),
@@ -681,6 +687,8 @@ def markdown(s: dict, *, title: str = "") -> str:
         f"{_pct(o['false_alarms_synthetic'])} / {_pct(o['false_alarms_real'])} |",
         f"| ... whose added term explains < {SPURIOUS:g} floor of the truth (spurious) | "
         f"{_pct(o['false_alarms_spurious'])} |",
+        f"| ... nulls whose true model reaches the floor (true held-out <= {TRUE_AT_FLOOR:g}x "
+        f"the injected floor) | {_pct(o.get('false_alarms_true_at_floor', _frac(0, 0)))} |",
         f"| final held-out / true held-out <= {FINAL_OK:g} | {_pct(o['final_ok'])} |",
         f"| ... among cases whose true model is at the floor | {_pct(o['final_ok_at_floor'])} |",
         f"| final held-out / held-out of the true model in the workbench's terms <= 1.1 | "

@@ -277,11 +277,16 @@ class _Fitter:
                 thetas[s.label] = {pname: math.sqrt(lo * hi) if s.effect.nonlinear[0].kind
                                    == "tau" else 0.5 * (lo + hi)}
         order = [s for s in nl if s.label not in known] + [s for s in nl if s.label in known]
-        rounds = 1 if len(nl) == 1 else 2
+        # from scratch, several nonlinear terms are searched globally twice: in the first
+        # round each is searched while the others still sit at provisional values and may
+        # lock onto what another term should explain (a lag τ imitating a second lag)
+        scratch = len(nl) > 1 and not known
+        rounds = 1 if len(nl) == 1 else 3 if scratch else 2
+        n_global = 2 if scratch else 1
         for rnd in range(rounds):
             for s in order:
                 thetas[s.label] = self._opt_one(
-                    s, thetas, mask, local=(local and s.label in known) or rnd > 0)
+                    s, thetas, mask, local=(local and s.label in known) or rnd >= n_global)
         return thetas
 
     def _opt_one(self, s: TermSpec, thetas: dict[str, dict], mask, local: bool) -> dict:

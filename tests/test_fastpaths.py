@@ -81,6 +81,12 @@ def test_allan_on_plain_csv_imports_no_stats_signal_pandas(tmp_path):
     mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", str(f), "--rate-unit",
                           "deg/h", "--json", "--terms", "N,markov,sine")
     assert "scipy.optimize" not in mods
+    # the impact of a bias-instability (flicker) term is in closed form (Ci): no
+    # scipy.integrate (≈ 0.15–0.25 s to import with the scipy.optimize it pulls in)
+    mods = _modules_after("from gyrotest.noise.impact import Component, axial_variance\n"
+                          "axial_variance(Component('B', 1.0), 3600.0, tau0=0.01, "
+                          "record_s=1e5)")
+    assert "scipy.integrate" not in mods and "scipy.optimize" not in mods
 
 
 def test_numerics_match_scipy_optimize():

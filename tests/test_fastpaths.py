@@ -174,6 +174,35 @@ def test_welch_matches_scipy(n, nperseg):
     np.testing.assert_allclose(p2, p, rtol=1e-10)
 
 
+def test_find_lines_chi2_only_above_the_snr_floor():
+    """find_lines evaluates the χ² tail only where the PSD exceeds min_snr × background; the
+    candidates and every reported line equal those of the tail evaluated on all bins."""
+    from scipy import special
+
+    from gyrotest.noise import spectral
+
+    rng = np.random.default_rng(21)
+    t = np.arange(1 << 18) * 0.01
+    for amp in (0.0, 0.05, 0.2, 1.0):
+        x = rng.standard_normal(t.size) + amp * np.sin(2 * np.pi * 7.3 * t) \
+            + 0.5 * amp * np.sin(2 * np.pi * 21.0 * t)
+        psd = spectral.welch_psd(x, 0.01)
+        got = spectral.find_lines(psd)
+        bg = spectral._background(psd.f, psd.psd)
+        ratio = psd.psd / bg
+        nu = max(psd.dof, 2.0)
+        pv = special.chdtrc(nu, nu * ratio)
+        cand = (ratio > 4.0) & (pv < 1e-6 / psd.f.size)
+        cand[0] = False
+        for ln in got:  # the peak bin's tail probability, as evaluated on all bins
+            k = int(np.flatnonzero(ratio == ln.snr)[0])
+            assert ln.p_value == pv[k]
+        runs = int(np.count_nonzero(np.diff(cand.astype(int)) == 1) + cand[0])
+        assert len(got) == min(runs, 3), amp
+        if amp >= 0.2:
+            assert got and abs(got[0].f_hz - 7.3) < 0.05
+
+
 def test_chi2_from_special_matches_stats():
     from scipy import stats
 

@@ -55,7 +55,7 @@ def test_help_imports_no_command_module():
 
 def test_allan_help_and_info_import_no_heavy_module(tmp_path):
     mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", "--help")
-    for m in HEAVY:
+    for m in (*HEAVY, "scipy", "gyrotest.noise.analysis"):  # options from noise.kinds
         assert m not in mods, f"`gyrotest allan --help` imports {m}"
     f = tmp_path / "small.csv"
     t = np.arange(1, 501) * 0.1
@@ -367,3 +367,40 @@ def test_no_progress_text_when_piped(tmp_path):
     r = run_cli(["allan", str(f), "--rate-unit", "deg/h", "--dev", "mtotdev", "--taus", "octave"])
     assert r.code == 0, r.err
     assert "τ ━" not in r.err and "\r" not in r.err
+
+
+def test_allan_prefetched_read_identical_to_serial(tmp_path, monkeypatch):
+    """`allan` reads a single text log on a thread while it imports the analysis: stdout,
+    stderr (ingest notes first) and exit codes are identical to the serial read, including
+    the order of errors (a bad option before a bad file) — and the prefetch really ran."""
+    from gyrotest.cli import cmd_allan, pool
+
+    from cliutil import run_cli
+
+    rng = np.random.default_rng(5)
+    t = np.arange(6000) * 0.01
+    good = tmp_path / "notes.csv"
+    np.savetxt(good, np.c_[t, rng.standard_normal(t.size), rng.standard_normal(t.size)],
+               delimiter=",", header="time,gx,gy", comments="")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_s,omega_dph\n0.01,1\n0.02,abc\n0.03,2\n")
+    cases = [[str(good), "--rate-unit", "deg/s"], [str(good), "--rate-unit", "deg/s", "--json"],
+             [str(bad), "--rate-unit", "deg/h"], [str(bad), "--rate-unit", "deg/h", "--taus", "zz"],
+             [str(tmp_path / "missing.csv")]]
+    started = []
+
+    def counting(paths, opts):
+        fut = pool.prefetch_log(paths, opts)
+        started.append(fut is not None)
+        return fut
+
+    monkeypatch.setattr(cmd_allan, "prefetch_log", counting)
+    early = [run_cli(["allan", *c]) for c in cases]
+    assert started == [True, True, True, True, False]
+    monkeypatch.setattr(cmd_allan, "prefetch_log", lambda paths, opts: None)
+    serial = [run_cli(["allan", *c]) for c in cases]
+    for c, a, b in zip(cases, early, serial):
+        assert (a.code, a.out, a.err) == (b.code, b.out, b.err), c
+    assert "auto-detected" in early[0].err.splitlines()[0]
+    early[3].assert_clean_error("--taus")
+    early[2].assert_clean_error("row 2")

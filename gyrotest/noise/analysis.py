@@ -35,6 +35,7 @@ import numpy as np
 from ..data import GyroLog
 from ..errors import AnalysisError, InputError
 from ..units import format_duration, parse_duration
+from . import kinds as _kinds
 from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
@@ -63,8 +64,7 @@ from .warnings import KrobkaWarning, krobka_checks
 #: samples of a streamed log's rate rebuilt for the axis cross-correlation
 STREAM_PREFIX = 1 << 24
 #: deviations a streamed log (θ only) supports: those computed from θ here
-STREAM_DEVS = ("oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev",
-                "hkdev")
+STREAM_DEVS = _kinds.STREAM_DEVS
 
 __all__ = ["AllanAnalysis", "AxisAnalysis", "allan_document", "analyse_allan", "input_kind_of",
            "parse_taus"]

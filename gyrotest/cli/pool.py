@@ -100,8 +100,10 @@ def prefetch_log(paths: Sequence[str], opts: dict):
         return None
     from concurrent.futures import ThreadPoolExecutor
 
+    from ..heap import reuse_freed_memory
     from .common import load_log
 
+    reuse_freed_memory()  # read whole (text): before any thread starts (gyrotest.heap)
     pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gyrotest-read")
     fut = pool.submit(load_log, paths[0], opts, announce=False)
     pool.shutdown(wait=False)

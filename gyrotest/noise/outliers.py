@@ -141,16 +141,18 @@ NUMPY_MEDIAN_MAX = 200_000
 MEDIAN_PIECE = 1 << 18
 
 
-def _running_median(x: np.ndarray, window: int) -> np.ndarray:
+def _running_median(x: np.ndarray, window: int, out: np.ndarray | None = None) -> np.ndarray:
     """Running median over ``window`` (odd) samples, edges padded with the end values
-    (scipy.ndimage.median_filter with mode="nearest"; the same numbers either way). Long
-    records go in pieces of :data:`MEDIAN_PIECE` extended by window // 2 samples on each
-    inner side, so every output sees the same window as in one call (identical numbers)."""
+    (scipy.ndimage.median_filter with mode="nearest"; the same numbers either way), into
+    ``out`` if given. Long records go in pieces of :data:`MEDIAN_PIECE` extended by
+    window // 2 samples on each inner side, so every output sees the same window as in one
+    call (identical numbers)."""
+    if out is None:
+        out = np.empty(x.size)
     if x.size > NUMPY_MEDIAN_MAX:
         from scipy.ndimage import median_filter
 
         h = window // 2
-        out = np.empty(x.size)
         for a in range(0, x.size, MEDIAN_PIECE):
             b = min(a + MEDIAN_PIECE, x.size)
             lo, hi = max(a - h, 0), min(b + h, x.size)
@@ -158,7 +160,6 @@ def _running_median(x: np.ndarray, window: int) -> np.ndarray:
         return out
     h = window // 2
     xp = np.concatenate([np.full(h, x[0]), x, np.full(h, x[-1])])
-    out = np.empty(x.size)
     step = max(1, 4_000_000 // window)  # bounded memory: chunks of the window view
     view = np.lib.stride_tricks.sliding_window_view(xp, window)
     for i in range(0, x.size, step):
@@ -255,14 +256,19 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
     r = np.empty_like(x)  # the running median, then x − median in place
     for a, b in segs:
         w = min(window, (b - a) | 1) if b - a >= 3 else 1
-        r[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
+        if w >= 3:
+            _running_median(x[a:b], w, out=r[a:b])
+        else:
+            r[a:b] = x[a:b]
     np.subtract(x, r, out=r)
     scale, how = _scale(r)
     kk = threshold_k(n, false_alarm, k_min) if k is None else float(k)
     if scale <= 0:
         mask = np.zeros(n, dtype=bool)
     else:  # |r/scale| > kk, without a full-size z array
-        mask = np.abs(r) > kk * scale * (1.0 - 1e-12)  # a superset; the exact test below
+        lim = kk * scale * (1.0 - 1e-12)  # |r| > lim: a superset; the exact test below
+        mask = r > lim  # two sign tests instead of a full-size |r| copy
+        mask |= r < -lim
         cand = np.flatnonzero(mask)
         mask[cand] = np.abs(r[cand] / scale) > kk
     events: list[OutlierEvent] = []
@@ -306,7 +312,10 @@ def apply_outliers(x, report: OutlierReport, mode: str, *, segments=None) -> np.
     med = np.empty_like(x)
     for a, b in segs:
         w = min(report.window, (b - a) | 1) if b - a >= 3 else 1
-        med[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
+        if w >= 3:
+            _running_median(x[a:b], w, out=med[a:b])
+        else:
+            med[a:b] = x[a:b]
     out = x.copy()
     m = report.mask
     if mode == "remove":

@@ -102,7 +102,8 @@ def paired(label_a: str, cmd_a: list[str], label_b: str, cmd_b: list[str], pairs
     print(f"  {label_a:<44} {med['a'][0]:7.2f} s wall {med['a'][1]:7.2f} s CPU")
     print(f"  {label_b:<44} {med['b'][0]:7.2f} s wall {med['b'][1]:7.2f} s CPU")
     print(f"  {'ratio ' + label_b.split()[0] + ' / ' + label_a.split()[0]:<44} "
-          f"{r_wall:7.2f}× wall {r_cpu:7.2f}× CPU   (median of {pairs} pairs)")
+          f"{r_wall:7.2f}× wall {r_cpu:7.2f}× CPU   (median of {pairs} pairs; load now "
+          f"{os.getloadavg()[0]:.1f})")
     return {"a": med["a"], "b": med["b"], "ratio_wall": r_wall, "ratio_cpu": r_cpu}
 
 
@@ -132,7 +133,7 @@ def startup(pairs: int, tmp: str, before: str | None = None) -> None:
                pairs, cwd_b=before, env_b=env)
 
 
-def big(rows: int, pairs: int, tmp: str) -> None:
+def big(rows: int, pairs: int, tmp: str, before: str | None = None) -> None:
     path = os.path.join(tmp, "big.csv")
     write_csv(path, rows)
     pq = os.path.join(tmp, "big.parquet")
@@ -149,6 +150,12 @@ def big(rows: int, pairs: int, tmp: str) -> None:
            out_a=out)
     paired("gyrotest allan big.parquet", [*GY, "allan", pq], "gyrotest allan big.csv",
            [*GY, "allan", path, "--rate-unit", "deg/h"], pairs, out_a=out)
+    if before:  # this checkout against another one, paired, on the same CSV
+        compileall.compile_dir(os.path.join(before, "gyrotest"), quiet=1)
+        env = dict(os.environ, PYTHONPATH=before)
+        cmd = [*GY, "allan", path, "--rate-unit", "deg/h", "--json"]
+        paired("gyrotest allan big.csv --json", cmd, "before: gyrotest allan big.csv --json", cmd,
+               pairs, out_a=out, cwd_b=before, env_b=env)
     parse_stage(path, pq, pairs)
 
 
@@ -200,7 +207,9 @@ def main() -> None:
     ap.add_argument("--rows", type=float, default=1e7)
     ap.add_argument("--pairs", type=int, default=5)
     ap.add_argument("--before", metavar="DIR",
-                    help="with --startup: also pair `allan small.csv` against the gyrotest in DIR")
+                    help="also pair `allan small.csv` (--startup) and `allan big.csv --json` "
+                         "(--big) against the gyrotest in DIR (e.g. a `git archive` of an older "
+                         "commit)")
     a = ap.parse_args()
     if not (a.startup or a.big or a.parse):
         a.startup = a.big = True
@@ -212,7 +221,7 @@ def main() -> None:
     if a.startup:
         startup(a.pairs, tmp, a.before)
     if a.big:
-        big(int(a.rows), a.pairs, tmp)
+        big(int(a.rows), a.pairs, tmp, a.before)
     elif a.parse:
         path, pq = os.path.join(tmp, "big.csv"), os.path.join(tmp, "big.parquet")
         write_csv(path, int(a.rows))

@@ -239,6 +239,7 @@ def _fixed_mmap_threshold() -> None:
         import ctypes
 
         libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-4, 65536)  # M_MMAP_MAX: glibc's default (gyrotest.heap may have set 0)
         libc.mallopt(-3, 1 << 20)  # M_MMAP_THRESHOLD
         libc.mallopt(-1, 32 << 20)  # M_TRIM_THRESHOLD
     except (OSError, AttributeError):  # pragma: no cover - not glibc

@@ -55,7 +55,7 @@ def test_help_imports_no_command_module():
 
 def test_allan_help_and_info_import_no_heavy_module(tmp_path):
     mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", "--help")
-    for m in HEAVY:
+    for m in (*HEAVY, "scipy", "gyrotest.noise.analysis"):  # options from noise.kinds
         assert m not in mods, f"`gyrotest allan --help` imports {m}"
     f = tmp_path / "small.csv"
     t = np.arange(1, 501) * 0.1
@@ -81,6 +81,12 @@ def test_allan_on_plain_csv_imports_no_stats_signal_pandas(tmp_path):
     mods = _modules_after("from gyrotest.cli import main\nmain()", "allan", str(f), "--rate-unit",
                           "deg/h", "--json", "--terms", "N,markov,sine")
     assert "scipy.optimize" not in mods
+    # the impact of a bias-instability (flicker) term is in closed form (Ci): no
+    # scipy.integrate (≈ 0.15–0.25 s to import with the scipy.optimize it pulls in)
+    mods = _modules_after("from gyrotest.noise.impact import Component, axial_variance\n"
+                          "axial_variance(Component('B', 1.0), 3600.0, tau0=0.01, "
+                          "record_s=1e5)")
+    assert "scipy.integrate" not in mods and "scipy.optimize" not in mods
 
 
 def test_numerics_match_scipy_optimize():
@@ -166,6 +172,35 @@ def test_welch_matches_scipy(n, nperseg):
     f2, p2 = _welch_density(x, 50.0, nperseg)
     np.testing.assert_allclose(f2, f, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(p2, p, rtol=1e-10)
+
+
+def test_find_lines_chi2_only_above_the_snr_floor():
+    """find_lines evaluates the χ² tail only where the PSD exceeds min_snr × background; the
+    candidates and every reported line equal those of the tail evaluated on all bins."""
+    from scipy import special
+
+    from gyrotest.noise import spectral
+
+    rng = np.random.default_rng(21)
+    t = np.arange(1 << 18) * 0.01
+    for amp in (0.0, 0.05, 0.2, 1.0):
+        x = rng.standard_normal(t.size) + amp * np.sin(2 * np.pi * 7.3 * t) \
+            + 0.5 * amp * np.sin(2 * np.pi * 21.0 * t)
+        psd = spectral.welch_psd(x, 0.01)
+        got = spectral.find_lines(psd)
+        bg = spectral._background(psd.f, psd.psd)
+        ratio = psd.psd / bg
+        nu = max(psd.dof, 2.0)
+        pv = special.chdtrc(nu, nu * ratio)
+        cand = (ratio > 4.0) & (pv < 1e-6 / psd.f.size)
+        cand[0] = False
+        for ln in got:  # the peak bin's tail probability, as evaluated on all bins
+            k = int(np.flatnonzero(ratio == ln.snr)[0])
+            assert ln.p_value == pv[k]
+        runs = int(np.count_nonzero(np.diff(cand.astype(int)) == 1) + cand[0])
+        assert len(got) == min(runs, 3), amp
+        if amp >= 0.2:
+            assert got and abs(got[0].f_hz - 7.3) < 0.05
 
 
 def test_chi2_from_special_matches_stats():
@@ -332,3 +367,40 @@ def test_no_progress_text_when_piped(tmp_path):
     r = run_cli(["allan", str(f), "--rate-unit", "deg/h", "--dev", "mtotdev", "--taus", "octave"])
     assert r.code == 0, r.err
     assert "τ ━" not in r.err and "\r" not in r.err
+
+
+def test_allan_prefetched_read_identical_to_serial(tmp_path, monkeypatch):
+    """`allan` reads a single text log on a thread while it imports the analysis: stdout,
+    stderr (ingest notes first) and exit codes are identical to the serial read, including
+    the order of errors (a bad option before a bad file) — and the prefetch really ran."""
+    from gyrotest.cli import cmd_allan, pool
+
+    from cliutil import run_cli
+
+    rng = np.random.default_rng(5)
+    t = np.arange(6000) * 0.01
+    good = tmp_path / "notes.csv"
+    np.savetxt(good, np.c_[t, rng.standard_normal(t.size), rng.standard_normal(t.size)],
+               delimiter=",", header="time,gx,gy", comments="")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t_s,omega_dph\n0.01,1\n0.02,abc\n0.03,2\n")
+    cases = [[str(good), "--rate-unit", "deg/s"], [str(good), "--rate-unit", "deg/s", "--json"],
+             [str(bad), "--rate-unit", "deg/h"], [str(bad), "--rate-unit", "deg/h", "--taus", "zz"],
+             [str(tmp_path / "missing.csv")]]
+    started = []
+
+    def counting(paths, opts):
+        fut = pool.prefetch_log(paths, opts)
+        started.append(fut is not None)
+        return fut
+
+    monkeypatch.setattr(cmd_allan, "prefetch_log", counting)
+    early = [run_cli(["allan", *c]) for c in cases]
+    assert started == [True, True, True, True, False]
+    monkeypatch.setattr(cmd_allan, "prefetch_log", lambda paths, opts: None)
+    serial = [run_cli(["allan", *c]) for c in cases]
+    for c, a, b in zip(cases, early, serial):
+        assert (a.code, a.out, a.err) == (b.code, b.out, b.err), c
+    assert "auto-detected" in early[0].err.splitlines()[0]
+    early[3].assert_clean_error("--taus")
+    early[2].assert_clean_error("row 2")

@@ -85,6 +85,36 @@ def test_closed_forms():
         axial_variance(s, 1000.0, tau0=0.01, record_s=1e4)
 
 
+def test_flicker_angle_variance_closed_form_vs_quadrature():
+    """The flicker (B) angle variance 2∫ c/(2πf)·sin²(πft)/(πf)² df in closed form (Ci) against
+    a direct adaptive quadrature of the defining integral at rel. tolerance 1e-13, over t from
+    10 ms to 10⁶ s, records from 10 s to 10⁷ s and cut-offs f_hi on both sides of 20/t."""
+    from scipy import integrate
+
+    from gyrotest.noise.impact import _flicker_angle_var
+
+    def direct(c, t, f_lo, f_hi):
+        def g(u):  # in ln f
+            f = math.exp(u)
+            return 2.0 * c / (2 * math.pi) * (math.sin(math.pi * f * t) / (math.pi * f)) ** 2
+
+        cuts = sorted({math.log(f_lo), math.log(f_hi)} | {
+            math.log(k / t) for k in (0.25, 0.5, 1, 2, 4, 8, 16, 32) if f_lo < k / t < f_hi})
+        return sum(integrate.quad(g, a, b, epsabs=0.0, epsrel=1e-13, limit=2000)[0]
+                   for a, b in zip(cuts[:-1], cuts[1:]))
+
+    for t in (0.01, 1.0, 100.0, 3600.0, 1e6):
+        for rec in (10.0, 1e3, 1e5, 1e7):
+            for f_hi in (0.5, 50.0, 5000.0):
+                if f_hi > 20.0 / t:  # the closed form's analytic tail is the sin² → ½ limit
+                    f_hi = 20.0 / t
+                if f_hi <= 1.0 / rec:
+                    continue
+                assert _flicker_angle_var(2.0, t, 1.0 / rec, f_hi) == pytest.approx(
+                    direct(2.0, t, 1.0 / rec, f_hi), rel=1e-11), (t, rec, f_hi)
+    assert _flicker_angle_var(2.0, 10.0, 1.0, 1.0) == 0.0
+
+
 def test_white_angle_diffusion_example_from_the_notes():
     """Q = 1 arcsec, τ0 = 0.01 s, Ω = 10 deg/s ⇒ diffusion 2·0.01·(4.848e-6)²·(0.1745)² rad²/s."""
     comps = [("quantization", {"Q": 1.0}), ("arw", {"N": 0.01})]

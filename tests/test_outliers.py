@@ -107,3 +107,49 @@ def test_running_median_numpy_equals_scipy_median_filter():
     for n, w in ((5, 3), (7, 7), (1000, 51), (20001, 101)):
         x = rng.standard_normal(n)
         assert np.array_equal(o._running_median(x, w), median_filter(x, size=w, mode="nearest"))
+
+
+def test_running_median_in_pieces_equals_one_call(monkeypatch):
+    """Long records get scipy's running median in pieces (so another thread gets the GIL
+    between them): the same numbers as one call, for windows shorter and longer than a
+    piece, pieces cut anywhere, and the record's ends padded as in one call."""
+    from scipy.ndimage import median_filter
+
+    from gyrotest.noise import outliers as o
+
+    monkeypatch.setattr(o, "NUMPY_MEDIAN_MAX", 100)
+    rng = np.random.default_rng(12)
+    for piece in (1, 50, 997, 1 << 18):
+        monkeypatch.setattr(o, "MEDIAN_PIECE", piece)
+        for n, w in ((101, 3), (3001, 51), (3001, 2001), (12345, 101)):
+            x = rng.standard_normal(n)
+            x[:: 97] += 40.0  # spikes
+            assert np.array_equal(o._running_median(x, w),
+                                  median_filter(x, size=w, mode="nearest")), (piece, n, w)
+
+
+def test_median_and_quantile_equal_numpy(monkeypatch):
+    """The spike check's scale takes the median and the 99 % quantile of |residual| from
+    order statistics selected in brackets: exactly np.median and np.quantile, with ties
+    (quantized data, half the values zero), sorted input, heavy tails; NaN ranks last as in a
+    partition."""
+    from gyrotest.noise import outliers as o
+
+    rng = np.random.default_rng(13)
+    for bracket_min in (1 << 18, 64):
+        monkeypatch.setattr(o, "BRACKET_MIN", bracket_min)
+        for n in (5, 64, 1001, 300_001):
+            cases = [np.abs(rng.standard_normal(n)), np.abs(rng.standard_cauchy(n)),
+                     np.round(np.abs(rng.standard_normal(n)) * 2) / 2, np.zeros(n),
+                     np.sort(np.abs(rng.standard_normal(n)))]
+            half = np.abs(rng.standard_normal(n))
+            half[: n // 2] = 0.0
+            cases.append(half)
+            for a in cases:
+                got = o._median_quantile(a.copy(), 0.99)
+                assert got == (float(np.median(a)), float(np.quantile(a, 0.99))), (n, got)
+        a = np.abs(rng.standard_normal(300_001))
+        a[::7] = np.nan
+        ref = a.copy()
+        ref.partition([150_000])
+        assert o._median_quantile(a.copy(), 0.99)[0] == ref[150_000]

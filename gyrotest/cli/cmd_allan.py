@@ -17,9 +17,7 @@ from rich.markup import escape
 
 from ..display import DEFAULT as DEFAULT_UNIT
 from ..errors import InputError
-from ..noise.analysis import FIT_WEIGHTS
-from ..noise.deviations import DEVIATION_KINDS
-from ..noise.fit import MIN_EDF
+from ..noise.kinds import DEVIATION_KINDS, MIN_EDF  # no numpy/scipy: see command()
 from ..output import atomic_open
 from ..units import format_duration, parse_duration
 from .common import (
@@ -35,7 +33,7 @@ from .common import (
     with_ingest,
 )
 from .common_display import resolve_display_unit, unit_option
-from .pool import deviation_progress, jobs_option, map_logs
+from .pool import deviation_progress, jobs_option, map_logs, prefetch_log
 
 _TABLE_COLS = ("tau", "n", "alpha", "sigma_lo", "sigma", "sigma_hi")
 _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
@@ -127,6 +125,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
       gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
       gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
     """
+    parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
+    # a single text log is read on a thread while the analysis modules are imported (their
+    # numpy/scipy imports take ≈ 0.2 s); errors of either kind surface in the serial order
+    early = None if model_path else prefetch_log(logs, ingest_opts)
     from ..noise.analysis import (
         STREAM_DEVS,
         allan_document,
@@ -137,7 +139,6 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
-    parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
     unit = resolve_display_unit(display_unit, ingest_opts)
     horizon_s = parse_horizon(horizon)
     rates = [parse_vehicle_rate(v) for v in vehicle_rates]
@@ -172,7 +173,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
                       and dev_kind in STREAM_DEVS)
             results = map_logs(  # one process per log with --jobs (identical results)
                 analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
-                stream=stream, **kw)
+                stream=stream, loaded=early, **kw)
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)
@@ -344,6 +345,8 @@ def _fit_table(f, title: str, unit=DEFAULT_UNIT):
 
 
 def _render_fit(a, unit=DEFAULT_UNIT) -> None:
+    from ..noise.analysis import FIT_WEIGHTS
+
     c = console()
     f = a.fit
     c.print(_fit_table(f, "Noise model, requested terms", unit))

@@ -264,6 +264,9 @@ def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = Fal
         log = stream_log(path, profile=prof, overrides=ingest_overrides(opts),
                          nan_policy=opts.get("nan_policy") or "error")
     if log is None:
+        from ..heap import reuse_freed_memory
+
+        reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
         log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
                        nan_policy=opts.get("nan_policy") or "error")
     if announce:

@@ -83,13 +83,47 @@ def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]
     return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]
 
 
+def prefetch_log(paths: Sequence[str], opts: dict):
+    """Start reading the only log of a run on a background thread, so that the parse (pyarrow
+    and numpy, mostly without the GIL) overlaps the import of the analysis modules; returns a
+    Future of the log for :func:`map_logs` (``loaded=``), or None (several logs, stdin, an
+    unreadable path, or a Parquet file, which may be streamed with a progress bar drawn from
+    the calling thread). The notes are printed by :func:`map_logs` and any error is raised
+    there, after the options have been checked, as without the prefetch."""
+    if len(paths) != 1 or paths[0] == "-":
+        return None
+    try:
+        with open(paths[0], "rb") as fh:
+            if fh.read(4) == b"PAR1":
+                return None
+    except OSError:
+        return None
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ..heap import reuse_freed_memory
+    from .common import load_log
+
+    reuse_freed_memory()  # read whole (text): before any thread starts (gyrotest.heap)
+    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gyrotest-read")
+    fut = pool.submit(load_log, paths[0], opts, announce=False)
+    pool.shutdown(wait=False)
+    return fut
+
+
 def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None = None,
-             announce: bool = True, stream: bool = False, **kw) -> list:
+             announce: bool = True, stream: bool = False, loaded=None, **kw) -> list:
     """``[fn(load_log(p), **kw) for p in paths]``, on ``jobs`` worker processes when there is
     more than one log. ``fn`` must be a module-level function (it is pickled by name).
-    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.stream`)."""
+    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.stream`).
+    ``loaded``: the Future of :func:`prefetch_log` for the only log."""
     from .common import load_logs, note, progress
 
+    if loaded is not None:
+        log = loaded.result()
+        if announce:
+            for msg in log.notes:
+                note(f"{log.source}: {msg}")
+        return [fn(log, **kw)]
     n_jobs = min(jobs or default_jobs(), len(paths))
     if n_jobs < 2 or "-" in paths:
         return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce,

@@ -218,8 +218,8 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
             with _quiet_invalid_row_handler():
                 owned = read_numeric(p, delim, skip, names, columns)
             if owned is not None and any(
-                    v.size and np.nanmax(np.abs(v), initial=0.0) >= 2.0 ** 53
-                    for v in owned.values()):
+                    v.size and max(np.fmax.reduce(v), -np.fmin.reduce(v)) >= 2.0 ** 53
+                    for v in owned.values()):  # fmax/fmin skip NaN; no |v| copy
                 owned = None  # integers beyond float64's 53 bits (ns epochs): exact reader
         elif p:
             owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal)

@@ -35,6 +35,7 @@ import numpy as np
 from ..data import GyroLog
 from ..errors import AnalysisError, InputError
 from ..units import format_duration, parse_duration
+from . import kinds as _kinds
 from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
@@ -63,8 +64,7 @@ from .warnings import KrobkaWarning, krobka_checks
 #: samples of a streamed log's rate rebuilt for the axis cross-correlation
 STREAM_PREFIX = 1 << 24
 #: deviations a streamed log (θ only) supports: those computed from θ here
-STREAM_DEVS = ("oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev",
-                "hkdev")
+STREAM_DEVS = _kinds.STREAM_DEVS
 
 __all__ = ["AllanAnalysis", "AxisAnalysis", "allan_document", "analyse_allan", "input_kind_of",
            "parse_taus"]
@@ -74,6 +74,12 @@ PULSE_KINDS = ("counts", "updown", "counter")
 ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
 #: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
 MAX_JITTER = 0.1
+#: from this many samples the spike check (``--outliers flag``, which leaves the rate as
+#: recorded) runs in a second thread beside the deviations, PSD and fit of the same axis: the
+#: deviation kernels and FFTs run in C without the GIL, and the running median (which holds
+#: it) hands it over between pieces (10⁷-row CSV: benchmarks/README.md, bench_speed, fourth
+#: pass)
+SPIKE_BESIDE_MIN = 1 << 20
 #: what the interval columns mean (``--ci``)
 CI_TEXT = {
     "stable32": "Stable32's: χ² interval from the EDF of the noise type identified at that τ "
@@ -616,19 +622,33 @@ def analyse_allan(
             continue
         rate = np.asarray(log.rates[name], dtype=np.float64)
         det_info = None
-        out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
-        if model_info is not None and name == model_info["axis"]:
-            rate = rate - model_pred
-        if detrend not in (None, "none"):
-            rate, det_info = _detrend(rate, log.t, segs, detrend)
-        rates_used[name] = rate
-        results.append(_analyse_axis(
-            name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev, tau_spec=tau_spec,
-            keys=keys, vehicle_rates=vehicle_rates, confidence=confidence,
-            stop_ratio=stop_ratio, min_edf=min_edf, run_diagnosis=run_diagnosis,
-            spectral=spectral, trend_check=trend_check, horizon=impact_horizon_s,
-            bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps, record_s=log.duration_s,
-            det_info=det_info, source=log.source, fit_model=fit_model, ci=ci))
+        beside = outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN
+        if beside:  # the rate stays as recorded: the spike check runs beside the analysis
+            from concurrent.futures import ThreadPoolExecutor
+
+            spike_pool = ThreadPoolExecutor(max_workers=1)
+            spike = spike_pool.submit(_outliers, rate, log, segs, name, outliers)
+        else:
+            out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
+        try:
+            if model_info is not None and name == model_info["axis"]:
+                rate = rate - model_pred
+            if detrend not in (None, "none"):
+                rate, det_info = _detrend(rate, log.t, segs, detrend)
+            rates_used[name] = rate
+            res = _analyse_axis(
+                name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
+                tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
+                confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+                run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
+                horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
+                record_s=log.duration_s, det_info=det_info, source=log.source,
+                fit_model=fit_model, ci=ci)
+        finally:
+            if beside:  # its error first, as in the serial order
+                out_info, out_warn, _ = spike.result()
+                spike_pool.shutdown()
+        results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:
             results[-1].warnings.insert(0, out_warn)

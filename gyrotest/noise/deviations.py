@@ -73,6 +73,7 @@ import numpy as np
 
 from ..errors import AnalysisError, InputError
 from . import edf as _edf
+from . import kinds as _kinds
 from . import mtot as _mtot
 from .taus import STOP_RATIOS, tau_grid
 
@@ -96,11 +97,7 @@ __all__ = [
 ]
 
 INPUT_KINDS = ("rate", "increment", "angle")
-DEVIATION_KINDS = (
-    "oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev", "hkdev",
-    # long-τ and gap-tolerant kinds, computed in gyrotest.noise.theo / gyrotest.noise.gapdev
-    "theo1", "theoh", "ttotdev", "htotdev", "gapadev",
-)
+DEVIATION_KINDS = _kinds.DEVIATION_KINDS
 _EXTRA_KINDS = ("theo1", "theoh", "ttotdev", "htotdev", "gapadev")
 _LONG_NAMES = {
     "adev": "Allan deviation (non-overlapping)",

@@ -75,6 +75,7 @@ from scipy import special
 
 from ..errors import AnalysisError, InputError
 from ..units import format_number
+from . import kinds as _kinds
 from .numerics import minimize_bounded, nelder_mead, nnls, root_bracketed  # no scipy.optimize
 from .terms import (
     BIAS_INSTABILITY_PLATEAU,
@@ -122,10 +123,8 @@ REGISTRY = {"Q": "quantization", "N": "arw", "B": "bias_instability", "K": "rrw"
             "blue": "blue_markov_derivative"}
 #: S(0) = 0 ("platform-benign / strapdown-critical") terms
 ZERO_DC = {"Q", "sine", "blue"}
-#: default fitting floor: τ with fewer equivalent degrees of freedom are not fitted (at EDF 2
-#: the 68.3 % interval of σ is already ×0.65 … ×2.2; the Stable32 stop ratio 4 keeps
-#: EDF ≥ 2.2 for every power-law noise α ≥ −2, so default grids are fitted to their end)
-MIN_EDF = 2.0
+#: default fitting floor (:data:`gyrotest.noise.kinds.MIN_EDF`, where it is explained)
+MIN_EDF = _kinds.MIN_EDF
 _LRT_P = 0.95
 FIT_METHOD = ("maximum likelihood of the Allan variance estimates given their chi-square(EDF) "
               "distribution, log-normal form with exact ln-chi2 moments: minimise "

@@ -134,16 +134,32 @@ def threshold_k(n: int, false_alarm: float = FALSE_ALARM, k_min: float = K_MIN) 
 NUMPY_MEDIAN_MAX = 200_000
 
 
-def _running_median(x: np.ndarray, window: int) -> np.ndarray:
+#: samples per call of scipy's running median on long records: its C loop holds the GIL, so
+#: it is called on pieces (with the window's overlap) and other threads (the deviation
+#: kernels, the PSD; :func:`gyrotest.noise.analysis.analyse_allan` runs the spike check
+#: beside them) get the interpreter between pieces
+MEDIAN_PIECE = 1 << 18
+
+
+def _running_median(x: np.ndarray, window: int, out: np.ndarray | None = None) -> np.ndarray:
     """Running median over ``window`` (odd) samples, edges padded with the end values
-    (scipy.ndimage.median_filter with mode="nearest"; the same numbers either way)."""
+    (scipy.ndimage.median_filter with mode="nearest"; the same numbers either way), into
+    ``out`` if given. Long records go in pieces of :data:`MEDIAN_PIECE` extended by
+    window // 2 samples on each inner side, so every output sees the same window as in one
+    call (identical numbers)."""
+    if out is None:
+        out = np.empty(x.size)
     if x.size > NUMPY_MEDIAN_MAX:
         from scipy.ndimage import median_filter
 
-        return median_filter(x, size=window, mode="nearest")
+        h = window // 2
+        for a in range(0, x.size, MEDIAN_PIECE):
+            b = min(a + MEDIAN_PIECE, x.size)
+            lo, hi = max(a - h, 0), min(b + h, x.size)
+            out[a:b] = median_filter(x[lo:hi], size=window, mode="nearest")[a - lo:a - lo + b - a]
+        return out
     h = window // 2
     xp = np.concatenate([np.full(h, x[0]), x, np.full(h, x[-1])])
-    out = np.empty(x.size)
     step = max(1, 4_000_000 // window)  # bounded memory: chunks of the window view
     view = np.lib.stride_tricks.sliding_window_view(xp, window)
     for i in range(0, x.size, step):
@@ -151,17 +167,54 @@ def _running_median(x: np.ndarray, window: int) -> np.ndarray:
     return out
 
 
+#: from this many values, order statistics are selected inside brackets taken from a strided
+#: sample (:func:`_order_stats`) instead of partitioning the whole array
+BRACKET_MIN = 1 << 18
+
+
+def _order_stats(a: np.ndarray, ks: list[int]) -> dict[int, float]:
+    """The values of rank ``ks`` (0-based, as ``np.partition`` places them; NaN ranks last)
+    of ``a``, which may be reordered. Exact: long arrays are bracketed around each cluster of
+    ranks by a strided sample's order statistics with a wide margin; the values below the
+    bracket are counted and only those inside it are partitioned. A bracket that misses its
+    ranks (checked by the counts) falls back to the partition of the whole array."""
+    n = a.size
+    if n < BRACKET_MIN:
+        a.partition(ks)
+        return {k: float(a[k]) for k in ks}
+    step = max(n // (1 << 15), 1)
+    smp = np.sort(a[::step])
+    m = smp.size
+    out: dict[int, float] = {}
+    for k0 in sorted(set(ks)):
+        if k0 in out:
+            continue
+        group = [k for k in ks if k0 <= k <= k0 + 1]
+        p = k0 / max(n - 1, 1)
+        j, dj = p * (m - 1), 8.0 * math.sqrt(m * p * (1.0 - p)) + 16.0
+        lo_v = smp[max(int(j - dj), 0)]
+        hi_v = smp[min(int(j + dj) + 1, m - 1)]
+        below = int(np.count_nonzero(a < lo_v))
+        inside = a[(a >= lo_v) & (a <= hi_v)]
+        if not all(below <= k < below + inside.size for k in group):
+            a.partition(ks)  # pragma: no cover - a 8σ miss of the sample quantile
+            return {k: float(a[k]) for k in ks}
+        inside.partition([k - below for k in group])
+        out.update({k: float(inside[k - below]) for k in group})
+    return out
+
+
 def _median_quantile(a: np.ndarray, q: float) -> tuple[float, float]:
     """(np.median(a), np.quantile(a, q)) — the same numbers (numpy's linear interpolation,
-    reproduced) from one in-place partition of ``a`` instead of two partitioned copies."""
+    reproduced) from the order statistics of ``a`` (:func:`_order_stats`; ``a`` may be
+    reordered) instead of two partitioned copies."""
     n = a.size
     vi = (n - 1) * q  # numpy's virtual index, method="linear"
     lo = min(max(int(math.floor(vi)), 0), n - 1)
     hi = min(lo + 1, n - 1)
-    kth = sorted({(n - 1) // 2, n // 2, lo, hi})
-    a.partition(kth)
-    med = float(a[n // 2]) if n % 2 else float((a[n // 2 - 1] + a[n // 2]) / 2.0)
-    x0, x1, g = float(a[lo]), float(a[hi]), vi - math.floor(vi)
+    v = _order_stats(a, sorted({(n - 1) // 2, n // 2, lo, hi}))
+    med = v[n // 2] if n % 2 else float((v[n // 2 - 1] + v[n // 2]) / 2.0)
+    x0, x1, g = v[lo], v[hi], vi - math.floor(vi)
     d = x1 - x0
     quant = x1 - d * (1 - g) if g >= 0.5 else x0 + d * g
     return med, quant
@@ -203,14 +256,19 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
     r = np.empty_like(x)  # the running median, then x − median in place
     for a, b in segs:
         w = min(window, (b - a) | 1) if b - a >= 3 else 1
-        r[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
+        if w >= 3:
+            _running_median(x[a:b], w, out=r[a:b])
+        else:
+            r[a:b] = x[a:b]
     np.subtract(x, r, out=r)
     scale, how = _scale(r)
     kk = threshold_k(n, false_alarm, k_min) if k is None else float(k)
     if scale <= 0:
         mask = np.zeros(n, dtype=bool)
     else:  # |r/scale| > kk, without a full-size z array
-        mask = np.abs(r) > kk * scale * (1.0 - 1e-12)  # a superset; the exact test below
+        lim = kk * scale * (1.0 - 1e-12)  # |r| > lim: a superset; the exact test below
+        mask = r > lim  # two sign tests instead of a full-size |r| copy
+        mask |= r < -lim
         cand = np.flatnonzero(mask)
         mask[cand] = np.abs(r[cand] / scale) > kk
     events: list[OutlierEvent] = []
@@ -254,7 +312,10 @@ def apply_outliers(x, report: OutlierReport, mode: str, *, segments=None) -> np.
     med = np.empty_like(x)
     for a, b in segs:
         w = min(report.window, (b - a) | 1) if b - a >= 3 else 1
-        med[a:b] = _running_median(x[a:b], w) if w >= 3 else x[a:b]
+        if w >= 3:
+            _running_median(x[a:b], w, out=med[a:b])
+        else:
+            med[a:b] = x[a:b]
     out = x.copy()
     m = report.mask
     if mode == "remove":

@@ -217,8 +217,10 @@ def find_lines(psd: PsdEstimate, *, max_lines: int = 3, p_false: float = 1e-6,
     bg = _background(f, p)
     ratio = p / bg
     nu = max(psd.dof, 2.0)
-    pv = special.chdtrc(nu, nu * ratio)  # χ² survival
-    cand = (ratio > min_snr) & (pv < p_false / nb)
+    above = ratio > min_snr
+    pv = np.ones(nb)  # χ² survival, needed only above min_snr (a line's peak bin is there too)
+    pv[above] = special.chdtrc(nu, nu * ratio[above])
+    cand = above & (pv < p_false / nb)
     cand[0] = False  # the lowest bin is not a line
     lines: list[SpectralLine] = []
     df = f[1] - f[0] if nb > 1 else f[0]

@@ -128,6 +128,14 @@ FAR_T = 2.13
 FAR_T_NUISANCE = 3.75
 #: ... with the HAC test as a guard: the coefficient exceeds its own standard error
 FAR_Z = 1.0
+#: far above the floor, when no single term (nor a field block) qualifies, two effects may
+#: each hide the other (every fold is dominated by a different one): pairs of the PAIR_TOP
+#: best candidates are fitted together, and a pair that cuts the held-out RMS at least
+#: PAIR_MARGIN below either member alone, consistently across the folds (the far-route
+#: thresholds), names its more useful member first -- the next step then tests the other
+PAIR_TOP = 4
+PAIR_MIN_GAIN = 0.05
+PAIR_MARGIN = 0.9
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02
 EQUIVALENT_R = 0.995
@@ -373,6 +381,11 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             out.append(_judge(wd, base, base_specs, spec, thetas0, n_c, base_ratio, alpha,
                               min_improvement, folds, replaces_labels=repl))
         sig = [c for c in out if c.significant]
+    if not sig and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio >= FAR_RATIO:
+        pair = _pair_step(wd, base, base_specs, out, thetas0, folds)
+        if pair is not None:
+            sig = [pair]
     chosen = None
     if sig:
         best = sig[0]
@@ -385,6 +398,52 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = _equivalents(chosen, out, base)
     return out, chosen
+
+
+def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
+               folds: int) -> Candidate | None:
+    """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
+    pair's more useful member (the better one alone), marked significant with the route
+    "together with OTHER"; None when no pair qualifies."""
+    pool = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
+            and c._fit is not None and math.isfinite(c.rms_holdout)
+            and c.improvement_pct >= 100 * PAIR_MIN_GAIN][:PAIR_TOP]
+    best = None
+    for i in range(len(pool)):
+        for j in range(i + 1, len(pool)):
+            a, b = pool[i], pool[j]
+            th = dict(thetas0)
+            for c in (a, b):
+                th.update(getattr(c._fit, "_thetas", {}) or {})
+            try:
+                r = fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds,
+                              thetas0=th, light=True)
+            except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+                continue
+            if not r.rms_holdout <= PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout):
+                continue
+            impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+            scatter = _gain_scatter(base, r)
+            t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
+                    and scatter > 0 else math.inf if impr > 0 else 0.0)
+            nuisance = a.klass == "nuisance" and b.klass == "nuisance"
+            if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
+                    else impr >= FAR_GAIN and t_cv >= FAR_T):
+                continue
+            if best is None or r.rms_holdout < best[2].rms_holdout:
+                best = (a, b, r, t_cv)
+    if best is None:
+        return None
+    a, b, r, t_cv = best
+    first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
+    if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
+        first, other = other, first
+        if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
+            return None
+    first.significant = True
+    first.route = f"together with {other.term}"
+    first.pair = (other.term, r.rms_holdout, t_cv)  # type: ignore[attr-defined]
+    return first
 
 
 def _new_channels(c: Candidate, used: set[str]) -> int:
@@ -593,6 +652,13 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
                   f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
                   "HAC test")
+        pair = getattr(top, "pair", None)
+        if pair is not None:
+            v += (f"; the model is {ratio:.1f}x the noise floor and no single term explains "
+                  f"it: {top.term} and {pair[0]} together bring the held-out RMS to "
+                  f"{pair[1]:.4g} deg/h, consistently across the folds (gain/(fold "
+                  f"scatter/sqrt(folds)) = {pair[2]:.1f}); each hides the other, so the next "
+                  f"step tests {pair[0]}")
         if top.klass == "channel" and math.isfinite(top.r_residual):
             ch = ", ".join(top.spec.channels) if top.spec else ""
             v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"

@@ -438,7 +438,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
     while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
-    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1). The noise floor is
+    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
+    term qualifies, the best four are also tried in pairs (two effects that hide each
+    other are named one after the other). The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across
     steps of a logged channel left out), or from --reference.
     The verdict names the effect, how to add it (--terms or the equivalent --term), the

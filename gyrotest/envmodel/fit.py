@@ -550,7 +550,6 @@ def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     plain rule "variation over the training blocks below 2 % of the record's". The
     intercept (a constant column) is always free.
     """
-    n_col = X.shape[1]
     full = X - X.mean(axis=0)
     v_all = np.sum(full * full, axis=0)
     const = v_all <= 0
@@ -558,9 +557,6 @@ def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     if len(cols) == 0:
         return st.lstsq(X[train], y[train])[0]
     xt = X[train][:, cols] - X[train][:, cols].mean(axis=0)
-    v_tr = np.sum(xt * xt, axis=0)
-    if np.all(v_tr >= MIN_FOLD_SUPPORT * v_all[cols]) and len(cols) == 1:
-        return st.lstsq(X[train], y[train])[0]
     scale = np.sqrt(v_all[cols])
     F = full[:, cols] / scale
     T = xt / scale
@@ -585,7 +581,6 @@ def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     if k:
         b[cols] += (V / scale[:, None]) @ c[:k]
     b[np.flatnonzero(const)] += c[k:]
-    assert b.shape == (n_col,)
     return b
 
 

@@ -275,7 +275,7 @@ def _rate_effect_bound(frame: EnvFrame, trate: np.ndarray, inner: np.ndarray,
     X = X[:, keep]
     if len(idx) < X.shape[1] + 8:
         X = X[:, :2]
-    beta, res, rank, _ = np.linalg.lstsq(X, y, rcond=None)
+    beta = st.lstsq(X, y)[0]
     e = y - X @ beta
     dof = max(1, len(idx) - X.shape[1])
     s2 = float(e @ e) / dof

@@ -386,8 +386,8 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                               min_improvement, folds, replaces_labels=repl,
                               ratio_slow=ratio_slow))
         sig = [c for c in out if c.significant]
-    if not sig and candidates is None and math.isfinite(base_ratio) \
-            and base_ratio >= FAR_RATIO and not ratio_slow <= ABOVE_FLOOR:
+    if not sig and candidates is None and math.isfinite(ratio_slow) \
+            and ratio_slow >= FAR_RATIO:
         pair = _pair_step(wd, base, base_specs, out, thetas0, folds)
         if pair is not None:
             sig = [pair]
@@ -548,8 +548,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     if ratio_slow is None:
         ratio_slow = base_ratio
     # without a strong HAC test, held-out evidence counts only where slow noise cannot be
-    # all the candidate fits: the model also above (ABOVE_FLOOR x) the floor bound that
-    # includes the record's slow noise
+    # what the candidate fits: the model above the floor with slow noise included
     weak_ok = not math.isfinite(ratio_slow) or ratio_slow > ABOVE_FLOOR
     cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
     clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
@@ -558,7 +557,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                       or (weak_ok and impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
                           and p_tr < STRONG_P))
                  and (c.key != "hyst" or t_cv >= HYST_CV_T))
-    far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO and weak_ok
+    far = bool(math.isfinite(ratio_slow) and ratio_slow >= FAR_RATIO
                and math.isfinite(z) and abs(z) >= FAR_Z
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)

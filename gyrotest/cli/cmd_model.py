@@ -260,8 +260,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
     out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
               f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
               "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis) while the model is "
-              "above 1.2x the noise floor, or (model ≥ 2x the floor with slow noise) down by "
-              "≥ 10 % "
+              "above 1.2x the noise floor, or (model ≥ 2x the floor) down by ≥ 10 % "
               "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1); "
               "ties go to channel-based terms and to the channels the model already uses")
     if b.excursions:
@@ -438,10 +437,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     its coefficient in the augmented model. A missing effect either passes the strict test
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
     while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
-    at least 2x the noise floor (a bound that also holds the record's slow noise, so that a
-    wandering bias is not read as an incomplete model), cuts the held-out RMS by >= 10 %
-    consistently across the folds (gain / (fold scatter / sqrt(folds)) >= 2.13,
-    |z| >= 1); there, when no single
+    at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
+    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
     term qualifies, the best four are also tried in pairs (two effects that hide each
     other are named one after the other). The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across

@@ -12,7 +12,6 @@ import math
 
 import numpy as np
 import pytest
-from test_envmodel_helpers import make_log
 from workbench_cases import CASES, case, user_loop
 
 from gyrotest.envmodel import fit_model, prepare
@@ -163,32 +162,6 @@ def test_model_free_floor_ignores_dense_stimulus_steps():
     mask, names = stimulus_steps({"Hx": H[0], "noise": rng.normal(size=n),
                                   "ramp": np.linspace(20, 30, n)}, [(0, n)], n)
     assert names == ["Hx"] and 0 < mask.mean() < 0.1
-
-
-def test_slow_noise_bound_holds_random_walk():
-    """The slow-noise bound of the floor (which only gates the "far above the floor" route):
-    for white noise it equals the white floor; with a random walk K it comes to within 35 %
-    of the closed form N²/T_eff + K²T/6, while the printed (white/flicker) floor stays
-    without it."""
-    from gyrotest.envmodel.floor import slow_noise_bound
-
-    rng = np.random.default_rng(21)
-    n = 6 * 3600
-    N, K = 0.3, 0.004
-    white = N * rng.normal(size=n)
-    rw = np.cumsum(rng.normal(scale=K, size=n))  # σ²(τ) = K²τ/3 at 1 s steps
-    for x, k in ((white, 0.0), (white + rw - rw.mean(), K)):
-        ta, sa = robust_avar(x, 1.0, [(0, n)], hadamard=True)
-        t_eff = 60.0
-        got = slow_noise_bound(ta, sa, N, t_eff, float(n))
-        want = floor_rms(N, 0.0, k, t_eff, float(n))
-        assert got == pytest.approx(want, rel=0.35), (k, got, want)
-        log = make_log(x, 1.0)
-        wd = prepare(log)
-        fl = model_free_floor(wd)
-        assert fl.slow_dph >= fl.rms_dph
-        if k:
-            assert fl.slow_dph > 1.5 * fl.rms_dph
 
 
 def test_robust_deviations_equal_allan_on_gaussian_noise():

@@ -356,10 +356,6 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     n_c = max(1, len(cands))
     fl = floor.rms_dph
     base_ratio = base.rms_holdout / fl if fl and math.isfinite(fl) and fl > 0 else math.inf
-    fs = floor.slow_dph
-    # the cross-validated evidence that stands without a strong HAC test is for a model far
-    # above every floor the log allows, slow noise included
-    ratio_slow = base.rms_holdout / fs if fs and math.isfinite(fs) and fs > 0 else base_ratio
     cands = _not_in_model(base, cands)
     n_c = max(1, len(cands))
     out: list[Candidate] = []
@@ -367,7 +363,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if progress:
             progress(i, len(cands), c.label)
         out.append(_judge(wd, base, base_specs, c, thetas0, n_c, base_ratio, alpha,
-                          min_improvement, folds, ratio_slow=ratio_slow))
+                          min_improvement, folds))
     nb = wd.nb
 
     def score(c: Candidate) -> float:
@@ -383,11 +379,10 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # axes are not the coils' needs every field component at once)
         for spec, repl in block_candidates(wd.frame, base.specs):
             out.append(_judge(wd, base, base_specs, spec, thetas0, n_c, base_ratio, alpha,
-                              min_improvement, folds, replaces_labels=repl,
-                              ratio_slow=ratio_slow))
+                              min_improvement, folds, replaces_labels=repl))
         sig = [c for c in out if c.significant]
-    if not sig and candidates is None and math.isfinite(ratio_slow) \
-            and ratio_slow >= FAR_RATIO:
+    if not sig and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio >= FAR_RATIO:
         pair = _pair_step(wd, base, base_specs, out, thetas0, folds)
         if pair is not None:
             sig = [pair]
@@ -511,8 +506,7 @@ def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
 
 
 def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
-           min_improvement, folds, replaces_labels: list[str] | None = None,
-           ratio_slow: float | None = None) -> Candidate:
+           min_improvement, folds, replaces_labels: list[str] | None = None) -> Candidate:
     replaces = None
     specs = list(base_specs)
     if replaces_labels:
@@ -545,19 +539,14 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                                else min_improvement)
                   and (c.key != "hyst" or t_cv >= HYST_CV_T))
     above = base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN
-    if ratio_slow is None:
-        ratio_slow = base_ratio
-    # without a strong HAC test, held-out evidence counts only where slow noise cannot be
-    # what the candidate fits: the model above the floor with slow noise included
-    weak_ok = not math.isfinite(ratio_slow) or ratio_slow > ABOVE_FLOOR
     cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
     clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
                  and (p_tr < guard
-                      or (weak_ok and impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
-                      or (weak_ok and impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
+                      or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
+                      or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
                           and p_tr < STRONG_P))
                  and (c.key != "hyst" or t_cv >= HYST_CV_T))
-    far = bool(math.isfinite(ratio_slow) and ratio_slow >= FAR_RATIO
+    far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
                and math.isfinite(z) and abs(z) >= FAR_Z
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)

@@ -313,41 +313,13 @@ def model_free_floor(wd) -> st.NoiseFloor:
     N, B_h, (t_lo, t_hi) = white_flicker(tau, sig, wd.duration_s, se_factor=1.2)
     B = B_h / math.sqrt(HADAMARD_FLICKER)
     rms = floor_rms(N, B, 0.0, t_eff, wd.duration_s)
-    slow = slow_noise_bound(tau, sig, N, t_eff, wd.duration_s)
     basis = (f"white and flicker noise of the raw rate (robust Hadamard deviation over τ = "
              f"{tau[0]:.3g}–{t_lo:.3g} s, before environmental stimuli add to it; flicker "
              f"{'capped by the lowest excess up to ' + format(t_hi, '.3g') + ' s' if B > 0 else 'not detected'}"
              + (f"; windows across steps of {', '.join(stepped)} left out" if stepped else "")
              + f"), independent of the model; random walk not included; at T_eff = "
              f"{t_eff:.3g} s over {wd.duration_s:.0f} s")
-    return st.NoiseFloor(rms, N, B, (float(tau[0]), float(t_hi)), basis,
-                         rms_slow_dph=max(rms, slow))
-
-
-def slow_noise_bound(tau: np.ndarray, sig: np.ndarray, N: float, t_eff: float,
-                     duration_s: float) -> float:
-    """Upper bound (deg/h) of the working-resolution residual RMS with slow noise included.
-
-    Method: flicker and random walk, σ²(τ) = N²/τ + B²·h + K²τ/3 (h the Hadamard flicker
-    factor), fitted by non-negative least squares to the whole robust Hadamard curve up to
-    T/8 with N held at its short-τ value, carried to the working resolution by
-    :func:`floor_rms`. Slow environment that the step mask cannot remove raises it too, so
-    it is only an upper bound: it decides whether a model is "far above the floor" (where a
-    consistent held-out gain alone names an effect), never the printed floor. A record whose
-    own slow noise wanders (bias instability, a MEMS gyro's thermal drift) is then not read as
-    an incomplete model."""
-    keep = tau <= duration_s / 8.0
-    if keep.sum() < 3:
-        return math.nan
-    t, s = tau[keep], sig[keep]
-    y = s ** 2 - N * N / t
-    w = 1.0 / (1.2 * _se(t, s, duration_s))
-    A = np.column_stack([np.full(len(t), HADAMARD_FLICKER), t / 3.0]) * w[:, None]
-    scale = np.sqrt(np.sum(A * A, axis=0))
-    scale[scale == 0] = 1.0
-    c, _ = optimize.nnls(A / scale, y * w)
-    B2, K2 = c / scale
-    return floor_rms(N, math.sqrt(max(B2, 0.0)), math.sqrt(max(K2, 0.0)), t_eff, duration_s)
+    return st.NoiseFloor(rms, N, B, (float(tau[0]), float(t_hi)), basis)
 
 
 def reference_floor(ref_log, wd, axis: str | None = None) -> st.NoiseFloor:

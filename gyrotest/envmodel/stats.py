@@ -355,14 +355,6 @@ class NoiseFloor:
     flicker_B: float  # deg/h: Allan plateau of the flicker part
     tau_range_s: tuple[float, float]
     basis: str
-    #: an upper bound that also holds slow noise (random walk) as far as the log can show it;
-    #: NaN = the same as rms_dph (see gyrotest.envmodel.floor.model_free_floor)
-    rms_slow_dph: float = math.nan
-
-    @property
-    def slow_dph(self) -> float:
-        """The floor with slow noise (rms_slow_dph, else rms_dph)."""
-        return self.rms_slow_dph if math.isfinite(self.rms_slow_dph) else self.rms_dph
 
     @property
     def arw_deg_rt_h(self) -> float:
@@ -371,5 +363,4 @@ class NoiseFloor:
     def to_dict(self) -> dict:
         return {"rms_dph": self.rms_dph, "white_N_dph_rts": self.white_N,
                 "arw_deg_per_rt_h": self.arw_deg_rt_h, "flicker_plateau_dph": self.flicker_B,
-                "tau_range_s": list(self.tau_range_s), "basis": self.basis,
-                "rms_with_slow_noise_upper_dph": self.slow_dph}
+                "tau_range_s": list(self.tau_range_s), "basis": self.basis}

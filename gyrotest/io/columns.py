@@ -70,13 +70,15 @@ _ANGLE_SUFFIX_UNITS = [
 
 def angle_unit_from_name(col: str) -> str | None:
     """The angle unit a column header states: bracketed (``dtheta_x [rad]``) or a suffix."""
+    return _header_unit(col, _ANGLE_SUFFIX_UNITS)
+
+
+def _header_unit(col: str, suffixes) -> str | None:
+    """A bracketed unit in the header, else the unit of the first matching name suffix."""
     base, unit = split_header_unit(col)
     if unit:
         return unit
-    for pat, u in _ANGLE_SUFFIX_UNITS:
-        if pat.search(base):
-            return u
-    return None
+    return next((u for pat, u in suffixes if pat.search(base)), None)
 
 
 # ----------------------------------------------------------------------------- roles
@@ -139,13 +141,7 @@ def base_name(col: str) -> str:
 def _unit_from_name(col: str) -> str | None:
     """A unit stated in the header: a bracketed unit (``gx [deg/s]``) or a name suffix
     (``rate_dps``)."""
-    base, unit = split_header_unit(col)
-    if unit:
-        return unit
-    for pat, unit in _SUFFIX_UNITS:
-        if pat.search(base):
-            return unit
-    return None
+    return _header_unit(col, _SUFFIX_UNITS)
 
 
 def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[str, Any], list[str]]:

@@ -223,3 +223,75 @@ def test_acceleration_names_do_not_catch_gyro_axes():
         assert _G_PATTERN.search(name), name
     for name in ("gyro_y_dps", "gyro_x", "tilt_x", "T_amb"):
         assert not _G_PATTERN.search(name), name
+
+
+def test_sinusoid_sharing_a_stimulus_period_stands_when_the_channel_cannot_explain_it():
+    """An HVAC cycle that shows in a chamber temperature and in the rate by another path:
+    no term of the temperature explains the rate's sinusoid (the chamber profile would come
+    with it), so the sinusoid is the missing effect, and the verdict says whose period it
+    shares (the period check rejected it before, whatever the channel could explain)."""
+    from test_envmodel_helpers import make_log
+    from workbench_cases import chamber, noise
+
+    rng = np.random.default_rng(5)
+    n = 8 * 3600
+    t = np.arange(n) * 1.0
+    hvac = np.sin(2 * np.pi * t / 3700.0)
+    T = chamber(t) + 5.0 * hvac
+    rate = 0.4 + 0.05 * (T - 30) + 0.8 * np.sin(2 * np.pi * t / 3700.0 + 1.1) + noise(n, rng)
+    wd = prepare(make_log(rate, 1.0, temps={"T_case": T}))
+    d = diagnose(wd, ["T(T_case)"])
+    sin = next(x for x in d.candidates if x.term == "sin")
+    assert sin.period_match is not None and sin.period_match[0].startswith("T_case")
+    assert d.found and d.found[0].term == "sin", d.verdict
+    assert "also that of the logged stimulus T_case" in d.verdict
+    assert d.found[0].rejected is None
+
+
+def test_lagged_node_and_hvac_cycle_both_named():
+    """A lagging core (τ 400 s) of a wandering lab temperature plus an HVAC cycle whose
+    period the temperature's square shares: the loop names the lag, then the sinusoid (the
+    period check used to reject it, and the loop fell back on T² of the sensor)."""
+    from test_envmodel_helpers import lag, make_log
+    from workbench_cases import noise
+
+    rng = np.random.default_rng(1)
+    n = 5 * 3600
+    t = np.arange(n) * 1.0
+    T = 22 + 1.5 * np.sin(2 * np.pi * t / 9000 + 0.3) + 0.8 * np.sin(2 * np.pi * t / 4100 + 2.0)
+    rate = (0.3 + 0.6 * (lag(T, t, 400.0) - 22) + 0.5 * np.sin(2 * np.pi * t / 2900.0 + 0.7)
+            + noise(n, rng))
+    wd = prepare(make_log(rate, 1.0, temps={"tc1": T}))
+    d = diagnose(wd, [])
+    assert [p["term"] for p in d.path][:2] == ["Tlag(tc1)", "sin"], d.verdict
+    assert d.path[1]["ratio_to_floor_after"] < 1.3
+
+
+def test_pair_pool_holds_other_channels_plain_forms_and_in_sample_gains():
+    """The pair search pools the best held-out candidates, the best of further channels with
+    the plain form of a lag, and candidates that only the in-sample fit shows (an effect hidden
+    by another predicts held-out data worse than nothing)."""
+    from gyrotest.envmodel.candidate import Candidate
+    from gyrotest.envmodel.diagnose import _pair_pool
+    from gyrotest.envmodel.terms import TermSpec
+
+    class _Base:
+        rms_fit = 10.0
+        rms_holdout = 10.0
+
+    def cand(key, chans, ho, fit):
+        c = Candidate(TermSpec(key, chans).label, key, None, fit, ho, 100 * (1 - ho / 10.0),
+                      2.0, 0.01, 0.1, 1, False, spec=TermSpec(key, chans))
+        c._fit = object()
+        return c
+
+    out = [cand("chanlag", ("supply",), 6.0, 5.5), cand("g", ("acc",), 7.0, 6.5),
+           cand("g2", ("acc",), 7.0, 6.5), cand("V", (), 7.5, 7.0),
+           cand("ramp", (), 7.6, 6.8), cand("dchanlag", ("P",), 7.7, 7.4),
+           cand("dchan", ("P",), 7.8, 7.3), cand("Tlag", ("T",), 8.0, 7.0),
+           cand("sin", (), 11.0, 5.0), cand("chan", ("RH",), 10.5, 9.9)]
+    pool = [c.term for c in _pair_pool(_Base(), out)]
+    assert pool[:4] == ["chanlag(supply)", "g(acc)", "g2(acc)", "V"]
+    assert "dchan(P)" in pool and "dchanlag(P)" in pool  # the plain form of the lag too
+    assert "sin" in pool  # worse than nothing held out, best in-sample
+    assert "chan(RH)" not in pool

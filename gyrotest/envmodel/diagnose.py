@@ -46,12 +46,23 @@ that the model under judgment cannot move:
    that only explain the data together are tried the same way: the field sensitivity
    along every axis (``Hvec``) and the full second-order field sensitivity (``Hquad``),
    which a gyro whose axes are not the coils' needs; they replace the model's own
-   per-component field terms.
+   per-component field terms. If none does, **pairs** are fitted: two effects may each
+   hide the other (every fold dominated by a different one; an effect's coefficient
+   fitted to the other's signal predicts held-out data worse than nothing). The pool is
+   the four best candidates, the best of two more channels (with the plain form of a
+   lag), and the candidates that cut the *in-sample* RMS most; a pair that cuts the
+   held-out RMS ≥ 10 % below either member alone, consistently across the folds, names
+   its more useful member first, and the next step tests the other. A single term chosen
+   this far above the floor that cuts the held-out RMS by < 60 % and leaves the model
+   ≥ 2 × the floor also gives way to a qualifying pair of two other candidates whose
+   held-out RMS is below half of its own.
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
-   ≥ 10 % of its variance at that frequency) is not accepted: the stimulus acts through a
-   channel. Hysteresis widths are searched only above what the sensor can resolve.
+   ≥ 10 % of its variance at that frequency) is not accepted when a term of that channel
+   gets at least half its held-out gain: the stimulus acts through the channel. When no
+   term of the channel explains it, the sinusoid stands and the verdict says whose period
+   it shares. Hysteresis widths are searched only above what the sensor can resolve.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
@@ -79,6 +90,13 @@ import numpy as np
 
 from ..errors import AnalysisError, InputError
 from . import stats as st
+from .candidate import (
+    Candidate,
+    equivalents,
+    gain_scatter,
+    residual_corr,
+    uses_channel,
+)
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
@@ -136,78 +154,23 @@ FAR_Z = 1.0
 PAIR_TOP = 4
 PAIR_MIN_GAIN = 0.05
 PAIR_MARGIN = 0.9
+#: ... the pool also holds the best candidate of up to PAIR_MORE channels not yet in it, and
+#: the candidates with the largest in-sample gain (≥ PAIR_FIT_GAIN of the base model's fit
+#: RMS): an effect hidden by another can predict the held-out folds worse than nothing
+#: (its coefficient is fitted to the other effect) and still fit the record far better
+PAIR_MORE = 2
+PAIR_FIT_GAIN = 0.2
+PAIR_POOL = 8
+#: a single term chosen far above the floor that leaves the model there (gain below
+#: REDIRECT_GAIN) gives way to a pair of two other candidates that brings the held-out RMS
+#: below REDIRECT_RATIO x the single term's: the pair's more useful member is named first
+REDIRECT_GAIN = 0.6
+REDIRECT_RATIO = 0.5
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02
-EQUIVALENT_R = 0.995
-
-
-@dataclass
-class Candidate:
-    """One candidate term and how much it helps."""
-
-    term: str
-    effect: str
-    replaces: str | None
-    rms_fit: float
-    rms_holdout: float
-    improvement_pct: float
-    z: float
-    p: float
-    p_adj: float
-    trials: int
-    significant: bool
-    coefficients: list[dict] = field(default_factory=list)
-    n_params: int = 0
-    spec: TermSpec | None = None
-    error: str | None = None
-    klass: str = "library"
-    route: str | None = None  # strict | clear gain
-    gain_scatter_pct: float = math.nan  # fold-to-fold scatter (sd over folds) of the gain
-    rejected: str | None = None
-    equivalents: list[str] = field(default_factory=list)
-    custom: str | None = None  # the --term NAME:EXPR equivalent
-    r_residual: float = math.nan  # correlation of its contribution with the base residual
-    cv_t: float = math.nan  # gain / (fold scatter / √folds)
-    _fit: FitResult | None = None
-
-    @property
-    def p_trials(self) -> float:
-        return min(1.0, self.p * self.trials) if math.isfinite(self.p) else math.nan
-
-    @property
-    def evidence(self) -> str:
-        if self.error:
-            return self.error
-        z = f"z = {self.z:.1f}" if math.isfinite(self.z) else "z = n/a"
-        sc = (f" ± {self.gain_scatter_pct:.1f} % fold scatter"
-              if math.isfinite(self.gain_scatter_pct) else "")
-        return (f"held-out {-self.improvement_pct:+.1f} %{sc}, {z} (HAC), "
-                f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
-                                               if self.trials > 1 else ""))
-
-    @property
-    def add_hint(self) -> str:
-        """How to add it: ``--terms LABEL`` (and the custom ``--term`` equivalent)."""
-        if self.spec is not None and self.spec.key == "custom":
-            return f"--term '{self.spec.name}:{self.spec.expr}'"
-        h = f"--terms '{self.term}'"
-        if self.custom:
-            h += f" (or --term '{self.custom}')"
-        return h
-
-    def to_dict(self) -> dict:
-        return {"term": self.term, "effect": self.effect, "class": self.klass,
-                "replaces": self.replaces,
-                "rms_fit_dph": self.rms_fit, "rms_holdout_dph": self.rms_holdout,
-                "improvement_pct": self.improvement_pct,
-                "gain_fold_scatter_pct": self.gain_scatter_pct, "cv_t": self.cv_t,
-                "z": self.z, "p": self.p,
-                "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
-                "route": self.route, "rejected": self.rejected,
-                "equivalents": self.equivalents, "add": self.add_hint,
-                "custom_term": self.custom, "r_residual": self.r_residual,
-                "coefficients": self.coefficients, "n_params": self.n_params,
-                "evidence": self.evidence, "error": self.error}
+#: a sinusoid on a stimulus period is that channel's effect when a term of the channel gets
+#: at least this share of the sinusoid's held-out gain
+PERIOD_SHARE = 0.5
 
 
 @dataclass
@@ -372,6 +335,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         return c.rms_holdout * (1 + c.n_params / nb)
 
     out.sort(key=score)
+    _period_rule(out, wd.frame)
     sig = [c for c in out if c.significant]
     if not sig and candidates is None and math.isfinite(base_ratio) \
             and base_ratio >= FAR_RATIO:
@@ -387,6 +351,9 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if pair is not None:
             sig = [pair]
     chosen = None
+    if (sig and candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+            and not getattr(sig[0], "pair", None)):
+        sig = _redirect(wd, base, base_specs, out, sig, thetas0, folds, fl)
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
@@ -396,18 +363,17 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                                           FORM_ORDER.get(c.spec.key if c.spec else "", 5),
                                           score(c)))
         chosen = _unresolved_lag(chosen, sig, wd)
-        chosen.equivalents = _equivalents(chosen, out, base)
+        chosen.equivalents = equivalents(chosen, out, base)
     return out, chosen
 
 
 def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
-               folds: int) -> Candidate | None:
+               folds: int, exclude: Candidate | None = None,
+               below: float = math.inf) -> Candidate | None:
     """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
     pair's more useful member (the better one alone), marked significant with the route
     "together with OTHER"; None when no pair qualifies."""
-    pool = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
-            and c._fit is not None and math.isfinite(c.rms_holdout)
-            and c.improvement_pct >= 100 * PAIR_MIN_GAIN][:PAIR_TOP]
+    pool = [c for c in _pair_pool(base, out) if c is not exclude]
     best = None
     for i in range(len(pool)):
         for j in range(i + 1, len(pool)):
@@ -420,10 +386,11 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
                               thetas0=th, light=True)
             except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
                 continue
-            if not r.rms_holdout <= PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout):
+            if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
+                                        below):
                 continue
             impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-            scatter = _gain_scatter(base, r)
+            scatter = gain_scatter(base, r)
             t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
                     and scatter > 0 else math.inf if impr > 0 else 0.0)
             nuisance = a.klass == "nuisance" and b.klass == "nuisance"
@@ -444,6 +411,57 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     first.route = f"together with {other.term}"
     first.pair = (other.term, r.rms_holdout, t_cv)  # type: ignore[attr-defined]
     return first
+
+
+def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
+              sig: list[Candidate], thetas0, folds: int, fl: float) -> list[Candidate]:
+    """Far above the floor, a single term that leaves the model there may have been chosen
+    because two larger effects hide each other (see :data:`REDIRECT_RATIO`); then the
+    qualifying pair's more useful member leads."""
+    top = sig[0]
+    if (top.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
+            or top.rms_holdout < FAR_RATIO * fl):
+        return sig
+    pair = _pair_step(wd, base, base_specs, out, thetas0, folds, exclude=top,
+                      below=REDIRECT_RATIO * top.rms_holdout)
+    if pair is None:
+        return sig
+    pair.displaced = (top.term, top.rms_holdout)  # type: ignore[attr-defined]
+    return [pair]
+
+
+def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
+    """The candidates :func:`_pair_step` pairs (see :data:`PAIR_TOP`, :data:`PAIR_MORE`)."""
+    ok = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
+          and c._fit is not None and math.isfinite(c.rms_holdout)]
+
+    def group(c: Candidate):
+        return tuple(sorted(c.spec.channels)) or (c.spec.key,)
+
+    pool = [c for c in ok if c.improvement_pct >= 100 * PAIR_MIN_GAIN][:PAIR_TOP]
+    seen = {group(c) for c in pool}
+    more = 0
+    for c in ok:  # ranked best first
+        if more >= PAIR_MORE:
+            break
+        if c.improvement_pct >= 100 * PAIR_MIN_GAIN and group(c) not in seen:
+            pool.append(c)
+            seen.add(group(c))
+            more += 1
+            # a lag fitted beside a larger hidden effect may take a poor τ: the plain form
+            # of the same channel too
+            plain = UNLAGGED.get(c.spec.key)
+            sib = next((o for o in ok if plain and o.spec.key == plain
+                        and o.spec.channels == c.spec.channels
+                        and o.improvement_pct >= 100 * PAIR_MIN_GAIN), None)
+            if sib is not None and sib not in pool:
+                pool.append(sib)
+    fit_gain = sorted((c for c in ok if c not in pool and math.isfinite(c.rms_fit)
+                       and base.rms_fit > 0
+                       and 1 - c.rms_fit / base.rms_fit >= PAIR_FIT_GAIN),
+                      key=lambda c: c.rms_fit)
+    pool += fit_gain[:max(0, PAIR_POOL - len(pool))]
+    return pool
 
 
 def _new_channels(c: Candidate, used: set[str]) -> int:
@@ -529,7 +547,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     z, p = _significance(r, c, replaces, wd)
     p_adj = min(1.0, p * trials * n_c) if math.isfinite(p) else math.nan
     impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-    scatter = _gain_scatter(base, r)
+    scatter = gain_scatter(base, r)
     p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
     t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
@@ -553,12 +571,10 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                and (c.key != "hyst" or t_cv >= HYST_CV_T))
     rejected = None
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
+    match = None
     if c.key == "sin" and (strict or clear or far):
-        m = period_match(wd.frame, float(theta["f_Hz"]))
-        if m is not None:
-            rejected = (f"its period {1 / theta['f_Hz']:.4g} s is that of the logged stimulus "
-                        f"{m[0]} (R² {m[1]:.2f}): an effect of that channel, not a periodic "
-                        "disturbance")
+        # judged in _step against the matched channel's own candidates
+        match = period_match(wd.frame, float(theta["f_Hz"]))
     if rejected is None and (strict or clear) and base_ratio <= AT_FLOOR and impr < BIG_GAIN:
         # a model at the floor is complete: only a gain it could not give (>= 20 %) says
         # the floor is wrong
@@ -576,67 +592,43 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                      replaces, r.rms_fit, r.rms_holdout, 100 * impr, z, p, p_adj, trials, sig,
                      coefs, r.n_params, spec=c, klass=klass, route=route,
                      gain_scatter_pct=100 * scatter, rejected=rejected, custom=custom)
-    cand.r_residual = _residual_corr(base, r, c)
+    cand.r_residual = residual_corr(base, r, c)
     cand.cv_t = t_cv
     cand._fit = r
+    cand.period_match = match
     return cand
 
 
-def _gain_scatter(base: FitResult, r: FitResult) -> float:
-    """Fold-to-fold scatter of the relative held-out gain: the standard deviation over the
-    folds of 1 − rms_f/rms_base,f."""
-    a = np.asarray(base.holdout_fold_rms, float)
-    b = np.asarray(r.holdout_fold_rms, float)
-    if len(a) != len(b) or len(a) < 2:
-        return math.nan
-    with np.errstate(divide="ignore", invalid="ignore"):
-        g = 1.0 - b / a
-    g = g[np.isfinite(g)]
-    if len(g) < 2:
-        return math.nan
-    return float(np.std(g, ddof=1))
-
-
-def _contribution(r: FitResult, label: str) -> np.ndarray:
-    from .fit import predict_blocks
-
-    spec = next(s for s in r.specs if s.label == label)
-    return predict_blocks(r, [spec])
-
-
-def _residual_corr(base: FitResult, r: FitResult, c: TermSpec) -> float:
-    try:
-        x = _contribution(r, c.label)
-    except (StopIteration, KeyError, ValueError):
-        return math.nan
-    e = base.resid
-    if e is None or np.std(x) == 0 or np.std(e) == 0:
-        return math.nan
-    return float(np.corrcoef(x, e)[0, 1])
-
-
-def _equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> list[str]:
-    """Candidates with (nearly) the same held-out RMS whose fitted contribution is the
-    chosen one's to |r| ≥ 0.995: explanations this log cannot tell apart."""
-    if chosen._fit is None:
-        return []
-    try:
-        x0 = _contribution(chosen._fit, chosen.term)
-    except (StopIteration, KeyError, ValueError):
-        return []
-    out = []
-    for c in cands:
-        if c is chosen or c._fit is None or not math.isfinite(c.rms_holdout):
+def _period_rule(out: list[Candidate], frame) -> None:
+    """A qualifying sinusoid whose period is that of a logged stimulus
+    (:func:`gyrotest.envmodel.screen.period_match`) is that stimulus acting through its
+    channel -- when a term of that channel explains it: the best candidate using the channel
+    gets at least :data:`PERIOD_SHARE` of the sinusoid's held-out gain. Then the sinusoid is
+    rejected; otherwise the channel does not carry the disturbance (an HVAC cycle seen in a
+    temperature and in the rate by another path) and the sinusoid stands, with a note."""
+    for c in out:
+        m = c.period_match
+        if m is None or not c.significant:
             continue
-        if c.rms_holdout > chosen.rms_holdout * 1.05:
-            continue
-        try:
-            x = _contribution(c._fit, c.term)
-        except (StopIteration, KeyError, ValueError):
-            continue
-        if np.std(x) > 0 and np.std(x0) > 0 and abs(np.corrcoef(x, x0)[0, 1]) >= EQUIVALENT_R:
-            out.append(c.term)
-    return out
+        ch = m[0].rstrip("²")
+        per = 1.0 / float((c._fit._thetas.get(c.term) or {})["f_Hz"])  # type: ignore[union-attr]
+        users = [o for o in out if o is not c and o.klass != "nuisance" and o.spec is not None
+                 and math.isfinite(o.improvement_pct) and uses_channel(o.spec, ch, frame)]
+        best = max(users, key=lambda o: o.improvement_pct, default=None)
+        share = (best.improvement_pct / c.improvement_pct
+                 if best is not None and c.improvement_pct > 0 else 0.0)
+        if share >= PERIOD_SHARE:
+            c.rejected = (f"its period {per:.4g} s is that of the logged stimulus {m[0]} "
+                          f"(R² {m[1]:.2f}) and {best.term} explains it too "
+                          f"({-best.improvement_pct:+.1f} % vs {-c.improvement_pct:+.1f} %): an "
+                          "effect of that channel, not a periodic disturbance")
+            c.significant = False
+            c.route = None
+        else:
+            c.note = (f"its period {per:.4g} s is also that of the logged stimulus {m[0]} "
+                      f"(R² {m[1]:.2f}), but no term of {ch} explains it"
+                      + (f" (best: {best.term}, {-best.improvement_pct:+.1f} %)" if best
+                         else ""))
 
 
 def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
@@ -654,11 +646,16 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
                   "HAC test")
         pair = getattr(top, "pair", None)
         if pair is not None:
-            v += (f"; the model is {ratio:.1f}x the noise floor and no single term explains "
-                  f"it: {top.term} and {pair[0]} together bring the held-out RMS to "
+            disp = getattr(top, "displaced", None)
+            why = (f"{disp[0]} alone would leave {disp[1]:.4g} deg/h, while" if disp
+                   else "no single term explains it:")
+            v += (f"; the model is {ratio:.1f}x the noise floor and {why} "
+                  f"{top.term} and {pair[0]} together bring the held-out RMS to "
                   f"{pair[1]:.4g} deg/h, consistently across the folds (gain/(fold "
                   f"scatter/sqrt(folds)) = {pair[2]:.1f}); each hides the other, so the next "
                   f"step tests {pair[0]}")
+        if top.note:
+            v += f"; {top.note}"
         if top.klass == "channel" and math.isfinite(top.r_residual):
             ch = ", ".join(top.spec.channels) if top.spec else ""
             v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"

@@ -1,0 +1,162 @@
+"""One candidate term of the workbench diagnosis (:mod:`gyrotest.envmodel.diagnose`) and the
+helpers that compare candidates: the fold-to-fold scatter of a held-out gain, a term's
+fitted contribution, its correlation with the base residual, and the candidates this log
+cannot tell apart from the chosen one."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .fit import FitResult
+from .terms import TermSpec
+
+#: candidates whose fitted contributions correlate at least this well are indistinguishable
+EQUIVALENT_R = 0.995
+
+
+@dataclass
+class Candidate:
+    """One candidate term and how much it helps."""
+
+    term: str
+    effect: str
+    replaces: str | None
+    rms_fit: float
+    rms_holdout: float
+    improvement_pct: float
+    z: float
+    p: float
+    p_adj: float
+    trials: int
+    significant: bool
+    coefficients: list[dict] = field(default_factory=list)
+    n_params: int = 0
+    spec: TermSpec | None = None
+    error: str | None = None
+    klass: str = "library"
+    route: str | None = None  # strict | clear gain
+    gain_scatter_pct: float = math.nan  # fold-to-fold scatter (sd over folds) of the gain
+    rejected: str | None = None
+    equivalents: list[str] = field(default_factory=list)
+    custom: str | None = None  # the --term NAME:EXPR equivalent
+    r_residual: float = math.nan  # correlation of its contribution with the base residual
+    period_match: tuple[str, float] | None = None  # a sinusoid's period is a stimulus's
+    note: str | None = None
+    cv_t: float = math.nan  # gain / (fold scatter / √folds)
+    _fit: FitResult | None = None
+
+    @property
+    def p_trials(self) -> float:
+        return min(1.0, self.p * self.trials) if math.isfinite(self.p) else math.nan
+
+    @property
+    def evidence(self) -> str:
+        if self.error:
+            return self.error
+        z = f"z = {self.z:.1f}" if math.isfinite(self.z) else "z = n/a"
+        sc = (f" ± {self.gain_scatter_pct:.1f} % fold scatter"
+              if math.isfinite(self.gain_scatter_pct) else "")
+        return (f"held-out {-self.improvement_pct:+.1f} %{sc}, {z} (HAC), "
+                f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
+                                               if self.trials > 1 else ""))
+
+    @property
+    def add_hint(self) -> str:
+        """How to add it: ``--terms LABEL`` (and the custom ``--term`` equivalent)."""
+        if self.spec is not None and self.spec.key == "custom":
+            return f"--term '{self.spec.name}:{self.spec.expr}'"
+        h = f"--terms '{self.term}'"
+        if self.custom:
+            h += f" (or --term '{self.custom}')"
+        return h
+
+    def to_dict(self) -> dict:
+        return {"term": self.term, "effect": self.effect, "class": self.klass,
+                "replaces": self.replaces,
+                "rms_fit_dph": self.rms_fit, "rms_holdout_dph": self.rms_holdout,
+                "improvement_pct": self.improvement_pct,
+                "gain_fold_scatter_pct": self.gain_scatter_pct, "cv_t": self.cv_t,
+                "z": self.z, "p": self.p,
+                "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
+                "route": self.route, "rejected": self.rejected, "note": self.note,
+                "equivalents": self.equivalents, "add": self.add_hint,
+                "custom_term": self.custom, "r_residual": self.r_residual,
+                "coefficients": self.coefficients, "n_params": self.n_params,
+                "evidence": self.evidence, "error": self.error}
+
+
+def uses_channel(spec: TermSpec, ch: str, frame) -> bool:
+    """Does the term act through the logged channel ``ch``?"""
+    if ch in spec.channels:
+        return True
+    if ch == "supply" and spec.key == "V":
+        return True
+    if spec.expr and re.search(rf"\b{re.escape(ch)}\b", spec.expr):
+        return True
+    return (not spec.channels and spec.key.startswith("H")
+            and ch in getattr(frame, "field_uT", {}))
+
+
+def gain_scatter(base: FitResult, r: FitResult) -> float:
+    """Fold-to-fold scatter of the relative held-out gain: the standard deviation over the
+    folds of 1 − rms_f/rms_base,f."""
+    a = np.asarray(base.holdout_fold_rms, float)
+    b = np.asarray(r.holdout_fold_rms, float)
+    if len(a) != len(b) or len(a) < 2:
+        return math.nan
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = 1.0 - b / a
+    g = g[np.isfinite(g)]
+    if len(g) < 2:
+        return math.nan
+    return float(np.std(g, ddof=1))
+
+
+def contribution(r: FitResult, label: str) -> np.ndarray:
+    from .fit import predict_blocks
+
+    spec = next(s for s in r.specs if s.label == label)
+    return predict_blocks(r, [spec])
+
+
+def residual_corr(base: FitResult, r: FitResult, c: TermSpec) -> float:
+    try:
+        x = contribution(r, c.label)
+    except (StopIteration, KeyError, ValueError):
+        return math.nan
+    e = base.resid
+    if e is None or np.std(x) == 0 or np.std(e) == 0:
+        return math.nan
+    return float(np.corrcoef(x, e)[0, 1])
+
+
+def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> list[str]:
+    """Candidates with (nearly) the same held-out RMS whose fitted contribution is the
+    chosen one's to |r| ≥ 0.995: explanations this log cannot tell apart."""
+    if chosen._fit is None:
+        return []
+    try:
+        x0 = contribution(chosen._fit, chosen.term)
+    except (StopIteration, KeyError, ValueError):
+        return []
+    out = []
+    for c in cands:
+        if c is chosen or c._fit is None or not math.isfinite(c.rms_holdout):
+            continue
+        if c.rms_holdout > chosen.rms_holdout * 1.05:
+            continue
+        try:
+            x = contribution(c._fit, c.term)
+        except (StopIteration, KeyError, ValueError):
+            continue
+        if np.std(x) > 0 and np.std(x0) > 0 and abs(np.corrcoef(x, x0)[0, 1]) >= EQUIVALENT_R:
+            out.append(c.term)
+    return out
+
+
+__all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
+           "residual_corr", "uses_channel"]

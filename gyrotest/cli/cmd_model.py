@@ -241,7 +241,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
         ev = (c.error or (f"z {c.z:.1f}, p·trials {c.p_trials:.1g}, p_adj {c.p_adj:.1g}"
                           if math.isfinite(c.z) else "—"))
         if c.rejected:
-            ev += "; rejected: period of a logged stimulus"
+            ev += ("; rejected: period of a logged stimulus" if "period" in c.rejected
+                   else "; rejected: model at the noise floor")
         mark = ("[green]yes[/green]" + (" (chosen)" if c is diag.chosen else "")
                 if c.significant else "no")
         t.add_row(str(i), escape(c.term), escape(eff), fmt_num(c.rms_holdout),
@@ -439,8 +440,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
     folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
-    term qualifies, the best four are also tried in pairs (two effects that hide each
-    other are named one after the other). The noise floor is
+    term qualifies (or the one that does cuts < 60 % and a pair of two others halves its
+    held-out RMS), the best candidates, further channels and the largest in-sample gains are
+    also tried in pairs (two effects that hide each other are named one after the other). A
+    sinusoid on the period of a logged stimulus is rejected when a term of that channel
+    gets half its gain; otherwise it stands, and the verdict says whose period it shares.
+    The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across
     steps of a logged channel left out), or from --reference.
     The verdict names the effect, how to add it (--terms or the equivalent --term), the

@@ -242,7 +242,7 @@ def test_sinusoid_sharing_a_stimulus_period_stands_when_the_channel_cannot_expla
     wd = prepare(make_log(rate, 1.0, temps={"T_case": T}))
     d = diagnose(wd, ["T(T_case)"])
     sin = next(x for x in d.candidates if x.term == "sin")
-    assert sin.period_match is not None and sin.period_match[0].startswith("T_case")
+    assert sin.period_match and sin.period_match[0][0].startswith("T_case")
     assert d.found and d.found[0].term == "sin", d.verdict
     assert "also that of the logged stimulus T_case" in d.verdict
     assert d.found[0].rejected is None

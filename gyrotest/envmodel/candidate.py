@@ -44,7 +44,8 @@ class Candidate:
     equivalents: list[str] = field(default_factory=list)
     custom: str | None = None  # the --term NAME:EXPR equivalent
     r_residual: float = math.nan  # correlation of its contribution with the base residual
-    period_match: tuple[str, float] | None = None  # a sinusoid's period is a stimulus's
+    #: a sinusoid's period is that of these logged stimuli: [(channel or 'name²', R²)]
+    period_match: list[tuple[str, float]] | None = None
     note: str | None = None
     cv_t: float = math.nan  # gain / (fold scatter / √folds)
     _fit: FitResult | None = None

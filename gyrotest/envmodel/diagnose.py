@@ -106,7 +106,7 @@ from .screen import (
     NUISANCE,
     block_candidates,
     candidate_terms,
-    period_match,
+    period_matches,
     term_class,
 )
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
@@ -574,7 +574,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     match = None
     if c.key == "sin" and (strict or clear or far):
         # judged in _step against the matched channel's own candidates
-        match = period_match(wd.frame, float(theta["f_Hz"]))
+        match = period_matches(wd.frame, float(theta["f_Hz"])) or None
     if rejected is None and (strict or clear) and base_ratio <= AT_FLOOR and impr < BIG_GAIN:
         # a model at the floor is complete: only a gain it could not give (>= 20 %) says
         # the floor is wrong
@@ -600,33 +600,37 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
 
 
 def _period_rule(out: list[Candidate], frame) -> None:
-    """A qualifying sinusoid whose period is that of a logged stimulus
-    (:func:`gyrotest.envmodel.screen.period_match`) is that stimulus acting through its
-    channel -- when a term of that channel explains it: the best candidate using the channel
-    gets at least :data:`PERIOD_SHARE` of the sinusoid's held-out gain. Then the sinusoid is
-    rejected; otherwise the channel does not carry the disturbance (an HVAC cycle seen in a
-    temperature and in the rate by another path) and the sinusoid stands, with a note."""
+    """A qualifying sinusoid whose period is that of logged stimuli
+    (:func:`gyrotest.envmodel.screen.period_matches`) is a stimulus acting through its
+    channel -- when a term of one of those channels explains it: the best candidate using
+    any of them (a channel-less nuisance term does not count; a hysteresis of a temperature
+    does) gets at least :data:`PERIOD_SHARE` of the sinusoid's held-out gain. Then the
+    sinusoid is rejected; otherwise no such channel carries the disturbance (an HVAC cycle
+    seen in a temperature and in the rate by another path) and the sinusoid stands, with a
+    note."""
     for c in out:
-        m = c.period_match
-        if m is None or not c.significant:
+        ms = c.period_match
+        if not ms or not c.significant:
             continue
-        ch = m[0].rstrip("²")
+        chans = list(dict.fromkeys(name.rstrip("²") for name, _ in ms))
         per = 1.0 / float((c._fit._thetas.get(c.term) or {})["f_Hz"])  # type: ignore[union-attr]
-        users = [o for o in out if o is not c and o.klass != "nuisance" and o.spec is not None
-                 and math.isfinite(o.improvement_pct) and uses_channel(o.spec, ch, frame)]
+        users = [o for o in out if o is not c and o.spec is not None and o.spec.key != "sin"
+                 and math.isfinite(o.improvement_pct)
+                 and any(uses_channel(o.spec, ch, frame) for ch in chans)]
         best = max(users, key=lambda o: o.improvement_pct, default=None)
         share = (best.improvement_pct / c.improvement_pct
                  if best is not None and c.improvement_pct > 0 else 0.0)
+        names = ", ".join(f"{n} (R² {r2:.2f})" for n, r2 in ms[:3])
         if share >= PERIOD_SHARE:
-            c.rejected = (f"its period {per:.4g} s is that of the logged stimulus {m[0]} "
-                          f"(R² {m[1]:.2f}) and {best.term} explains it too "
-                          f"({-best.improvement_pct:+.1f} % vs {-c.improvement_pct:+.1f} %): an "
-                          "effect of that channel, not a periodic disturbance")
+            c.rejected = (f"its period {per:.4g} s is that of the logged stimulus {names} and "
+                          f"{best.term} explains it too ({-best.improvement_pct:+.1f} % vs "
+                          f"{-c.improvement_pct:+.1f} %): an effect of that channel, not a "
+                          "periodic disturbance")
             c.significant = False
             c.route = None
         else:
-            c.note = (f"its period {per:.4g} s is also that of the logged stimulus {m[0]} "
-                      f"(R² {m[1]:.2f}), but no term of {ch} explains it"
+            c.note = (f"its period {per:.4g} s is also that of the logged stimulus {names}, "
+                      f"but no term of {', '.join(chans[:3])} explains it"
                       + (f" (best: {best.term}, {-best.improvement_pct:+.1f} %)" if best
                          else ""))
 

@@ -165,7 +165,7 @@ def block_candidates(frame: EnvFrame, present: list[TermSpec]
 def stimulus_periods(frame: EnvFrame) -> dict[str, np.ndarray]:
     """Every varying channel (and its square: a symmetric sweep of H shows in H² at twice the
     frequency) as a zero-mean series on the frame's grid, for the period check of a fitted
-    sinusoid (:func:`period_match`)."""
+    sinusoid (:func:`period_matches`)."""
     out = {}
     for name, (_g, v) in numeric_channels(frame).items():
         if not _varies(v):
@@ -177,21 +177,28 @@ def stimulus_periods(frame: EnvFrame) -> dict[str, np.ndarray]:
     return out
 
 
-def period_match(frame: EnvFrame, f_hz: float, min_r2: float = 0.1) -> tuple[str, float] | None:
-    """The logged channel whose variation has the period 1/``f_hz`` (the fraction of its
-    variance a sinusoid at f explains, R² ≥ ``min_r2``), or None. A free-frequency sinusoid
-    that matches a stimulus period is that stimulus acting through a channel, not a periodic
-    disturbance."""
+def period_matches(frame: EnvFrame, f_hz: float, min_r2: float = 0.1
+                   ) -> list[tuple[str, float]]:
+    """Every logged channel (or square, "name²") whose variation has the period 1/``f_hz``:
+    the fraction of its variance a sinusoid at f explains, R² ≥ ``min_r2``; best first. A
+    free-frequency sinusoid that matches a stimulus period may be that stimulus acting
+    through a channel rather than a periodic disturbance."""
     t = frame.t
     w = 2 * np.pi * f_hz * t
     S = np.column_stack([np.cos(w), np.sin(w)])
-    best = None
+    out = []
     for name, x in stimulus_periods(frame).items():
         v = float(x @ x)
         if v <= 0:
             continue
         b, *_ = np.linalg.lstsq(S, x, rcond=None)
         r2 = float(np.sum((S @ b) ** 2)) / v
-        if r2 >= min_r2 and (best is None or r2 > best[1]):
-            best = (name, r2)
-    return best
+        if r2 >= min_r2:
+            out.append((name, r2))
+    return sorted(out, key=lambda m: -m[1])
+
+
+def period_match(frame: EnvFrame, f_hz: float, min_r2: float = 0.1) -> tuple[str, float] | None:
+    """The best of :func:`period_matches`, or None."""
+    m = period_matches(frame, f_hz, min_r2)
+    return m[0] if m else None

@@ -51,7 +51,8 @@ that the model under judgment cannot move:
    fitted to the other's signal predicts held-out data worse than nothing). The pool is
    the four best candidates, the best of two more channels (with the plain form of a
    lag), and the candidates that cut the *in-sample* RMS most; a pair that cuts the
-   held-out RMS ≥ 10 % below either member alone, consistently across the folds, names
+   held-out RMS ≥ 10 % below either member alone, consistently across the folds (the
+   nuisance thresholds, ≥ 20 % and 3.75, when either member is a nuisance term), names
    its more useful member first, and the next step tests the other. A single term chosen
    this far above the floor that cuts the held-out RMS by < 60 % and leaves the model
    ≥ 2 × the floor also gives way to a qualifying pair of two other candidates whose
@@ -393,7 +394,8 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
             scatter = gain_scatter(base, r)
             t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
                     and scatter > 0 else math.inf if impr > 0 else 0.0)
-            nuisance = a.klass == "nuisance" and b.klass == "nuisance"
+            # a free frequency or width in the pair: the flexible-term thresholds
+            nuisance = a.klass == "nuisance" or b.klass == "nuisance"
             if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
                     else impr >= FAR_GAIN and t_cv >= FAR_T):
                 continue

@@ -404,3 +404,22 @@ def test_allan_prefetched_read_identical_to_serial(tmp_path, monkeypatch):
     assert "auto-detected" in early[0].err.splitlines()[0]
     early[3].assert_clean_error("--taus")
     early[2].assert_clean_error("row 2")
+
+
+def test_cli_turns_off_numpy_huge_page_advice_unless_the_user_sets_it():
+    """`gyrotest` asks numpy not to madvise huge pages (first touch of a fresh large array
+    cost 7x under THP compaction); a user's NUMPY_MADVISE_HUGEPAGE wins."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import gyrotest.cli, numpy; from numpy._core import multiarray as m; "
+            "print(m._get_madvise_hugepage())")
+    env = {k: v for k, v in os.environ.items() if k != "NUMPY_MADVISE_HUGEPAGE"}
+    off = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert off.stdout.strip() == "False", off.stderr
+    if not sys.platform.startswith("linux"):
+        return
+    env["NUMPY_MADVISE_HUGEPAGE"] = "1"
+    on = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert on.stdout.strip() == "True", on.stderr

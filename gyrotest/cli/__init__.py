@@ -22,6 +22,12 @@ import warnings
 # matrices are small (τ × frequency grids, a few dozen columns) and OpenBLAS' worker threads
 # cost 4–10× in CPU and wall time on a loaded 2-core machine (benchmarks/README.md, start-up)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+# No transparent-huge-page advice on numpy's large arrays unless the user says otherwise:
+# where the kernel compacts memory on such a fault (THP defrag "madvise", the common default),
+# first touching a fresh 80 MB array cost 0.22 s instead of 0.03 s, and `allan` on a 10⁷-row
+# CSV spent 0.3-0.5 s more system time (benchmarks/README.md, fifth pass); our arrays are
+# streamed through, not randomly accessed, so huge pages buy nothing back
+os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
 
 import click  # noqa: E402
 

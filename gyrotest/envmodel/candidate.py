@@ -47,6 +47,10 @@ class Candidate:
     #: a sinusoid's period is that of these logged stimuli: [(channel or 'name²', R²)]
     period_match: list[tuple[str, float]] | None = None
     note: str | None = None
+    #: named through a pair: (the other member, the pair's held-out RMS deg/h, consistency)
+    pair: tuple[str, float, float] | None = None
+    #: ... instead of this single term: (term, its held-out RMS deg/h)
+    displaced: tuple[str, float] | None = None
     cv_t: float = math.nan  # gain / (fold scatter / √folds)
     _fit: FitResult | None = None
 

@@ -60,10 +60,10 @@ that the model under judgment cannot move:
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
-   ≥ 10 % of its variance at that frequency) is not accepted when a term of that channel
-   gets at least half its held-out gain: the stimulus acts through the channel. When no
-   term of the channel explains it, the sinusoid stands and the verdict says whose period
-   it shares. Hysteresis widths are searched only above what the sensor can resolve.
+   ≥ 10 % of its variance at that frequency) is not accepted when a term of one of the
+   channels sharing the period (a hysteresis of a temperature included) gets at least half
+   its held-out gain: the stimulus acts through the channel. When none does, the sinusoid
+   stands and the verdict says whose period it shares. Hysteresis widths are searched only above what the sensor can resolve.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
@@ -353,7 +353,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             sig = [pair]
     chosen = None
     if (sig and candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
-            and not getattr(sig[0], "pair", None)):
+            and sig[0].pair is None):
         sig = _redirect(wd, base, base_specs, out, sig, thetas0, folds, fl)
     if sig:
         best = sig[0]
@@ -411,7 +411,7 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
             return None
     first.significant = True
     first.route = f"together with {other.term}"
-    first.pair = (other.term, r.rms_holdout, t_cv)  # type: ignore[attr-defined]
+    first.pair = (other.term, r.rms_holdout, t_cv)
     return first
 
 
@@ -428,7 +428,7 @@ def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                       below=REDIRECT_RATIO * top.rms_holdout)
     if pair is None:
         return sig
-    pair.displaced = (top.term, top.rms_holdout)  # type: ignore[attr-defined]
+    pair.displaced = (top.term, top.rms_holdout)
     return [pair]
 
 
@@ -650,9 +650,9 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
                   f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
                   "HAC test")
-        pair = getattr(top, "pair", None)
+        pair = top.pair
         if pair is not None:
-            disp = getattr(top, "displaced", None)
+            disp = top.displaced
             why = (f"{disp[0]} alone would leave {disp[1]:.4g} deg/h, while" if disp
                    else "no single term explains it:")
             v += (f"; the model is {ratio:.1f}x the noise floor and {why} "

@@ -295,3 +295,21 @@ def test_pair_pool_holds_other_channels_plain_forms_and_in_sample_gains():
     assert "dchan(P)" in pool and "dchanlag(P)" in pool  # the plain form of the lag too
     assert "sin" in pool  # worse than nothing held out, best in-sample
     assert "chan(RH)" not in pool
+
+
+def test_level_and_square_that_cancel_are_found_together():
+    """A tilt between 0 and 90°: g·a and g²·a² nearly cancel over the range (2.0 a − 1.9 a²),
+    so neither term alone predicts held-out data; the pair search tries the level and the
+    square of each channel together and names both (before: 'possible missing effect: ramp')."""
+    from test_envmodel_helpers import make_log
+    from workbench_cases import noise
+
+    rng = np.random.default_rng(3)
+    n = 6 * 3600
+    ang = np.repeat(rng.permutation(np.linspace(0, 90, 12)), n // 12 + 1)[:n]
+    a = np.sin(np.radians(ang))
+    rate = 0.2 + 2.0 * a - 1.9 * a**2 + noise(n, rng, N=0.05, B=0.0005)
+    wd = prepare(make_log(rate, 1.0, extra={"acc_y": a}))
+    d = diagnose(wd, [])
+    assert sorted(p["term"] for p in d.path[:2]) == ["g(acc_y)", "g2(acc_y)"], d.verdict
+    assert d.path[1]["ratio_to_floor_after"] < 1.3

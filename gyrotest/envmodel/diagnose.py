@@ -375,32 +375,34 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     pair's more useful member (the better one alone), marked significant with the route
     "together with OTHER"; None when no pair qualifies."""
     pool = [c for c in _pair_pool(base, out) if c is not exclude]
+    pairs = [(pool[i], pool[j]) for i in range(len(pool)) for j in range(i + 1, len(pool))]
+    seen = {frozenset((id(a), id(b))) for a, b in pairs}
+    pairs += [(a, b) for a, b in _polynomial_pairs(out)
+              if a is not exclude and b is not exclude and frozenset((id(a), id(b))) not in seen]
     best = None
-    for i in range(len(pool)):
-        for j in range(i + 1, len(pool)):
-            a, b = pool[i], pool[j]
-            th = dict(thetas0)
-            for c in (a, b):
-                th.update(getattr(c._fit, "_thetas", {}) or {})
-            try:
-                r = fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds,
-                              thetas0=th, light=True)
-            except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
-                continue
-            if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
-                                        below):
-                continue
-            impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-            scatter = gain_scatter(base, r)
-            t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
-                    and scatter > 0 else math.inf if impr > 0 else 0.0)
-            # a free frequency or width in the pair: the flexible-term thresholds
-            nuisance = a.klass == "nuisance" or b.klass == "nuisance"
-            if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
-                    else impr >= FAR_GAIN and t_cv >= FAR_T):
-                continue
-            if best is None or r.rms_holdout < best[2].rms_holdout:
-                best = (a, b, r, t_cv)
+    for a, b in pairs:
+        th = dict(thetas0)
+        for c in (a, b):
+            th.update(getattr(c._fit, "_thetas", {}) or {})
+        try:
+            r = fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds,
+                          thetas0=th, light=True)
+        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+            continue
+        if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
+                                    below):
+            continue
+        impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+        scatter = gain_scatter(base, r)
+        t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
+                and scatter > 0 else math.inf if impr > 0 else 0.0)
+        # a free frequency or width in the pair: the flexible-term thresholds
+        nuisance = a.klass == "nuisance" or b.klass == "nuisance"
+        if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
+                else impr >= FAR_GAIN and t_cv >= FAR_T):
+            continue
+        if best is None or r.rms_holdout < best[2].rms_holdout:
+            best = (a, b, r, t_cv)
     if best is None:
         return None
     a, b, r, t_cv = best
@@ -430,6 +432,25 @@ def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
         return sig
     pair.displaced = (top.term, top.rms_holdout)
     return [pair]
+
+
+#: the level and the square of one channel: a second-order sensitivity whose two terms
+#: nearly cancel over the stimulus range explains nothing term by term
+LEVEL_SQUARE = {"g": "g2", "T": "T2", "chan": "chan2", "Hx": "Hsq", "Hy": "Hsq", "Hz": "Hsq"}
+
+
+def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]:
+    """(level, square) candidate pairs of one channel (:data:`LEVEL_SQUARE`)."""
+    ok = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
+          and c._fit is not None and math.isfinite(c.rms_holdout)]
+    pairs = []
+    for a in ok:
+        sq = LEVEL_SQUARE.get(a.spec.key)
+        b = next((o for o in ok if sq and o.spec.key == sq
+                  and o.spec.channels == a.spec.channels), None)
+        if b is not None:
+            pairs.append((a, b))
+    return pairs
 
 
 def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:

@@ -442,7 +442,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
     term qualifies (or the one that does cuts < 60 % and a pair of two others halves its
     held-out RMS), the best candidates, further channels and the largest in-sample gains are
-    also tried in pairs (two effects that hide each other are named one after the other). A
+    also tried in pairs, and so are the level and square of each channel (two effects that
+    hide each other are named one after the other). A
     sinusoid on the period of a logged stimulus is rejected when a term of that channel
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     The noise floor is

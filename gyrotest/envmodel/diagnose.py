@@ -50,7 +50,9 @@ that the model under judgment cannot move:
    hide the other (every fold dominated by a different one; an effect's coefficient
    fitted to the other's signal predicts held-out data worse than nothing). The pool is
    the four best candidates, the best of two more channels (with the plain form of a
-   lag), and the candidates that cut the *in-sample* RMS most; a pair that cuts the
+   lag), and the candidates that cut the *in-sample* RMS most; besides, the level and the
+   square of each channel are tried together (over a one-sided range g·a and g²·a² can
+   nearly cancel, so neither predicts anything alone); a pair that cuts the
    held-out RMS ≥ 10 % below either member alone, consistently across the folds (the
    nuisance thresholds, ≥ 20 % and 3.75, when either member is a nuisance term), names
    its more useful member first, and the next step tests the other. A single term chosen

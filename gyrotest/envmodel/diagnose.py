@@ -441,10 +441,15 @@ def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
 LEVEL_SQUARE = {"g": "g2", "T": "T2", "chan": "chan2", "Hx": "Hsq", "Hy": "Hsq", "Hz": "Hsq"}
 
 
+def _pairable(out: list[Candidate]) -> list[Candidate]:
+    """Candidates the pair search may use: fitted, not rejected, not replacing a term."""
+    return [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
+            and c._fit is not None and math.isfinite(c.rms_holdout)]
+
+
 def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]:
     """(level, square) candidate pairs of one channel (:data:`LEVEL_SQUARE`)."""
-    ok = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
-          and c._fit is not None and math.isfinite(c.rms_holdout)]
+    ok = _pairable(out)
     pairs = []
     for a in ok:
         sq = LEVEL_SQUARE.get(a.spec.key)
@@ -457,8 +462,7 @@ def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]
 
 def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
     """The candidates :func:`_pair_step` pairs (see :data:`PAIR_TOP`, :data:`PAIR_MORE`)."""
-    ok = [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
-          and c._fit is not None and math.isfinite(c.rms_holdout)]
+    ok = _pairable(out)
 
     def group(c: Candidate):
         return tuple(sorted(c.spec.channels)) or (c.spec.key,)

@@ -196,9 +196,3 @@ def period_matches(frame: EnvFrame, f_hz: float, min_r2: float = 0.1
         if r2 >= min_r2:
             out.append((name, r2))
     return sorted(out, key=lambda m: -m[1])
-
-
-def period_match(frame: EnvFrame, f_hz: float, min_r2: float = 0.1) -> tuple[str, float] | None:
-    """The best of :func:`period_matches`, or None."""
-    m = period_matches(frame, f_hz, min_r2)
-    return m[0] if m else None

@@ -223,3 +223,18 @@ def test_thermal_and_mag_fit_reference_floor(logs, tmp_path):
     sp.write_text("temperature,dw\n31,0.49\n40,0.50\n55,1.56\n")
     run_cli(["thermal-fit", "--setpoints", sp, "--reference", str(good)]).assert_clean_error(
         "--reference", "chamber log")
+
+
+def test_diagnose_magnetic_sample_names_hy_then_hz():
+    """The bundled Helmholtz run (wx, wy, wz linear): Hy first, then Hz. A cross term tied
+    with Hy plus Hz is not 'a pair of two other effects' -- Hy with Hz does as well -- so
+    the pair redirect keeps Hy (it had named Hprod(Hy,Hz) first)."""
+    from pathlib import Path
+
+    s = Path(__file__).resolve().parent.parent / "sample_data"
+    r = run_cli(["model", "diagnose", s / "magnetic.parquet", "--profile",
+                 s / "magnetic.profile.toml", "--json"])
+    assert r.code == 0, r.err
+    d = json.loads(r.out)
+    assert d["missing_effect"] == "Hy(Hy_uT)", d["verdict"]
+    assert [p["term"] for p in d["path"]][:2] == ["Hy(Hy_uT)", "Hz(Hz_uT)"]

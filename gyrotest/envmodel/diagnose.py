@@ -58,7 +58,8 @@ that the model under judgment cannot move:
    its more useful member first, and the next step tests the other. A single term chosen
    this far above the floor that cuts the held-out RMS by < 60 % and leaves the model
    ≥ 2 × the floor also gives way to a qualifying pair of two other candidates whose
-   held-out RMS is below half of its own.
+   held-out RMS is below half of its own -- unless the term itself, paired with one of the
+   pool, comes within 10 % of that pair (then the next step finds the partner).
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -354,9 +355,6 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if pair is not None:
             sig = [pair]
     chosen = None
-    if (sig and candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
-            and sig[0].pair is None):
-        sig = _redirect(wd, base, base_specs, out, sig, thetas0, folds, fl)
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
@@ -367,20 +365,37 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                                           score(c)))
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = equivalents(chosen, out, base)
+        if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+                and chosen.pair is None):
+            pair = _redirect(wd, base, base_specs, out, chosen, thetas0, folds, fl)
+            if pair is not None:
+                chosen = pair
+                chosen.equivalents = equivalents(chosen, out, base)
     return out, chosen
 
 
 def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
-               folds: int, exclude: Candidate | None = None,
-               below: float = math.inf) -> Candidate | None:
+               folds: int) -> Candidate | None:
     """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
     pair's more useful member (the better one alone), marked significant with the route
     "together with OTHER"; None when no pair qualifies."""
-    pool = [c for c in _pair_pool(base, out) if c is not exclude]
+    found = _find_pair(wd, base, base_specs, out, thetas0, folds)
+    return _mark_pair(found) if found is not None else None
+
+
+def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
+               folds: int, exclude: set[int] | None = None, below: float = math.inf
+               ) -> tuple[Candidate, Candidate, float, float] | None:
+    """The best qualifying pair (see :func:`_pair_step`), candidates whose ``id`` is in
+    ``exclude`` left out, held-out RMS below ``below``: (more useful member, the other, the
+    pair's held-out RMS, its fold consistency), or None."""
+    skip = exclude or set()
+    pool = [c for c in _pair_pool(base, out) if id(c) not in skip]
     pairs = [(pool[i], pool[j]) for i in range(len(pool)) for j in range(i + 1, len(pool))]
     seen = {frozenset((id(a), id(b))) for a, b in pairs}
     pairs += [(a, b) for a, b in _polynomial_pairs(out)
-              if a is not exclude and b is not exclude and frozenset((id(a), id(b))) not in seen]
+              if id(a) not in skip and id(b) not in skip
+              and frozenset((id(a), id(b))) not in seen]
     best = None
     for a, b in pairs:
         th = dict(thetas0)
@@ -413,27 +428,51 @@ def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         first, other = other, first
         if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
             return None
+    return first, other, r.rms_holdout, t_cv
+
+
+def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
+    """The pair's more useful member, marked significant with the route "together with
+    OTHER" (see :func:`_find_pair`)."""
+    first, other, rms, t_cv = found
     first.significant = True
     first.route = f"together with {other.term}"
-    first.pair = (other.term, r.rms_holdout, t_cv)
+    first.pair = (other.term, rms, t_cv)
     return first
 
 
 def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
-              sig: list[Candidate], thetas0, folds: int, fl: float) -> list[Candidate]:
+              chosen: Candidate, thetas0, folds: int, fl: float) -> Candidate | None:
     """Far above the floor, a single term that leaves the model there may have been chosen
-    because two larger effects hide each other (see :data:`REDIRECT_RATIO`); then the
-    qualifying pair's more useful member leads."""
-    top = sig[0]
-    if (top.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
-            or top.rms_holdout < FAR_RATIO * fl):
-        return sig
-    pair = _pair_step(wd, base, base_specs, out, thetas0, folds, exclude=top,
-                      below=REDIRECT_RATIO * top.rms_holdout)
-    if pair is None:
-        return sig
-    pair.displaced = (top.term, top.rms_holdout)
-    return [pair]
+    because two larger effects hide each other (see :data:`REDIRECT_RATIO`): the qualifying
+    pair of two *other* effects -- neither the chosen term nor one this log cannot tell
+    from it -- whose more useful member then leads; None to keep ``chosen``."""
+    if (chosen.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
+            or chosen.rms_holdout < FAR_RATIO * fl):
+        return None
+    same = {id(chosen)} | {id(c) for c in out if c.term in chosen.equivalents}
+    found = _find_pair(wd, base, base_specs, out, thetas0, folds, exclude=same,
+                       below=REDIRECT_RATIO * chosen.rms_holdout)
+    if found is None:
+        return None
+    # ... unless the chosen term with a partner does about as well: the next step finds it
+    for m in _pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
+                                      if chosen in ab]:
+        if m is chosen or m.spec is None or chosen.spec is None:
+            continue
+        th = dict(thetas0)
+        for c in (chosen, m):
+            th.update(getattr(c._fit, "_thetas", {}) or {})
+        try:
+            r = fit_model(wd, list(base_specs) + [chosen.spec, m.spec], folds=folds,
+                          thetas0=th, light=True)
+        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+            continue
+        if r.rms_holdout * PAIR_MARGIN <= found[2]:
+            return None
+    pair = _mark_pair(found)
+    pair.displaced = (chosen.term, chosen.rms_holdout)
+    return pair
 
 
 #: the level and the square of one channel: a second-order sensitivity whose two terms

@@ -313,3 +313,29 @@ def test_level_and_square_that_cancel_are_found_together():
     d = diagnose(wd, [])
     assert sorted(p["term"] for p in d.path[:2]) == ["g(acc_y)", "g2(acc_y)"], d.verdict
     assert d.path[1]["ratio_to_floor_after"] < 1.3
+
+
+def test_warm_start_does_not_trap_a_time_constant():
+    """A warm-up transient (τ 1200 s) on an ageing ramp: fitted alone, the warm-up stretches
+    its τ to imitate the ramp. Adding the ramp to that model must find the warm-up's own τ
+    again (a warm start searched the known τ only near its old value, the ramp then looked
+    useless and the loop wandered off through lags of the temperatures)."""
+    from test_envmodel_helpers import make_log
+    from workbench_cases import noise
+
+    from gyrotest.envmodel.terms import parse_terms, resolve_terms
+
+    rng = np.random.default_rng(11)
+    n = 6 * 3600
+    t = np.arange(n) * 1.0
+    T = 24 + 0.6 * np.sin(2 * np.pi * t / 20000 + 0.4)
+    rate = 0.5 + 30.0 * np.exp(-t / 1200.0) + 60.0 * t / n + noise(n, rng)
+    wd = prepare(make_log(rate, 1.0, temps={"T_case": T}))
+    alone = fit_model(wd, resolve_terms(parse_terms(["warmup"]), wd.frame))
+    both = resolve_terms(parse_terms(["warmup", "ramp"]), wd.frame)
+    warm = fit_model(wd, both, thetas0=dict(alone._thetas), light=True)
+    cold = fit_model(wd, both, light=True)
+    assert warm.rms_holdout <= 1.01 * cold.rms_holdout, (warm.rms_holdout, cold.rms_holdout)
+    d = diagnose(wd, ["warmup"])
+    assert d.found and d.found[0].term == "ramp", d.verdict
+    assert d.path[0]["ratio_to_floor_after"] < 1.3

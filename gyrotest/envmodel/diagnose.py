@@ -398,13 +398,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
               and frozenset((id(a), id(b))) not in seen]
     best = None
     for a, b in pairs:
-        th = dict(thetas0)
-        for c in (a, b):
-            th.update(getattr(c._fit, "_thetas", {}) or {})
-        try:
-            r = fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds,
-                          thetas0=th, light=True)
-        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+        r = _fit_pair(wd, base_specs, a, b, thetas0, folds)
+        if r is None:
             continue
         if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
                                     below):
@@ -429,6 +424,20 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
             return None
     return first, other, r.rms_holdout, t_cv
+
+
+def _fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int
+              ) -> FitResult | None:
+    """The base model with candidates ``a`` and ``b`` added, started from the base's and both
+    candidates' nonlinear parameters; None when it cannot be fitted."""
+    th = dict(thetas0)
+    for c in (a, b):
+        th.update(getattr(c._fit, "_thetas", {}) or {})
+    try:
+        return fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds, thetas0=th,
+                         light=True)
+    except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+        return None
 
 
 def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
@@ -460,13 +469,8 @@ def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                                       if chosen in ab]:
         if m is chosen or m.spec is None or chosen.spec is None:
             continue
-        th = dict(thetas0)
-        for c in (chosen, m):
-            th.update(getattr(c._fit, "_thetas", {}) or {})
-        try:
-            r = fit_model(wd, list(base_specs) + [chosen.spec, m.spec], folds=folds,
-                          thetas0=th, light=True)
-        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+        r = _fit_pair(wd, base_specs, chosen, m, thetas0, folds)
+        if r is None:
             continue
         if r.rms_holdout * PAIR_MARGIN <= found[2]:
             return None

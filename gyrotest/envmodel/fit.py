@@ -236,6 +236,10 @@ def _rss(X: np.ndarray, y: np.ndarray) -> float:
     return st.lstsq(X, y)[1]
 
 
+#: points of the global log-spaced search grid of a time constant
+TAU_GRID = 14
+
+
 class _Fitter:
     """Variable projection over the nonlinear parameters of a term set."""
 
@@ -294,18 +298,18 @@ class _Fitter:
         """Time constants taken from a warm start (labels in ``warm``) were searched only near
         their old values, where a term fitted without the new one may sit far from its own
         optimum (a warm-up τ stretched to imitate a ramp): each is evaluated on the global
-        14-point grid of :meth:`_opt_one`, and when a grid point lowers the residual sum of
-        squares by more than the fraction ``min_gain`` it is refined there and every
-        parameter polished locally again. 10 % separates a trapped τ from a small move, which
-        would only give the new term's test a free parameter it does not count (campaign:
-        with 0.1 % two more null cases alarmed). The cost is 14 solves per warm τ."""
+        grid of :meth:`_opt_one` (:data:`TAU_GRID` points), and when a grid point lowers the
+        residual sum of squares by more than the fraction ``min_gain`` it is refined there and
+        every parameter polished locally again. 10 % separates a trapped τ from a small move,
+        which would only give the new term's test a free parameter it does not count
+        (campaign: with 0.1 % two more null cases alarmed). Cost: TAU_GRID solves per warm τ."""
         cur = self.solve(thetas, None)[1]
         moved = False
         for s in self.nl:
             if s.label not in warm or s.effect.nonlinear[0].kind != "tau":
                 continue
             (pname, (lo, hi)), = self.bounds[s.label].items()
-            grid = np.linspace(math.log(lo), math.log(hi), 14)
+            grid = np.linspace(math.log(lo), math.log(hi), TAU_GRID)
             vals = []
             for u in grid:
                 th = dict(thetas)
@@ -340,7 +344,7 @@ class _Fitter:
                 c = math.log(min(max(cur, lo), hi))
                 a, b = max(llo, c - 0.7), min(lhi, c + 0.7)
             else:
-                grid = np.linspace(llo, lhi, 14)
+                grid = np.linspace(llo, lhi, TAU_GRID)
                 vals = [g(u) for u in grid]
                 i = int(np.argmin(vals))
                 a = grid[max(i - 1, 0)]

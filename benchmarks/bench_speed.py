@@ -33,6 +33,7 @@ import compileall
 import math
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -218,17 +219,20 @@ def main() -> None:
     # have their .pyc, and with PYTHONDONTWRITEBYTECODE set (as on the reference VM) a source
     # checkout would otherwise recompile every gyrotest module in every run
     compileall.compile_dir(os.path.join(ROOT, "gyrotest"), quiet=1)
-    if a.startup:
-        startup(a.pairs, tmp, a.before)
-    if a.big:
-        big(int(a.rows), a.pairs, tmp, a.before)
-    elif a.parse:
-        path, pq = os.path.join(tmp, "big.csv"), os.path.join(tmp, "big.parquet")
-        write_csv(path, int(a.rows))
-        run([*GY, "-q", "ingest", path, "--rate-unit", "deg/h", "-o", pq])
-        print(f"\nparse stage, {a.rows:.3g} rows ({os.path.getsize(path) / 1e6:.0f} MB CSV, "
-              f"{os.path.getsize(pq) / 1e6:.0f} MB Parquet; load {os.getloadavg()[0]:.1f})")
-        parse_stage(path, pq, a.pairs)
+    try:
+        if a.startup:
+            startup(a.pairs, tmp, a.before)
+        if a.big:
+            big(int(a.rows), a.pairs, tmp, a.before)
+        elif a.parse:
+            path, pq = os.path.join(tmp, "big.csv"), os.path.join(tmp, "big.parquet")
+            write_csv(path, int(a.rows))
+            run([*GY, "-q", "ingest", path, "--rate-unit", "deg/h", "-o", pq])
+            print(f"\nparse stage, {a.rows:.3g} rows ({os.path.getsize(path) / 1e6:.0f} MB CSV, "
+                  f"{os.path.getsize(pq) / 1e6:.0f} MB Parquet; load {os.getloadavg()[0]:.1f})")
+            parse_stage(path, pq, a.pairs)
+    finally:  # the logs are hundreds of MB: never leave them in /tmp
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 if __name__ == "__main__":

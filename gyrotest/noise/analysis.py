@@ -75,10 +75,9 @@ ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
 #: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
 MAX_JITTER = 0.1
 #: from this many samples the spike check (``--outliers flag``, which leaves the rate as
-#: recorded) runs in a second thread beside the deviations, PSD and fit of the same axis: the
-#: deviation kernels and FFTs run in C without the GIL, and the running median (which holds
-#: it) hands it over between pieces (10⁷-row CSV: benchmarks/README.md, bench_speed, fourth
-#: pass)
+#: recorded) runs in a forked child process beside the deviations, PSD and fit of the same axis
+#: (:mod:`gyrotest.beside`; a thread did not overlap: scipy's running median holds the GIL;
+#: 10⁷-row CSV: benchmarks/README.md, bench_speed, sixth pass)
 SPIKE_BESIDE_MIN = 1 << 20
 #: what the interval columns mean (``--ci``)
 CI_TEXT = {
@@ -420,6 +419,15 @@ def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
     return info, warn, rate
 
 
+def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
+    """:func:`_outliers` for ``--outliers flag`` (the rate stays as recorded), with plain
+    arguments and only the small results, for a forked child (:mod:`gyrotest.beside`)."""
+    from .outliers import detect_outliers
+
+    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs)
+    return _outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None)
+
+
 def _fold_filters(fit, diag, warns, tau0):
     """Markov terms with T_c < τ0 are the sensor's output filter: fold them into N (N_eq, see
     :mod:`gyrotest.noise.filtered`) in the requested and the diagnosed model, and drop the
@@ -607,15 +615,21 @@ def analyse_allan(
     for name in names:
         if streamed:
             series, means = log.series[name], log.means[name]
-            out_info, out_warn = _outliers_streamed(log, name)
-            results.append(_analyse_axis(
-                name, None, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
-                tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
-                confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-                run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
-                horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
-                record_s=log.duration_s, det_info=None, source=log.source, fit_model=fit_model,
-                ci=ci, series=series, means=means))
+            from ..beside import run_beside
+
+            spike = run_beside(_outliers_streamed, log, name)  # beside, as for a log read whole
+            try:
+                res = _analyse_axis(
+                    name, None, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
+                    tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
+                    confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+                    run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
+                    horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
+                    record_s=log.duration_s, det_info=None, source=log.source,
+                    fit_model=fit_model, ci=ci, series=series, means=means)
+            finally:  # its error first, as in the serial order
+                out_info, out_warn = spike.result()
+            results.append(res)
             results[-1].outliers = out_info
             if out_warn is not None:
                 results[-1].warnings.insert(0, out_warn)
@@ -624,10 +638,10 @@ def analyse_allan(
         det_info = None
         beside = outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN
         if beside:  # the rate stays as recorded: the spike check runs beside the analysis
-            from concurrent.futures import ThreadPoolExecutor
+            from ..beside import run_beside
 
-            spike_pool = ThreadPoolExecutor(max_workers=1)
-            spike = spike_pool.submit(_outliers, rate, log, segs, name, outliers)
+            spike = run_beside(_outliers_flag, rate, log.tau0, float(log.t[0]) if log.n else 0.0,
+                               segs, name)
         else:
             out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
         try:
@@ -646,8 +660,7 @@ def analyse_allan(
                 fit_model=fit_model, ci=ci)
         finally:
             if beside:  # its error first, as in the serial order
-                out_info, out_warn, _ = spike.result()
-                spike_pool.shutdown()
+                out_info, out_warn = spike.result()
         results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:

@@ -1,0 +1,98 @@
+"""Run one function in a forked child process beside the caller's work.
+
+Some steps hold Python's GIL for their whole run (scipy's running median in the spike check),
+so a thread beside the deviations does not overlap them: on a 10⁷-sample log the thread and the
+main work took as long together as one after the other (benchmarks/README.md, issue #13, sixth
+pass). A forked child shares the record copy-on-write, needs no pickling of its inputs and runs
+on the other core; only its (small) result comes back through a pipe.
+
+:func:`run_beside` returns a handle whose ``result()`` returns the function's value or raises
+its exception, as a direct call would. Off Linux (no ``fork``, or a fork that system
+frameworks do not support) or when the fork fails, the function runs in the caller when
+``result()`` is called. The child leaves with ``os._exit``: no atexit handlers, no flush of
+the parent's buffered output.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import sys
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+
+class _Inline:
+    def __init__(self, fn: Callable[..., Any], args: tuple) -> None:
+        self._fn, self._args = fn, args
+
+    def result(self) -> Any:
+        return self._fn(*self._args)
+
+
+class _Forked:
+    def __init__(self, pid: int, fd: int) -> None:
+        self._pid, self._fd = pid, fd
+        self._done = False
+
+    def result(self) -> Any:
+        if self._done:
+            raise RuntimeError("result() already taken")
+        self._done = True
+        chunks = []
+        with os.fdopen(self._fd, "rb") as f:
+            while True:
+                b = f.read(1 << 20)
+                if not b:
+                    break
+                chunks.append(b)
+        _, status = os.waitpid(self._pid, 0)
+        data = b"".join(chunks)
+        if not data:  # killed (out of memory, a signal): no answer
+            raise RuntimeError(f"the child process of the spike check ended without a result "
+                               f"(wait status {status}); rerun with --outliers remove or robust "
+                               "to run it in the main process")
+        ok, value = pickle.loads(data)
+        if ok:
+            return value
+        raise value
+
+
+def run_beside(fn: Callable[..., Any], *args: Any) -> _Inline | _Forked:
+    """Start ``fn(*args)`` in a forked child (Linux); its value or exception comes back through
+    :meth:`result`. Falls back to running it in the caller at ``result()``."""
+    if not sys.platform.startswith("linux") or not hasattr(os, "fork"):
+        return _Inline(fn, args)
+    try:
+        r, w = os.pipe()
+    except OSError:
+        return _Inline(fn, args)
+    try:
+        with warnings.catch_warnings():  # Python ≥ 3.12 warns on fork with threads alive; the
+            warnings.simplefilter("ignore", DeprecationWarning)  # child only computes and exits
+            pid = os.fork()
+    except OSError:
+        os.close(r)
+        os.close(w)
+        return _Inline(fn, args)
+    if pid == 0:  # the child: compute, send, leave without atexit handlers or stdio flushes
+        code = 0
+        try:
+            os.close(r)
+            try:
+                out = (True, fn(*args))
+            except BaseException as e:  # noqa: BLE001 - re-raised in the parent
+                out = (False, e)
+            try:
+                data = pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception as e:  # noqa: BLE001 - an unpicklable exception: send its text
+                data = pickle.dumps((False, RuntimeError(f"{type(e).__name__}: {e}")))
+            with os.fdopen(w, "wb") as f:
+                f.write(data)
+        except BaseException:  # noqa: BLE001
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(w)
+    return _Forked(pid, r)

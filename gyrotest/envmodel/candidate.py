@@ -52,6 +52,7 @@ class Candidate:
     #: ... instead of this single term: (term, its held-out RMS deg/h)
     displaced: tuple[str, float] | None = None
     cv_t: float = math.nan  # gain / (fold scatter / √folds)
+    spectral_z: float = math.nan  # Whittle z of its coefficients (weak routes only)
     _fit: FitResult | None = None
 
     @property
@@ -85,6 +86,7 @@ class Candidate:
                 "rms_fit_dph": self.rms_fit, "rms_holdout_dph": self.rms_holdout,
                 "improvement_pct": self.improvement_pct,
                 "gain_fold_scatter_pct": self.gain_scatter_pct, "cv_t": self.cv_t,
+                "spectral_z": self.spectral_z,
                 "z": self.z, "p": self.p,
                 "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
                 "route": self.route, "rejected": self.rejected, "note": self.note,

@@ -150,6 +150,12 @@ FAR_T = 2.13
 FAR_T_NUISANCE = 3.75
 #: ... with the HAC test as a guard: the coefficient exceeds its own standard error
 FAR_Z = 1.0
+#: the weak routes (clear gain, far above the floor, pairs) also need the added coefficients
+#: to stand out of the candidate model's residual spectrum: spectral (Whittle) z at least
+#: SPECTRAL_Z (:func:`gyrotest.envmodel.stats.whittle_z`). A smooth channel fitted to a gyro's
+#: slow wander (random walk, bias instability) reaches 2-6 there; true effects mostly > 10
+#: (tuned on seeds 10000-11199, benchmarks/README.md)
+SPECTRAL_Z = 8.0
 #: far above the floor, when no single term (nor a field block) qualifies, two effects may
 #: each hide the other (every fold is dominated by a different one): pairs of the PAIR_TOP
 #: best candidates are fitted together, and a pair that cuts the held-out RMS at least
@@ -413,6 +419,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
                 else impr >= FAR_GAIN and t_cv >= FAR_T):
             continue
+        if not _spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z:
+            continue
         if best is None or r.rms_holdout < best[2].rms_holdout:
             best = (a, b, r, t_cv)
     if best is None:
@@ -642,6 +650,13 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
                and (c.key != "hyst" or t_cv >= HYST_CV_T))
     rejected = None
+    zw = math.nan
+    if (clear or far) and not strict:
+        zw = _spectral_z(r, [c.label], wd)
+        if not zw >= SPECTRAL_Z:
+            rejected = (f"its coefficient does not stand out of the residual's slow noise "
+                        f"(spectral z {zw:.1f} < {SPECTRAL_Z:g}): the gain may be a fit to "
+                        "the gyro's own drift")
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     match = None
     if c.key == "sin" and (strict or clear or far):
@@ -666,6 +681,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                      gain_scatter_pct=100 * scatter, rejected=rejected, custom=custom)
     cand.r_residual = residual_corr(base, r, c)
     cand.cv_t = t_cv
+    cand.spectral_z = zw
     cand._fit = r
     cand.period_match = match
     return cand
@@ -766,6 +782,17 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
     if rej:
         v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
     return v, None
+
+
+def _spectral_z(r: FitResult, labels: list[str], wd: WorkData) -> float:
+    """Spectral (Whittle) z of the linear coefficients of the terms ``labels`` in the fitted
+    model ``r``, against the spectrum of its own residual (:func:`st.whittle_z`)."""
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term in labels and cf.kind == "linear"]
+    try:
+        X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
+        return st.whittle_z(X, wd.y, r.resid, idx)
+    except (np.linalg.LinAlgError, ValueError):
+        return math.nan
 
 
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData

@@ -60,6 +60,12 @@ that the model under judgment cannot move:
    ≥ 2 × the floor also gives way to a qualifying pair of two other candidates whose
    held-out RMS is below half of its own -- unless the term itself, paired with one of the
    pool, comes within 10 % of that pair (then the next step finds the partner).
+   On the clear-gain and far routes and for pairs, the added coefficients must also stand
+   out of the candidate model's own residual spectrum: frequency-domain GLS (Whittle) z
+   ≥ 8 (:func:`gyrotest.envmodel.stats.whittle_z`). The short-τ floor cannot see a gyro's
+   slow wander (random walk, bias instability), and a smooth channel fitted to it gains
+   25-45 % held-out; against the residual's spectrum its z stays at 2-6, where true
+   effects reach 10-100.
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains

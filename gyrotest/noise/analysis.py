@@ -612,55 +612,42 @@ def analyse_allan(
                      f"({', '.join(labels) or 'bias only'}; drift RMS "
                      f"{model_info['drift_rms_dph']:.4g} deg/h, peak-to-peak "
                      f"{model_info['drift_p2p_dph']:.4g} deg/h)")
+    common = dict(dev=dev, tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
+                  confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+                  run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
+                  horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
+                  record_s=log.duration_s, source=log.source, fit_model=fit_model, ci=ci)
     for name in names:
-        if streamed:
-            series, means = log.series[name], log.means[name]
-            from ..beside import run_beside
+        from ..beside import run_beside
 
-            spike = run_beside(_outliers_streamed, log, name)  # beside, as for a log read whole
+        spike = None  # the spike check beside the analysis (its report comes back at the end)
+        if streamed:
+            spike = run_beside(_outliers_streamed, log, name)
             try:
-                res = _analyse_axis(
-                    name, None, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
-                    tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
-                    confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-                    run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
-                    horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
-                    record_s=log.duration_s, det_info=None, source=log.source,
-                    fit_model=fit_model, ci=ci, series=series, means=means)
+                res = _analyse_axis(name, None, log.tau0, segs, in_kind, in_note, quantum,
+                                    det_info=None, series=log.series[name],
+                                    means=log.means[name], **common)
             finally:  # its error first, as in the serial order
                 out_info, out_warn = spike.result()
-            results.append(res)
-            results[-1].outliers = out_info
-            if out_warn is not None:
-                results[-1].warnings.insert(0, out_warn)
-            continue
-        rate = np.asarray(log.rates[name], dtype=np.float64)
-        det_info = None
-        beside = outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN
-        if beside:  # the rate stays as recorded: the spike check runs beside the analysis
-            from ..beside import run_beside
-
-            spike = run_beside(_outliers_flag, rate, log.tau0, float(log.t[0]) if log.n else 0.0,
-                               segs, name)
         else:
-            out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
-        try:
-            if model_info is not None and name == model_info["axis"]:
-                rate = rate - model_pred
-            if detrend not in (None, "none"):
-                rate, det_info = _detrend(rate, log.t, segs, detrend)
-            rates_used[name] = rate
-            res = _analyse_axis(
-                name, rate, log.tau0, segs, in_kind, in_note, quantum, dev=dev,
-                tau_spec=tau_spec, keys=keys, vehicle_rates=vehicle_rates,
-                confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-                run_diagnosis=run_diagnosis, spectral=spectral, trend_check=trend_check,
-                horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
-                record_s=log.duration_s, det_info=det_info, source=log.source,
-                fit_model=fit_model, ci=ci)
-        finally:
-            if beside:  # its error first, as in the serial order
-                out_info, out_warn = spike.result()
+            rate = np.asarray(log.rates[name], dtype=np.float64)
+            det_info = None
+            if outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN:  # rate stays as recorded
+                spike = run_beside(_outliers_flag, rate, log.tau0,
+                                   float(log.t[0]) if log.n else 0.0, segs, name)
+            else:
+                out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
+            try:
+                if model_info is not None and name == model_info["axis"]:
+                    rate = rate - model_pred
+                if detrend not in (None, "none"):
+                    rate, det_info = _detrend(rate, log.t, segs, detrend)
+                rates_used[name] = rate
+                res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
+                                    det_info=det_info, **common)
+            finally:
+                if spike is not None:  # its error first, as in the serial order
+                    out_info, out_warn = spike.result()
         results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:

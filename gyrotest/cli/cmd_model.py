@@ -264,7 +264,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "above 1.2x the noise floor, or (model ≥ 2x the floor) down by ≥ 10 % "
               "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1); "
               "off the strict test, spectral (Whittle) z ≥ 8 against the residual's own "
-              "spectrum unless the gain is ≥ 40 % with fold consistency ≥ 5; "
+              "spectrum (≥ 4 while the model is within 2x the floor) unless the gain is "
+              "≥ 40 % with fold consistency ≥ 5; "
               "ties go to channel-based terms and to the channels the model already uses")
     if b.excursions:
         out.print("  where the base model fails:")
@@ -449,7 +450,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     sinusoid on the period of a logged stimulus is rejected when a term of that channel
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     Off the strict test, the added coefficients must also stand out of the candidate
-    model's residual spectrum (frequency-domain GLS z >= 8), unless the held-out gain is
+    model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
+    within 2x the floor), unless the held-out gain is
     >= 40 % with fold consistency >= 5: a smooth channel fitted to the gyro's own slow
     wander is not named. The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across

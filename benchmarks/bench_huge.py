@@ -12,9 +12,9 @@ is written row group by row group (2²⁰ rows each, never the whole record in m
 ``gyrotest allan FILE --rate-unit deg/h --json`` (OADEV 10/decade + noise fit + diagnosis)
 runs in a fresh process; reported: wall and CPU time (getrusage of the child) and the child's
 peak resident memory (``ru_maxrss``) over the float64 record size (8 bytes × samples).
-Logs of ≥ 2²² rows are streamed into the integrated angle (``gyrotest/stream.py``);
-``--whole`` also runs each log with streaming off (``GYROTEST_STREAM_MIN_ROWS``), i.e. read
-whole as before. Check ``free -g`` first: 10⁹ samples need 8 GB streamed, ≈ 6× that read whole.
+Every log here is streamed into the integrated angle (``gyrotest/stream.py``; the runs set
+``GYROTEST_STREAM_MIN_ROWS=1``, since by default only logs of ≥ 2²⁴ rows are);
+``--whole`` also runs each log with streaming off, i.e. read whole. Check ``free -g`` first: 10⁹ samples need 8 GB streamed, ≈ 6× that read whole.
 """
 
 from __future__ import annotations
@@ -61,8 +61,7 @@ def run_allan(path: str, whole: bool = False) -> dict:
     if timer:
         cmd = ["/usr/bin/time", "-v", *cmd]
     env = dict(os.environ)
-    if whole:
-        env["GYROTEST_STREAM_MIN_ROWS"] = str(10**15)
+    env["GYROTEST_STREAM_MIN_ROWS"] = str(10**15) if whole else "1"
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,

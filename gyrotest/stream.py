@@ -44,7 +44,7 @@ __all__ = ["BATCH_ROWS", "STREAM_MIN_ROWS", "StreamedLog", "stream_log"]
 #: Parquet logs with at least this many rows (2²⁴ ≈ 1.7·10⁷) are streamed; smaller ones are
 #: read whole: the in-memory path gives bit-identical results to the CSV path and is faster
 #: while the record fits easily (10⁷ rows: 1.9 s against 2.7 s streamed, peak 0.46 GB against
-#: 0.26 GB; benchmarks/README.md); at 2²⁴ rows it peaks near 1 GB
+#: 0.26 GB; benchmarks/README.md); at 2²⁴ rows that is about 0.8 GB
 STREAM_MIN_ROWS = int(os.environ.get("GYROTEST_STREAM_MIN_ROWS", 1 << 24))
 #: rows per batch read from the Parquet file
 BATCH_ROWS = 1 << 18

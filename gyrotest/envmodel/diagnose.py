@@ -186,6 +186,8 @@ def spectral_bar(base_ratio: float) -> float:
     :data:`SPECTRAL_Z_NEAR` below :data:`SPECTRAL_NEAR_RATIO`, else :data:`SPECTRAL_Z`."""
     near = math.isfinite(base_ratio) and base_ratio < SPECTRAL_NEAR_RATIO
     return SPECTRAL_Z_NEAR if near else SPECTRAL_Z
+
+
 #: far above the floor, when no single term (nor a field block) qualifies, two effects may
 #: each hide the other (every fold is dominated by a different one): pairs of the PAIR_TOP
 #: best candidates are fitted together, and a pair that cuts the held-out RMS at least

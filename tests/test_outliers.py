@@ -153,3 +153,83 @@ def test_median_and_quantile_equal_numpy(monkeypatch):
         ref = a.copy()
         ref.partition([150_000])
         assert o._median_quantile(a.copy(), 0.99)[0] == ref[150_000]
+
+
+def _reference_outliers(x, segs, window, scale, kk):
+    """Outlier indices and z with the running median computed at every sample (the plain
+    Hampel filter) for a given scale: what the screened long-record check must reproduce."""
+    from gyrotest.noise import outliers as o
+
+    r = np.zeros_like(x)
+    for a, b in segs:
+        w = min(window, (b - a) | 1) if b - a >= 3 else 1
+        if w >= 3:
+            r[a:b] = x[a:b] - o._running_median(x[a:b], w)
+    idx = np.flatnonzero(np.abs(r / scale) > kk) if scale > 0 else np.zeros(0, int)
+    return idx, r[idx] / scale if idx.size else np.zeros(0)
+
+
+@pytest.mark.parametrize("kind", ["white", "spikes", "cluster", "rrw", "student", "quant",
+                                  "gaps", "adis"])
+def test_screened_long_record_finds_exactly_the_hampel_outliers(monkeypatch, kind):
+    """Long records: the scale from the stretches' residuals, and the outliers from the running
+    median at the samples the block screen cannot clear — exactly the samples and z of the
+    running median everywhere (for that scale), with short and odd segments, clustered
+    spikes, heavy tails, coarse quantization (the screen gives up: median everywhere) and
+    real ADIS16405 noise; the scale within 2 % of the exact one from every residual (8 % with
+    Student-t tails)."""
+    from gyrotest.noise import outliers as o
+
+    monkeypatch.setattr(o, "SCALE_SAMPLE", 1 << 14)
+    monkeypatch.setattr(o, "SCALE_STRETCHES", 16)
+    monkeypatch.setattr(o, "SCREEN_BLOCKS", 1000)
+    rng = np.random.default_rng(abs(hash(kind)) % 1000)
+    n = 120_000
+    segs = [(0, n)]
+    if kind == "adis":
+        a = bo._adis_rates()
+        if a is None:
+            pytest.skip("the shared ADIS16405 log is not present")
+        x = a[:n, 0].copy()
+    elif kind == "rrw":
+        x = rng.standard_normal(n) + np.cumsum(rng.standard_normal(n)) * 0.05
+    elif kind == "student":
+        x = rng.standard_t(3, n)
+    elif kind == "quant":
+        x = np.round(rng.standard_normal(n) * 0.3)  # MAD = 0 for most windows
+    else:
+        x = rng.standard_normal(n) * 2.0 + 5.0
+    if kind in ("spikes", "gaps", "adis", "rrw", "student"):
+        i = rng.choice(n, 60, replace=False)
+        x[i] += rng.choice([-1, 1], 60) * np.exp(rng.uniform(np.log(3), np.log(60), 60)) * \
+            np.std(np.diff(x)) / np.sqrt(2)
+    if kind == "cluster":
+        x[5000:5030] += 25.0  # longer than half the window: masks itself, as in the filter
+        x[7000:7010] -= 30.0
+        x[0] += 40.0
+        x[n - 1] -= 40.0
+    if kind == "gaps":
+        segs = [(0, 2), (2, 40), (40, 10_001), (10_001, 10_003), (10_003, 60_000),
+                (60_000, 60_051), (60_051, n)]
+    rep = detect_outliers(x, 0.01, segments=segs)
+    assert "stretches" in rep.scale_method
+    idx, z = _reference_outliers(x, segs, rep.window, rep.scale, rep.k)
+    assert np.array_equal(np.flatnonzero(rep.mask), idx)
+    got_z = np.array([e.peak_z for e in rep.events])
+    ref_ev = o.outlier_events(idx, z, 0.0, 0.01)
+    assert [(e.start, e.stop) for e in rep.events] == [(e.start, e.stop) for e in ref_ev]
+    np.testing.assert_array_equal(got_z, [e.peak_z for e in ref_ev])
+    if kind in ("spikes", "gaps", "cluster"):
+        assert rep.found
+    monkeypatch.setattr(o, "SCALE_SAMPLE", 1 << 30)  # the exact check, every residual
+    exact = detect_outliers(x, 0.01, segments=segs)
+    # a 99 % quantile of heavy-tailed residuals from 16 k samples (2²⁰ in use) scatters more
+    assert rep.scale == pytest.approx(exact.scale, rel=0.08 if kind == "student" else 0.02)
+    # the other scale only moves samples at the threshold's edge
+    diff = np.flatnonzero(rep.mask != exact.mask)
+    _, z_all = _reference_outliers(x, segs, rep.window, exact.scale, 0.0)
+    i_all, _ = _reference_outliers(x, segs, rep.window, exact.scale, 0.0)
+    z_of = dict(zip(i_all.tolist(), np.abs(z_all).tolist()))
+    tol = 0.08 if kind == "student" else 0.02
+    assert all(abs(z_of.get(i, 0.0) / exact.k - 1) <= tol for i in diff.tolist()), kind
+    assert diff.size <= max(2, 0.05 * exact.n_outliers) or kind == "student"

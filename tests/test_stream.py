@@ -120,12 +120,17 @@ def test_theta_equals_angle_series_and_scale_subsample(monkeypatch, tmp_path, sm
     th = s.series["omega_dph"].theta
     assert th.size == ref.theta.size
     assert np.max(np.abs(th - ref.theta)) < 1e-9 * np.max(np.abs(ref.theta))
-    monkeypatch.setattr("gyrotest.noise.streamed.SCALE_SAMPLE", 5_000)
+    full = detect_outliers(x, TAU0)  # every residual
+    monkeypatch.setattr("gyrotest.noise.outliers.SCALE_SAMPLE", 5_000)
+    monkeypatch.setattr("gyrotest.noise.outliers.SCALE_STRETCHES", 10)
     rep = detect_outliers_series(s.series["omega_dph"], s.means["omega_dph"], TAU0)
-    full = detect_outliers(x, TAU0)
+    whole = detect_outliers(x, TAU0)  # the same stretches, screened
     assert [e.start for e in rep.events] == [e.start for e in full.events] == [77, 40_000]
+    assert [e.start for e in whole.events] == [77, 40_000]
     assert rep.scale == pytest.approx(full.scale, rel=0.01)
-    assert "every 12th residual" in rep.scale_method
+    assert rep.scale == pytest.approx(whole.scale, rel=1e-12)
+    assert rep.excess_kurtosis == pytest.approx(whole.excess_kurtosis, rel=1e-6)
+    assert "from 5000 residuals in 10 stretches" in rep.scale_method
     psd = welch_psd_series(s.series["omega_dph"], s.means["omega_dph"], TAU0)
     np.testing.assert_allclose(psd.psd, welch_psd(x, TAU0).psd, rtol=1e-9)
 

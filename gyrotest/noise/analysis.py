@@ -75,9 +75,11 @@ ALLAN_TYPE = ("oadev", "adev", "totdev", "akdev")
 #: sample-interval jitter (std/τ0) above which the Allan analysis refuses uniform-τ0 results
 MAX_JITTER = 0.1
 #: from this many samples the spike check (``--outliers flag``, which leaves the rate as
-#: recorded) runs in a forked child process beside the deviations, PSD and fit of the same axis
-#: (:mod:`gyrotest.beside`; a thread did not overlap: scipy's running median holds the GIL;
-#: 10⁷-row CSV: benchmarks/README.md, bench_speed, sixth pass)
+#: recorded) runs on a thread beside the deviations, PSD and fit of the same axis: on records
+#: this long it screens (:func:`gyrotest.noise.outliers.detect_outliers`: mostly numpy work
+#: that releases the GIL, ≈ 0.15 s of CPU per 10⁷ samples). A streamed log's spike check (the
+#: running median everywhere, which holds the GIL) runs in a forked child instead
+#: (:mod:`gyrotest.beside`; benchmarks/README.md, bench_speed, sixth and eighth passes)
 SPIKE_BESIDE_MIN = 1 << 20
 #: what the interval columns mean (``--ci``)
 CI_TEXT = {
@@ -421,11 +423,22 @@ def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
 
 def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
     """:func:`_outliers` for ``--outliers flag`` (the rate stays as recorded), with plain
-    arguments and only the small results, for a forked child (:mod:`gyrotest.beside`)."""
+    arguments and only the small results, for a thread beside the analysis."""
     from .outliers import detect_outliers
 
     rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs)
     return _outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None)
+
+
+def _on_thread(fn, *args):
+    """A Future of ``fn(*args)`` on a new thread (numpy work beside the caller's); its
+    ``result()`` returns the value or raises the exception, as a direct call would."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ex = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gyrotest-spikes")
+    fut = ex.submit(fn, *args)
+    ex.shutdown(wait=False)
+    return fut
 
 
 def _fold_filters(fit, diag, warns, tau0):
@@ -633,7 +646,7 @@ def analyse_allan(
             rate = np.asarray(log.rates[name], dtype=np.float64)
             det_info = None
             if outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN:  # rate stays as recorded
-                spike = run_beside(_outliers_flag, rate, log.tau0,
+                spike = _on_thread(_outliers_flag, rate, log.tau0,
                                    float(log.t[0]) if log.n else 0.0, segs, name)
             else:
                 out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)

@@ -22,6 +22,15 @@ without assuming the noise is white:
 Consecutive outliers form one event (start time, duration, peak |z|). The report also gives
 the excess kurtosis of the residuals (heavy tails; 0 for Gaussian noise).
 
+Records longer than 2²⁰ samples (:data:`SCALE_SAMPLE`) take the scale and the kurtosis from the
+residuals of 64 contiguous stretches spread evenly over the record (2²⁰ residuals in all; the
+MAD's relative standard error is then ≈ 0.1 %), and compute the running median only where a
+sample can be an outlier: every window contains the aligned block of window//2 + 1 samples
+around its centre, so the median lies between that block's minimum and maximum, and a sample
+within the threshold of both cannot be flagged. The outliers found are exactly those of the
+running median everywhere (for that scale); the check costs ≈ 0.2 s instead of ≈ 0.9 s per 10⁷
+samples.
+
 Treatments (``--outliers``): ``flag`` (default: report, analyse unchanged), ``remove`` (each
 outlier replaced by its running median: the Hampel filter), ``robust`` (each residual clipped to
 ±k·σ_MAD: winsorised, keeps the sign and part of a large excursion).
@@ -247,12 +256,18 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
 
     ``tau0`` and ``t0`` give the event times (t0 + i·τ0 s); ``segments`` [(start, stop), ...]
     are gap-free stretches, each filtered on its own (default: the whole record). ``k`` fixes
-    the threshold; by default it follows the record length (:func:`threshold_k`).
+    the threshold; by default it follows the record length (:func:`threshold_k`). Records longer
+    than :data:`SCALE_SAMPLE` take the scale and the kurtosis from a sample of the residuals
+    and the running median only where a sample can be an outlier (:func:`_detect_screened`).
     """
     x = np.asarray(x, dtype=np.float64)
     n = x.size
     window = max(3, int(window) | 1)
     segs = segments or [(0, n)]
+    kk = threshold_k(n, false_alarm, k_min) if k is None else float(k)
+    if n > SCALE_SAMPLE:
+        return _detect_screened(x, tau0, t0=t0, channel=channel, window=window, kk=kk,
+                                segs=segs, unit=unit)
     r = np.empty_like(x)  # the running median, then x − median in place
     for a, b in segs:
         w = min(window, (b - a) | 1) if b - a >= 3 else 1
@@ -262,7 +277,6 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
             r[a:b] = x[a:b]
     np.subtract(x, r, out=r)
     scale, how = _scale(r)
-    kk = threshold_k(n, false_alarm, k_min) if k is None else float(k)
     if scale <= 0:
         mask = np.zeros(n, dtype=bool)
     else:  # |r/scale| > kk, without a full-size z array
@@ -271,26 +285,187 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
         mask |= r < -lim
         cand = np.flatnonzero(mask)
         mask[cand] = np.abs(r[cand] / scale) > kk
-    events: list[OutlierEvent] = []
-    if mask.any():
-        idx = np.flatnonzero(mask)
-        breaks = np.flatnonzero(np.diff(idx) > 1)
-        starts = np.concatenate([[idx[0]], idx[breaks + 1]])
-        stops = np.concatenate([idx[breaks] + 1, [idx[-1] + 1]])
-        for a, b in zip(starts, stops):
-            seg = r[a:b] / scale
-            j = int(np.argmax(np.abs(seg)))
-            events.append(OutlierEvent(int(a), int(b), float(t0 + a * tau0), float(seg[j])))
+    idx = np.flatnonzero(mask)
+    events = outlier_events(idx, r[idx] / scale if idx.size else np.zeros(0), t0, tau0)
     n_clean = n - int(mask.sum()) if scale > 0 else n
-    kurt = math.nan
-    if r.size > 3:
-        r -= r.mean()  # r is not needed any more: central moments in place
-        m2 = float(np.dot(r, r)) / n
-        if m2 > 0:
-            np.multiply(r, r, out=r)
-            kurt = float(np.dot(r, r) / n / m2 ** 2 - 3.0)
+    kurt = excess_kurtosis(r)  # r is not needed any more: central moments in place
     notes = []
     if scale > 0 and n_clean and not mask.any() and math.isfinite(kurt) and kurt > 10:
+        notes.append(f"heavy tails without isolated spikes (excess kurtosis {kurt:.3g})")
+    return OutlierReport(channel=channel, n=n, scale=scale, scale_method=how, k=kk,
+                         window=window, mask=mask, events=events, excess_kurtosis=kurt,
+                         unit=unit, notes=notes)
+
+
+#: records longer than this many samples take the robust scale and the excess kurtosis from
+#: the residuals of :data:`SCALE_STRETCHES` evenly spaced stretches holding this many samples
+#: in all (:func:`scale_stretches`; the whole record and a streamed one use the same samples)
+SCALE_SAMPLE = 1 << 20
+SCALE_STRETCHES = 64
+#: when the screen of :func:`_screen` leaves more than this fraction of the samples as
+#: candidates (coarse quantization, a very noisy block), the running median is computed
+#: everywhere instead (the same answer, only slower)
+SCREEN_MAX_FRACTION = 0.01
+#: blocks of the screen processed per numpy call (bounded temporaries)
+SCREEN_BLOCKS = 1 << 15
+
+
+def scale_stretches(n: int) -> list[tuple[int, int]]:
+    """Index ranges [lo, hi) of the residuals that give the robust scale and the kurtosis of a
+    record of ``n`` samples: all of it up to :data:`SCALE_SAMPLE`, else
+    :data:`SCALE_STRETCHES` contiguous stretches of SCALE_SAMPLE/SCALE_STRETCHES samples, each
+    centred in one of as many equal parts of the record. Contiguous stretches cost one call of
+    the running median each; a systematic every-s-th sample would need a median per sample."""
+    if n <= SCALE_SAMPLE:
+        return [(0, n)]
+    L = SCALE_SAMPLE // SCALE_STRETCHES
+    part = n / SCALE_STRETCHES
+    out = []
+    for j in range(SCALE_STRETCHES):
+        lo = int(j * part + (part - L) / 2)
+        out.append((lo, lo + L))
+    return out
+
+
+def excess_kurtosis(r: np.ndarray) -> float:
+    """Excess kurtosis m4/m2² − 3 of ``r`` (0 for Gaussian noise); ``r`` is overwritten."""
+    n = r.size
+    if n <= 3:
+        return math.nan
+    r -= r.mean()
+    m2 = float(np.dot(r, r)) / n
+    if m2 <= 0:
+        return math.nan
+    np.multiply(r, r, out=r)
+    return float(np.dot(r, r) / n / m2 ** 2 - 3.0)
+
+
+def outlier_events(idx: np.ndarray, z: np.ndarray, t0: float, tau0: float) -> list[OutlierEvent]:
+    """Runs of consecutive outlier indices ``idx`` (sorted) as events; ``z`` = residual/scale
+    of each."""
+    events: list[OutlierEvent] = []
+    if not idx.size:
+        return events
+    breaks = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate([[0], breaks + 1])
+    stops = np.concatenate([breaks + 1, [idx.size]])
+    for a, b in zip(starts, stops):
+        j = a + int(np.argmax(np.abs(z[a:b])))
+        events.append(OutlierEvent(int(idx[a]), int(idx[b - 1]) + 1,
+                                   float(t0 + idx[a] * tau0), float(z[j])))
+    return events
+
+
+def _seg_window(a: int, b: int, window: int) -> int:
+    """The running-median window of segment [a, b) (odd; 1: no median, residual 0)."""
+    return min(window, (b - a) | 1) if b - a >= 3 else 1
+
+
+def _residuals_range(x: np.ndarray, a: int, b: int, w: int, lo: int, hi: int) -> np.ndarray:
+    """x − running median for indices [lo, hi) ⊂ segment [a, b): the median of the samples
+    [lo − w//2, hi + w//2) clipped to the segment, so every output sees the same window as the
+    running median of the whole segment (identical numbers)."""
+    if w < 3:
+        return np.zeros(hi - lo)
+    from scipy.ndimage import median_filter  # (a long record: scipy's median is faster)
+
+    h = w // 2
+    elo, ehi = max(a, lo - h), min(b, hi + h)
+    med = median_filter(x[elo:ehi], size=w, mode="nearest")
+    return x[lo:hi] - med[lo - elo:hi - elo]
+
+
+def _medians_at(x: np.ndarray, a: int, b: int, w: int, idx: np.ndarray) -> np.ndarray:
+    """The running median of segment [a, b) (window ``w``, ends padded with the end values)
+    at the indices ``idx`` only."""
+    h = w // 2
+    out = np.empty(idx.size)
+    off = np.arange(-h, h + 1)
+    for s in range(0, idx.size, 1 << 14):
+        j = np.clip(idx[s:s + (1 << 14), None] + off, a, b - 1)
+        out[s:s + (1 << 14)] = np.median(x[j], axis=1)
+    return out
+
+
+def _screen(seg: np.ndarray, h: int, lim: float) -> np.ndarray:
+    """Indices of ``seg`` whose |x − running median| (window 2h + 1) may exceed ``lim``.
+
+    Each index lies in an aligned block of h + 1 samples, and every window of 2h + 1 samples
+    (padded at the ends with the end values) contains the block of its centre; at least h + 1
+    of its values are ≥ the block's minimum and h + 1 are ≤ its maximum, so the median lies in
+    [block min, block max] and |x − median| ≤ max(x − min, max − x). A sample for which both
+    are ≤ ``lim`` cannot be an outlier; the rest (and the last partial block) are returned."""
+    B = h + 1
+    nb = seg.size // B
+    out = []
+    for s in range(0, nb, SCREEN_BLOCKS):
+        e = min(nb, s + SCREEN_BLOCKS)
+        X = seg[s * B:e * B].reshape(-1, B)
+        c = X > (X.min(axis=1) + lim)[:, None]
+        c |= X < (X.max(axis=1) - lim)[:, None]
+        out.append(np.flatnonzero(c) + s * B)
+    out.append(np.arange(nb * B, seg.size))
+    return np.concatenate(out)
+
+
+def _detect_screened(x: np.ndarray, tau0: float, *, t0: float, channel: str, window: int,
+                     kk: float, segs, unit: str) -> OutlierReport:
+    """:func:`detect_outliers` of a long record: the scale and the kurtosis from the residuals
+    of :func:`scale_stretches`; the outliers exactly as with the running median everywhere (for
+    that scale), from the running median at the samples the screen of :func:`_screen` cannot
+    clear — about 10⁻⁴ of them for Gaussian noise, so the check costs ~0.2 s instead of ~0.9 s
+    per 10⁷ samples."""
+    n = x.size
+    pieces = []
+    for lo, hi in scale_stretches(n):
+        for a, b in segs:
+            s, e = max(lo, a), min(hi, b)
+            if s < e:
+                pieces.append(_residuals_range(x, a, b, _seg_window(a, b, window), s, e))
+    rs = np.concatenate(pieces) if pieces else np.zeros(0)
+    scale, how = _scale(rs)
+    how += (f"; from {rs.size} residuals in {SCALE_STRETCHES} stretches spread over the "
+            f"record")
+    kurt = excess_kurtosis(rs)
+    del rs, pieces
+    idx = np.zeros(0, np.int64)
+    z = np.zeros(0)
+    if scale > 0:
+        lim = kk * scale * (1.0 - 1e-12)
+        amax = float(np.max(np.abs(x))) if n else 0.0
+        clear = lim - (1e-9 * lim + 1e-12 * amax)  # rounding margin of the screen
+        found_i, found_r = [], []
+        plan = []
+        total = 0
+        for a, b in segs:
+            w = _seg_window(a, b, window)
+            if w < 3:
+                continue
+            c = _screen(x[a:b], w // 2, clear) + a
+            plan.append((a, b, w, c))
+            total += c.size
+        if total > SCREEN_MAX_FRACTION * n:  # the screen clears too little: median everywhere
+            plan = [(a, b, w, None) for a, b, w, _ in plan]
+        for a, b, w, c in plan:
+            if c is None:
+                r = _residuals_range(x, a, b, w, a, b)
+                c = np.flatnonzero((r > lim) | (r < -lim)) + a
+                rc = r[c - a]
+            else:
+                rc = x[c] - _medians_at(x, a, b, w, c)
+            keep = np.abs(rc / scale) > kk
+            found_i.append(c[keep])
+            found_r.append(rc[keep])
+        if found_i:
+            idx = np.concatenate(found_i)
+            z = np.concatenate(found_r) / scale
+            order = np.argsort(idx, kind="stable")
+            idx, z = idx[order], z[order]
+    mask = np.zeros(n, dtype=bool)
+    mask[idx] = True
+    events = outlier_events(idx, z, t0, tau0)
+    notes = []
+    if scale > 0 and idx.size < n and not events and math.isfinite(kurt) and kurt > 10:
         notes.append(f"heavy tails without isolated spikes (excess kurtosis {kurt:.3g})")
     return OutlierReport(channel=channel, n=n, scale=scale, scale_method=how, k=kk,
                          window=window, mask=mask, events=events, excess_kurtosis=kurt,

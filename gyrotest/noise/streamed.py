@@ -8,9 +8,11 @@ for increments; the rounding error is ε·|θ|, far below any gyro's noise):
 * :func:`detect_outliers_series`: the Hampel spike check of
   :func:`gyrotest.noise.outliers.detect_outliers` batch by batch (the running median of each
   batch gets ``window//2`` samples of the neighbours, so the residuals are identical); the
-  robust scale (1.4826·MAD, 99 % quantile) comes from every s-th residual when the record is
-  longer than :data:`SCALE_SAMPLE` (s = ⌈n/SCALE_SAMPLE⌉; exact below), the kurtosis from
-  running power sums, and only the residuals beyond 3 provisional σ are kept as candidates;
+  robust scale (1.4826·MAD, 99 % quantile) and the kurtosis come from the residuals of the
+  same stretches as for a record read whole
+  (:func:`~gyrotest.noise.outliers.scale_stretches`: all of them up to
+  :data:`~gyrotest.noise.outliers.SCALE_SAMPLE` samples), and only the residuals beyond 3
+  provisional σ are kept as candidates;
 * :func:`welch_psd_series`: the Welch PSD of :func:`~gyrotest.noise.spectral.welch_psd` (the
   first 2²³ samples of each segment) from a few Welch segments at a time;
 * :func:`rate_prefixes`: the first samples of each segment for the axis cross-correlation
@@ -29,19 +31,19 @@ from .outliers import (
     FALSE_ALARM,
     K_MIN,
     WINDOW,
-    OutlierEvent,
     OutlierReport,
     _running_median,
     _scale,
+    excess_kurtosis,
+    outlier_events,
+    scale_stretches,
     threshold_k,
 )
 from .spectral import WELCH_MAX_SAMPLES, PsdEstimate, _segment_length, _welch_density
 
-__all__ = ["SCALE_SAMPLE", "detect_outliers_series", "rate_prefixes", "rate_segment",
+__all__ = ["detect_outliers_series", "rate_prefixes", "rate_segment",
            "welch_psd_series"]
 
-#: residuals kept for the robust scale (every s-th one beyond this count)
-SCALE_SAMPLE = 1 << 20
 #: samples per batch of the streamed spike check
 BATCH = 1 << 18
 
@@ -99,28 +101,27 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
                            false_alarm: float = FALSE_ALARM, k_min: float = K_MIN,
                            unit: str = "deg/h") -> OutlierReport:
     """:func:`gyrotest.noise.outliers.detect_outliers` of the rate behind ``series`` (module
-    docstring): the same residuals, threshold and events; the scale from a systematic
-    subsample of the residuals on records longer than :data:`SCALE_SAMPLE`. The report's
+    docstring): the same residuals, threshold and events, and the scale and kurtosis from the
+    same residuals (:func:`~gyrotest.noise.outliers.scale_stretches`). The report's
     ``mask`` is empty (``count`` holds the number of outliers)."""
     n = series.n_data
     window = max(3, int(window) | 1)
     kk = threshold_k(n, false_alarm, k_min)
-    stride = max(1, math.ceil(n / SCALE_SAMPLE))
+    stretches = scale_stretches(n)
     sample: list[np.ndarray] = []
     cand_i: list[np.ndarray] = []
     cand_r: list[np.ndarray] = []
-    p = np.zeros(5)  # Σ r^k, k = 0 … 4
     cth = None
     for g, r in _residual_batches(series, means, window):
         if deviations.PROGRESS is not None:
             deviations.PROGRESS(g + r.size, n, "spike check")
-        off = (-g) % stride
-        sample.append(r[off::stride].copy())
+        for lo, hi in stretches:
+            s, e = max(lo, g), min(hi, g + r.size)
+            if s < e:
+                sample.append(r[s - g:e - g].copy())
         if cth is None:
             med = float(np.median(np.abs(r)))
             cth = 3.0 * 1.4826 * med if med > 0 else math.inf
-        rr = r * r
-        p += (r.size, r.sum(), rr.sum(), float(np.dot(rr, r)), float(np.dot(rr, rr)))
         if math.isfinite(cth):
             big = np.flatnonzero(np.abs(r) > cth)
             if big.size:
@@ -128,10 +129,12 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
                 cand_r.append(r[big])
     rs = np.concatenate(sample) if sample else np.zeros(0)
     scale, how = _scale(rs)
-    if stride > 1:
-        how += f"; from every {stride}th residual ({rs.size} values)"
+    if len(stretches) > 1:
+        how += (f"; from {rs.size} residuals in {len(stretches)} stretches spread over the "
+                f"record")
+    kurt = excess_kurtosis(rs)
     del rs, sample
-    events: list[OutlierEvent] = []
+    events = []
     count = 0
     if scale > 0:
         thr = kk * scale * (1.0 - 1e-12)  # candidates; then |r/scale| > k exactly as whole
@@ -147,22 +150,7 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
         keep = np.abs(val / scale) > kk
         idx, z = idx[keep], val[keep] / scale
         count = int(idx.size)
-        if count:
-            breaks = np.flatnonzero(np.diff(idx) > 1)
-            starts = np.concatenate([[0], breaks + 1])
-            stops = np.concatenate([breaks + 1, [idx.size]])
-            for a, b in zip(starts, stops):
-                j = a + int(np.argmax(np.abs(z[a:b])))
-                events.append(OutlierEvent(int(idx[a]), int(idx[b - 1]) + 1,
-                                           float(t0 + idx[a] * tau0), float(z[j])))
-    kurt = math.nan
-    n0, s1, s2, s3, s4 = p
-    if n0 > 3:
-        mu = s1 / n0
-        m2 = s2 / n0 - mu * mu
-        m4 = s4 / n0 - 4 * mu * s3 / n0 + 6 * mu * mu * s2 / n0 - 3 * mu ** 4
-        if m2 > 0:
-            kurt = float(m4 / m2 ** 2 - 3.0)
+        events = outlier_events(idx, z, t0, tau0)
     notes = []
     if scale > 0 and count < n and not events and math.isfinite(kurt) and kurt > 10:
         notes.append(f"heavy tails without isolated spikes (excess kurtosis {kurt:.3g})")

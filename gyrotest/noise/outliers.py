@@ -432,7 +432,7 @@ def _detect_screened(x: np.ndarray, tau0: float, *, t0: float, channel: str, win
     z = np.zeros(0)
     if scale > 0:
         lim = kk * scale * (1.0 - 1e-12)
-        amax = float(np.max(np.abs(x))) if n else 0.0
+        amax = max(abs(float(x.max())), abs(float(x.min()))) if n else 0.0  # no |x| copy
         clear = lim - (1e-9 * lim + 1e-12 * amax)  # rounding margin of the screen
         found_i, found_r = [], []
         plan = []

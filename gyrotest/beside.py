@@ -11,6 +11,9 @@ its exception, as a direct call would. Off Linux (no ``fork``, or a fork that sy
 frameworks do not support) or when the fork fails, the function runs in the caller when
 ``result()`` is called. The child leaves with ``os._exit``: no atexit handlers, no flush of
 the parent's buffered output.
+
+:func:`run_on_thread` is the in-process counterpart for work that releases the GIL (numpy,
+pyarrow): a thread instead of a child, the same ``result()``.
 """
 
 from __future__ import annotations
@@ -96,3 +99,14 @@ def run_beside(fn: Callable[..., Any], *args: Any) -> _Inline | _Forked:
             os._exit(code)
     os.close(w)
     return _Forked(pid, r)
+
+
+def run_on_thread(fn: Callable[..., Any], *args: Any, name: str = "gyrotest-beside"):
+    """Start ``fn(*args)`` on a new thread; a Future whose ``result()`` returns its value or
+    raises its exception, as a direct call would (for work that releases the GIL)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    ex = ThreadPoolExecutor(max_workers=1, thread_name_prefix=name)
+    fut = ex.submit(fn, *args)
+    ex.shutdown(wait=False)
+    return fut

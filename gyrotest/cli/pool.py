@@ -98,16 +98,15 @@ def prefetch_log(paths: Sequence[str], opts: dict):
                 return None
     except OSError:
         return None
-    from concurrent.futures import ThreadPoolExecutor
+    from functools import partial
 
+    from ..beside import run_on_thread
     from ..heap import reuse_freed_memory
     from .common import load_log
 
     reuse_freed_memory()  # read whole (text): before any thread starts (gyrotest.heap)
-    pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gyrotest-read")
-    fut = pool.submit(load_log, paths[0], opts, announce=False)
-    pool.shutdown(wait=False)
-    return fut
+    return run_on_thread(partial(load_log, announce=False), paths[0], opts,
+                         name="gyrotest-read")
 
 
 def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None = None,

@@ -77,7 +77,7 @@ MAX_JITTER = 0.1
 #: from this many samples the spike check (``--outliers flag``, which leaves the rate as
 #: recorded) runs on a thread beside the deviations, PSD and fit of the same axis: on records
 #: this long it screens (:func:`gyrotest.noise.outliers.detect_outliers`: mostly numpy work
-#: that releases the GIL, ≈ 0.15 s of CPU per 10⁷ samples). A streamed log's spike check (the
+#: that releases the GIL, ≈ 0.2 s of CPU per 10⁷ samples). A streamed log's spike check (the
 #: running median everywhere, which holds the GIL) runs in a forked child instead
 #: (:mod:`gyrotest.beside`; benchmarks/README.md, bench_speed, sixth and eighth passes)
 SPIKE_BESIDE_MIN = 1 << 20
@@ -430,17 +430,6 @@ def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
     return _outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None)
 
 
-def _on_thread(fn, *args):
-    """A Future of ``fn(*args)`` on a new thread (numpy work beside the caller's); its
-    ``result()`` returns the value or raises the exception, as a direct call would."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    ex = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gyrotest-spikes")
-    fut = ex.submit(fn, *args)
-    ex.shutdown(wait=False)
-    return fut
-
-
 def _fold_filters(fit, diag, warns, tau0):
     """Markov terms with T_c < τ0 are the sensor's output filter: fold them into N (N_eq, see
     :mod:`gyrotest.noise.filtered`) in the requested and the diagnosed model, and drop the
@@ -631,7 +620,7 @@ def analyse_allan(
                   horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
                   record_s=log.duration_s, source=log.source, fit_model=fit_model, ci=ci)
     for name in names:
-        from ..beside import run_beside
+        from ..beside import run_beside, run_on_thread
 
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:
@@ -646,8 +635,9 @@ def analyse_allan(
             rate = np.asarray(log.rates[name], dtype=np.float64)
             det_info = None
             if outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN:  # rate stays as recorded
-                spike = _on_thread(_outliers_flag, rate, log.tau0,
-                                   float(log.t[0]) if log.n else 0.0, segs, name)
+                spike = run_on_thread(_outliers_flag, rate, log.tau0,
+                                      float(log.t[0]) if log.n else 0.0, segs, name,
+                                      name="gyrotest-spikes")
             else:
                 out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
             try:

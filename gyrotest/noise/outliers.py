@@ -270,7 +270,7 @@ def detect_outliers(x, tau0: float, *, t0: float = 0.0, channel: str = "rate",
                                 segs=segs, unit=unit)
     r = np.empty_like(x)  # the running median, then x − median in place
     for a, b in segs:
-        w = min(window, (b - a) | 1) if b - a >= 3 else 1
+        w = _seg_window(a, b, window)
         if w >= 3:
             _running_median(x[a:b], w, out=r[a:b])
         else:
@@ -325,6 +325,11 @@ def scale_stretches(n: int) -> list[tuple[int, int]]:
         lo = int(j * part + (part - L) / 2)
         out.append((lo, lo + L))
     return out
+
+
+def stretch_note(size: int, count: int) -> str:
+    """What the scale method adds when the scale comes from :func:`scale_stretches`."""
+    return f"; from {size} residuals in {count} stretches spread over the record"
 
 
 def excess_kurtosis(r: np.ndarray) -> float:
@@ -424,8 +429,7 @@ def _detect_screened(x: np.ndarray, tau0: float, *, t0: float, channel: str, win
                 pieces.append(_residuals_range(x, a, b, _seg_window(a, b, window), s, e))
     rs = np.concatenate(pieces) if pieces else np.zeros(0)
     scale, how = _scale(rs)
-    how += (f"; from {rs.size} residuals in {SCALE_STRETCHES} stretches spread over the "
-            f"record")
+    how += stretch_note(rs.size, SCALE_STRETCHES)
     kurt = excess_kurtosis(rs)
     del rs, pieces
     idx = np.zeros(0, np.int64)
@@ -486,7 +490,7 @@ def apply_outliers(x, report: OutlierReport, mode: str, *, segments=None) -> np.
     segs = segments or [(0, n)]
     med = np.empty_like(x)
     for a, b in segs:
-        w = min(report.window, (b - a) | 1) if b - a >= 3 else 1
+        w = _seg_window(a, b, report.window)
         if w >= 3:
             _running_median(x[a:b], w, out=med[a:b])
         else:

@@ -34,9 +34,11 @@ from .outliers import (
     OutlierReport,
     _running_median,
     _scale,
+    _seg_window,
     excess_kurtosis,
     outlier_events,
     scale_stretches,
+    stretch_note,
     threshold_k,
 )
 from .spectral import WELCH_MAX_SAMPLES, PsdEstimate, _segment_length, _welch_density
@@ -81,7 +83,7 @@ def _residual_batches(series: AngleSeries, means: list[float], window: int):
     g0 = 0
     for j, (a, b) in enumerate(series.bounds):
         L = b - a - 1
-        w = min(window, L | 1) if L >= 3 else 1
+        w = _seg_window(0, L, window)
         hh = w // 2 if w >= 3 else 0
         for s in range(0, L, BATCH):
             e = min(L, s + BATCH)
@@ -130,8 +132,7 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
     rs = np.concatenate(sample) if sample else np.zeros(0)
     scale, how = _scale(rs)
     if len(stretches) > 1:
-        how += (f"; from {rs.size} residuals in {len(stretches)} stretches spread over the "
-                f"record")
+        how += stretch_note(rs.size, len(stretches))
     kurt = excess_kurtosis(rs)
     del rs, sample
     events = []

@@ -264,6 +264,7 @@ def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> li
                     "improvement_pct": c.improvement_pct, "scatter_pct": c.gain_scatter_pct,
                     "cv_t": c.cv_t, "p_trials": c.p_trials, "z": c.z, "p_adj": c.p_adj,
                     "n_params": c.n_params, "significant": c.significant,
+                    "route": c.route, "spectral_z": c.spectral_z,
                     "rejected": c.rejected,
                     "truth_reduction_floor": (u0 - u1) if (u0 is not None and u1 is not None)
                     else None})
@@ -404,6 +405,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                                "improvement_pct": top.improvement_pct, "p_adj": top.p_adj,
                                "p_trials": getattr(top, "p_trials", None),
                                "cv_t": getattr(top, "cv_t", None),
+                               "z": top.z, "spectral_z": getattr(top, "spectral_z", None),
                                "route": getattr(top, "route", None),
                                "class": getattr(top, "klass", None)}
                 added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,

@@ -684,11 +684,11 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                and (c.key != "hyst" or t_cv >= HYST_CV_T))
     rejected = None
     zw = math.nan
-    if ((clear or far) and not strict
-            and not (impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T)):
+    exempt = impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
+    if (clear or far) and not strict:
         zw = _spectral_z(r, [c.label], wd)
         bar = spectral_bar(base_ratio)
-        if not zw >= bar:
+        if not exempt and not zw >= bar:
             rejected = (f"its coefficient does not stand out of the residual's slow noise "
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "
                         "the gyro's own drift")

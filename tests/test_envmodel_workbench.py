@@ -272,7 +272,7 @@ def test_pair_pool_holds_other_channels_plain_forms_and_in_sample_gains():
     the plain form of a lag, and candidates that only the in-sample fit shows (an effect hidden
     by another predicts held-out data worse than nothing)."""
     from gyrotest.envmodel.candidate import Candidate
-    from gyrotest.envmodel.diagnose import _pair_pool
+    from gyrotest.envmodel.pairs import _pair_pool
     from gyrotest.envmodel.terms import TermSpec
 
     class _Base:

@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fit import FitResult
+from . import stats as st
+from .fit import FitResult, WorkData
 from .terms import TermSpec
 
 #: candidates whose fitted contributions correlate at least this well are indistinguishable
@@ -167,3 +168,27 @@ def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> l
 
 __all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
            "residual_corr", "uses_channel"]
+
+
+def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
+               keep: list[TermSpec] | None = None) -> float:
+    """Spectral (Whittle) z of the linear coefficients of the terms ``labels`` in the fitted
+    model ``r``, against the spectrum of its own residual
+    (:func:`gyrotest.envmodel.stats.whittle_z`).
+
+    ``keep``: terms the candidate replaced in ``r``, put back beside it for the test. A lagged
+    core temperature replaces the plain sensor temperature; its coefficient then carries the
+    whole temperature effect the model already had, and only what T_core explains beyond T
+    is evidence of a lag (the HAC test does the same)."""
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term in labels and cf.kind == "linear"]
+    try:
+        X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
+        e = r.resid
+        if keep:
+            d = r._fitter.d  # type: ignore[attr-defined]
+            X = np.column_stack([X] + [d.block(s, None) for s in keep])
+            beta, _ = st.lstsq(X, wd.y)
+            e = wd.y - X @ beta
+        return st.whittle_z(X, wd.y, e, idx)
+    except (np.linalg.LinAlgError, ValueError):
+        return math.nan

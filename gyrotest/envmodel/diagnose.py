@@ -21,7 +21,7 @@ that the model under judgment cannot move:
 4. **A candidate is a missing effect** when either
    * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 % (5 % for the nuisance
      terms ramp, warm-up, sinusoid and hysteresis, whose flexibility a HAC test undercounts;
-     hysteresis must also help consistently across the folds, gain/(scatter/√folds) ≥ 2);
+     hysteresis must also help consistently across the folds, gain/(scatter/√folds) ≥ 4);
      or
    * *clear gain*: the base model's held-out RMS is above 1.2 × the floor (or the candidate
      cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
@@ -70,6 +70,10 @@ that the model under judgment cannot move:
    5-6 (:func:`spectral_bar`). A gain of ≥ 40 % that is consistent across the folds
    (gain/(scatter/√folds) ≥ 5) is exempt: a second missing effect with the candidate's
    stimulus pattern lowers its spectral z too.
+   A hysteresis branch (a near-step regressor with a searched width) takes the clear-gain
+   and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01, and is never
+   one of a pair: fitted to a gyro's slow wander it reaches 2-10 there (20 at most), true
+   hysteresis 10-1000.
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -109,12 +113,42 @@ from .candidate import (
     equivalents,
     gain_scatter,
     residual_corr,
+    spectral_z,
     uses_channel,
 )
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
+from .pairs import pair_step, redirect
 from .prepare import prepare_log
+from .rules import (
+    ABOVE_FLOOR,
+    ALPHA,
+    AT_FLOOR,
+    BIG_GAIN,
+    CLEAR_GAIN,
+    CLEAR_P,
+    CLEAR_P_NUISANCE,
+    CV_STRONG,
+    CV_T,
+    CV_T_NUISANCE,
+    FAR_GAIN,
+    FAR_RATIO,
+    FAR_T,
+    FAR_T_NUISANCE,
+    FAR_Z,
+    HYST_CV_T,
+    HYST_WEAK_CV_T,
+    MIN_IMPROVEMENT,
+    PERIOD_SHARE,
+    SPECTRAL_EXEMPT_GAIN,
+    SPECTRAL_EXEMPT_T,
+    STRONG_P,
+    TIE,
+    UNLAGGED,
+    WEAK_P,
+    spectral_bar,
+)
 from .screen import (
     CLASS_ORDER,
     NUISANCE,
@@ -124,100 +158,6 @@ from .screen import (
     term_class,
 )
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
-
-ALPHA = 0.001
-MIN_IMPROVEMENT = 0.01
-#: clear-gain route: minimum held-out gain, guard on p × trials, base/floor ratio
-CLEAR_GAIN = 0.05
-CLEAR_P = 0.01
-CLEAR_P_NUISANCE = 0.001
-ABOVE_FLOOR = 1.2
-#: a held-out gain this large shows the model was not at the floor, whatever its estimate
-BIG_GAIN = 0.2
-#: cross-validated evidence that stands without a strong HAC test (another missing effect
-#: inflates every HAC error): gain / (fold scatter/√folds) at least this, and p × trials
-#: below WEAK_P (the coefficient is not noise)
-CV_T = 4.0
-CV_T_NUISANCE = 6.0
-WEAK_P = 0.05
-#: cross-validated evidence that stands on its own (a short log gives a t test few degrees
-#: of freedom): gain ≥ 20 % at gain / (scatter/√folds) ≥ 10 (15 for nuisance terms)
-CV_STRONG = 10.0
-STRONG_P = 0.5
-#: a hysteresis branch (a near-step regressor with a searched width) gets HAC z values far
-#: beyond its held-out evidence: it must also help consistently across the folds,
-#: gain/(scatter/√folds) ≥ HYST_CV_T; on the weak routes (clear gain, far above the floor)
-#: ≥ HYST_WEAK_CV_T with p × trials < CLEAR_P, and it is never paired. A branch state fitted
-#: to a gyro's slow wander reaches 2-10 (20 at most) there; true hysteresis mostly 10-1000
-#: (tuned on the campaigns of seeds 1000-16699, benchmarks/README.md)
-HYST_CV_T = 4.0
-HYST_WEAK_CV_T = 10.0
-#: a model is at the floor when its held-out RMS is within this factor of it
-AT_FLOOR = 1.1
-#: far above the floor the floor itself says the model is incomplete; the question is only
-#: which candidate explains the gap, and the cross-validated gain answers it: a held-out gain
-#: of at least FAR_GAIN that is consistent across the folds -- gain / (fold scatter/√folds)
-#: at least the one-sided 95 % t quantile for 4 degrees of freedom (99 % for the flexible
-#: nuisance terms, which must also cut the held-out RMS by BIG_GAIN)
-FAR_RATIO = 2.0
-FAR_GAIN = 0.10
-FAR_T = 2.13
-FAR_T_NUISANCE = 3.75
-#: ... with the HAC test as a guard: the coefficient exceeds its own standard error
-FAR_Z = 1.0
-#: the weak routes (clear gain, far above the floor, pairs) also need the added coefficients
-#: to stand out of the candidate model's residual spectrum: spectral (Whittle) z at least
-#: SPECTRAL_Z (:func:`gyrotest.envmodel.stats.whittle_z`). A smooth channel fitted to a gyro's
-#: slow wander (random walk, bias instability) reaches 2-6 there; true effects mostly > 10
-#: (tuned on seeds 10000-11199, benchmarks/README.md)
-SPECTRAL_Z = 8.0
-#: ... except for a gain a fit to slow noise rarely gives: ≥ 40 % held-out and consistent
-#: across the folds (gain/(scatter/√folds) ≥ 5). A second missing effect that shares the
-#: candidate's stimulus pattern (two tilt terms) also lowers the spectral z; such pairs keep
-#: this route (14 % of wander fits on real noise pass it, 67-74 % of true effects)
-SPECTRAL_EXEMPT_GAIN = 0.40
-SPECTRAL_EXEMPT_T = 5.0
-#: ... and near the floor (the model's held-out RMS < SPECTRAL_NEAR_RATIO × the floor) the bar
-#: is SPECTRAL_Z_NEAR: the residual is then close to white/flicker noise, its smoothed
-#: periodogram weighs the lowest frequencies correctly, and the wander that needs the higher
-#: bar leaves a model 2-18 × above the short-τ floor; follow-up effects near the floor reach
-#: spectral z 5-6 (tuned on seeds 14000-15199, benchmarks/README.md)
-SPECTRAL_Z_NEAR = 4.0
-SPECTRAL_NEAR_RATIO = 2.0
-
-
-def spectral_bar(base_ratio: float) -> float:
-    """The spectral z a weak-route candidate needs at a model ``base_ratio`` × the floor:
-    :data:`SPECTRAL_Z_NEAR` below :data:`SPECTRAL_NEAR_RATIO`, else :data:`SPECTRAL_Z`."""
-    near = math.isfinite(base_ratio) and base_ratio < SPECTRAL_NEAR_RATIO
-    return SPECTRAL_Z_NEAR if near else SPECTRAL_Z
-
-
-#: far above the floor, when no single term (nor a field block) qualifies, two effects may
-#: each hide the other (every fold is dominated by a different one): pairs of the PAIR_TOP
-#: best candidates are fitted together, and a pair that cuts the held-out RMS at least
-#: PAIR_MARGIN below either member alone, consistently across the folds (the far-route
-#: thresholds), names its more useful member first -- the next step then tests the other
-PAIR_TOP = 4
-PAIR_MIN_GAIN = 0.05
-PAIR_MARGIN = 0.9
-#: ... the pool also holds the best candidate of up to PAIR_MORE channels not yet in it, and
-#: the candidates with the largest in-sample gain (≥ PAIR_FIT_GAIN of the base model's fit
-#: RMS): an effect hidden by another can predict the held-out folds worse than nothing
-#: (its coefficient is fitted to the other effect) and still fit the record far better
-PAIR_MORE = 2
-PAIR_FIT_GAIN = 0.2
-PAIR_POOL = 8
-#: a single term chosen far above the floor that leaves the model there (gain below
-#: REDIRECT_GAIN) gives way to a pair of two other candidates that brings the held-out RMS
-#: below REDIRECT_RATIO x the single term's: the pair's more useful member is named first
-REDIRECT_GAIN = 0.6
-REDIRECT_RATIO = 0.5
-#: candidates within this fraction of the best held-out RMS count as equal evidence
-TIE = 0.02
-#: a sinusoid on a stimulus period is that channel's effect when a term of the channel gets
-#: at least this share of the sinusoid's held-out gain
-PERIOD_SHARE = 0.5
 
 
 @dataclass
@@ -394,7 +334,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         sig = [c for c in out if c.significant]
     if not sig and candidates is None and math.isfinite(base_ratio) \
             and base_ratio >= FAR_RATIO:
-        pair = _pair_step(wd, base, base_specs, out, thetas0, folds)
+        pair = pair_step(wd, base, base_specs, out, thetas0, folds)
         if pair is not None:
             sig = [pair]
     chosen = None
@@ -410,177 +350,11 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         chosen.equivalents = equivalents(chosen, out, base)
         if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
                 and chosen.pair is None):
-            pair = _redirect(wd, base, base_specs, out, chosen, thetas0, folds, fl)
+            pair = redirect(wd, base, base_specs, out, chosen, thetas0, folds, fl)
             if pair is not None:
                 chosen = pair
                 chosen.equivalents = equivalents(chosen, out, base)
     return out, chosen
-
-
-def _pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
-               folds: int) -> Candidate | None:
-    """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
-    pair's more useful member (the better one alone), marked significant with the route
-    "together with OTHER"; None when no pair qualifies."""
-    found = _find_pair(wd, base, base_specs, out, thetas0, folds)
-    return _mark_pair(found) if found is not None else None
-
-
-def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
-               folds: int, exclude: set[int] | None = None, below: float = math.inf
-               ) -> tuple[Candidate, Candidate, float, float] | None:
-    """The best qualifying pair (see :func:`_pair_step`), candidates whose ``id`` is in
-    ``exclude`` left out, held-out RMS below ``below``: (more useful member, the other, the
-    pair's held-out RMS, its fold consistency), or None."""
-    skip = exclude or set()
-    pool = [c for c in _pair_pool(base, out) if id(c) not in skip]
-    pairs = [(pool[i], pool[j]) for i in range(len(pool)) for j in range(i + 1, len(pool))]
-    seen = {frozenset((id(a), id(b))) for a, b in pairs}
-    pairs += [(a, b) for a, b in _polynomial_pairs(out)
-              if id(a) not in skip and id(b) not in skip
-              and frozenset((id(a), id(b))) not in seen]
-    best = None
-    for a, b in pairs:
-        r = _fit_pair(wd, base_specs, a, b, thetas0, folds)
-        if r is None:
-            continue
-        if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
-                                    below):
-            continue
-        impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-        scatter = gain_scatter(base, r)
-        t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
-                and scatter > 0 else math.inf if impr > 0 else 0.0)
-        # a free frequency or width in the pair: the flexible-term thresholds
-        nuisance = a.klass == "nuisance" or b.klass == "nuisance"
-        if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
-                else impr >= FAR_GAIN and t_cv >= FAR_T):
-            continue
-        if (not (impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T)
-                and not _spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z):  # far: ratio >= 2
-            continue
-        if best is None or r.rms_holdout < best[2].rms_holdout:
-            best = (a, b, r, t_cv)
-    if best is None:
-        return None
-    a, b, r, t_cv = best
-    first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
-    if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
-        first, other = other, first
-        if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
-            return None
-    return first, other, r.rms_holdout, t_cv
-
-
-def _fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int
-              ) -> FitResult | None:
-    """The base model with candidates ``a`` and ``b`` added, started from the base's and both
-    candidates' nonlinear parameters; None when it cannot be fitted."""
-    th = dict(thetas0)
-    for c in (a, b):
-        th.update(getattr(c._fit, "_thetas", {}) or {})
-    try:
-        return fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds, thetas0=th,
-                         light=True)
-    except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
-        return None
-
-
-def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
-    """The pair's more useful member, marked significant with the route "together with
-    OTHER" (see :func:`_find_pair`)."""
-    first, other, rms, t_cv = found
-    first.significant = True
-    first.route = f"together with {other.term}"
-    first.pair = (other.term, rms, t_cv)
-    return first
-
-
-def _redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
-              chosen: Candidate, thetas0, folds: int, fl: float) -> Candidate | None:
-    """Far above the floor, a single term that leaves the model there may have been chosen
-    because two larger effects hide each other (see :data:`REDIRECT_RATIO`): the qualifying
-    pair of two *other* effects -- neither the chosen term nor one this log cannot tell
-    from it -- whose more useful member then leads; None to keep ``chosen``."""
-    if (chosen.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
-            or chosen.rms_holdout < FAR_RATIO * fl):
-        return None
-    same = {id(chosen)} | {id(c) for c in out if c.term in chosen.equivalents}
-    found = _find_pair(wd, base, base_specs, out, thetas0, folds, exclude=same,
-                       below=REDIRECT_RATIO * chosen.rms_holdout)
-    if found is None:
-        return None
-    # ... unless the chosen term with a partner does about as well: the next step finds it
-    for m in _pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
-                                      if chosen in ab]:
-        if m is chosen or m.spec is None or chosen.spec is None:
-            continue
-        r = _fit_pair(wd, base_specs, chosen, m, thetas0, folds)
-        if r is None:
-            continue
-        if r.rms_holdout * PAIR_MARGIN <= found[2]:
-            return None
-    pair = _mark_pair(found)
-    pair.displaced = (chosen.term, chosen.rms_holdout)
-    return pair
-
-
-#: the level and the square of one channel: a second-order sensitivity whose two terms
-#: nearly cancel over the stimulus range explains nothing term by term
-LEVEL_SQUARE = {"g": "g2", "T": "T2", "chan": "chan2", "Hx": "Hsq", "Hy": "Hsq", "Hz": "Hsq"}
-
-
-def _pairable(out: list[Candidate]) -> list[Candidate]:
-    """Candidates the pair search may use: fitted, not rejected, not replacing a term, not
-    a hysteresis branch (:data:`HYST_WEAK_CV_T`)."""
-    return [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
-            and c._fit is not None and math.isfinite(c.rms_holdout) and c.spec.key != "hyst"]
-
-
-def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]:
-    """(level, square) candidate pairs of one channel (:data:`LEVEL_SQUARE`)."""
-    ok = _pairable(out)
-    pairs = []
-    for a in ok:
-        sq = LEVEL_SQUARE.get(a.spec.key)
-        b = next((o for o in ok if sq and o.spec.key == sq
-                  and o.spec.channels == a.spec.channels), None)
-        if b is not None:
-            pairs.append((a, b))
-    return pairs
-
-
-def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
-    """The candidates :func:`_pair_step` pairs (see :data:`PAIR_TOP`, :data:`PAIR_MORE`)."""
-    ok = _pairable(out)
-
-    def group(c: Candidate):
-        return tuple(sorted(c.spec.channels)) or (c.spec.key,)
-
-    pool = [c for c in ok if c.improvement_pct >= 100 * PAIR_MIN_GAIN][:PAIR_TOP]
-    seen = {group(c) for c in pool}
-    more = 0
-    for c in ok:  # ranked best first
-        if more >= PAIR_MORE:
-            break
-        if c.improvement_pct >= 100 * PAIR_MIN_GAIN and group(c) not in seen:
-            pool.append(c)
-            seen.add(group(c))
-            more += 1
-            # a lag fitted beside a larger hidden effect may take a poor τ: the plain form
-            # of the same channel too
-            plain = UNLAGGED.get(c.spec.key)
-            sib = next((o for o in ok if plain and o.spec.key == plain
-                        and o.spec.channels == c.spec.channels
-                        and o.improvement_pct >= 100 * PAIR_MIN_GAIN), None)
-            if sib is not None and sib not in pool:
-                pool.append(sib)
-    fit_gain = sorted((c for c in ok if c not in pool and math.isfinite(c.rms_fit)
-                       and base.rms_fit > 0
-                       and 1 - c.rms_fit / base.rms_fit >= PAIR_FIT_GAIN),
-                      key=lambda c: c.rms_fit)
-    pool += fit_gain[:max(0, PAIR_POOL - len(pool))]
-    return pool
 
 
 def _new_channels(c: Candidate, used: set[str]) -> int:
@@ -593,8 +367,6 @@ def _new_channels(c: Candidate, used: set[str]) -> int:
 FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,
               "chanprod": 6, "Tlag": 0, "dTlagdt": 1, "Hsq": 2, "Hmag2": 2, "Hprod": 3,
               "T2": 2, "T3": 4, "g2": 2, "gprod": 3}
-#: a lag term and the term it becomes when its time constant is not resolved
-UNLAGGED = {"Tlag": "T", "dTlagdt": "dTdt", "chanlag": "chan", "dchanlag": "dchan"}
 
 
 def _unresolved_lag(chosen: Candidate, sig: list[Candidate], wd: WorkData) -> Candidate:
@@ -693,7 +465,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     zw = math.nan
     exempt = impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
     if (clear or far) and not strict:
-        zw = _spectral_z(r, [c.label], wd)
+        zw = spectral_z(r, [c.label], wd)
         bar = spectral_bar(base_ratio)
         if not exempt and not zw >= bar:
             rejected = (f"its coefficient does not stand out of the residual's slow noise "
@@ -824,17 +596,6 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
     if rej:
         v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
     return v, None
-
-
-def _spectral_z(r: FitResult, labels: list[str], wd: WorkData) -> float:
-    """Spectral (Whittle) z of the linear coefficients of the terms ``labels`` in the fitted
-    model ``r``, against the spectrum of its own residual (:func:`st.whittle_z`)."""
-    idx = [i for i, cf in enumerate(r.coefficients) if cf.term in labels and cf.kind == "linear"]
-    try:
-        X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
-        return st.whittle_z(X, wd.y, r.resid, idx)
-    except (np.linalg.LinAlgError, ValueError):
-        return math.nan
 
 
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData

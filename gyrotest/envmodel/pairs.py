@@ -1,0 +1,205 @@
+"""Two missing effects that each hide the other (the pair search of
+:mod:`gyrotest.envmodel.diagnose`, see :data:`gyrotest.envmodel.rules.PAIR_TOP`).
+
+Far above the floor, when no single candidate qualifies, pairs from a pool of the best
+candidates are fitted together; a pair that cuts the held-out RMS well below either member
+alone, consistently across the folds, names its more useful member first and the next step
+of the forward path tests the other. A single term chosen far above the floor that leaves the
+model there may also give way to such a pair (:func:`redirect`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import AnalysisError, InputError
+from .candidate import Candidate, gain_scatter, spectral_z
+from .fit import FitResult, WorkData, fit_model
+from .rules import (
+    BIG_GAIN,
+    FAR_GAIN,
+    FAR_RATIO,
+    FAR_T,
+    FAR_T_NUISANCE,
+    FAR_Z,
+    PAIR_FIT_GAIN,
+    PAIR_MARGIN,
+    PAIR_MIN_GAIN,
+    PAIR_MORE,
+    PAIR_POOL,
+    PAIR_TOP,
+    REDIRECT_GAIN,
+    REDIRECT_RATIO,
+    SPECTRAL_EXEMPT_GAIN,
+    SPECTRAL_EXEMPT_T,
+    SPECTRAL_Z,
+    UNLAGGED,
+)
+
+
+def pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
+               folds: int) -> Candidate | None:
+    """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
+    pair's more useful member (the better one alone), marked significant with the route
+    "together with OTHER"; None when no pair qualifies."""
+    found = _find_pair(wd, base, base_specs, out, thetas0, folds)
+    return _mark_pair(found) if found is not None else None
+
+
+def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
+               folds: int, exclude: set[int] | None = None, below: float = math.inf
+               ) -> tuple[Candidate, Candidate, float, float] | None:
+    """The best qualifying pair (see :func:`pair_step`), candidates whose ``id`` is in
+    ``exclude`` left out, held-out RMS below ``below``: (more useful member, the other, the
+    pair's held-out RMS, its fold consistency), or None."""
+    skip = exclude or set()
+    pool = [c for c in _pair_pool(base, out) if id(c) not in skip]
+    pairs = [(pool[i], pool[j]) for i in range(len(pool)) for j in range(i + 1, len(pool))]
+    seen = {frozenset((id(a), id(b))) for a, b in pairs}
+    pairs += [(a, b) for a, b in _polynomial_pairs(out)
+              if id(a) not in skip and id(b) not in skip
+              and frozenset((id(a), id(b))) not in seen]
+    best = None
+    for a, b in pairs:
+        r = _fit_pair(wd, base_specs, a, b, thetas0, folds)
+        if r is None:
+            continue
+        if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
+                                    below):
+            continue
+        impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+        scatter = gain_scatter(base, r)
+        t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
+                and scatter > 0 else math.inf if impr > 0 else 0.0)
+        # a free frequency or width in the pair: the flexible-term thresholds
+        nuisance = a.klass == "nuisance" or b.klass == "nuisance"
+        if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
+                else impr >= FAR_GAIN and t_cv >= FAR_T):
+            continue
+        if (not (impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T)
+                and not spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z):  # far: ratio >= 2
+            continue
+        if best is None or r.rms_holdout < best[2].rms_holdout:
+            best = (a, b, r, t_cv)
+    if best is None:
+        return None
+    a, b, r, t_cv = best
+    first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
+    if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
+        first, other = other, first
+        if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
+            return None
+    return first, other, r.rms_holdout, t_cv
+
+
+def _fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int
+              ) -> FitResult | None:
+    """The base model with candidates ``a`` and ``b`` added, started from the base's and both
+    candidates' nonlinear parameters; None when it cannot be fitted."""
+    th = dict(thetas0)
+    for c in (a, b):
+        th.update(getattr(c._fit, "_thetas", {}) or {})
+    try:
+        return fit_model(wd, list(base_specs) + [a.spec, b.spec], folds=folds, thetas0=th,
+                         light=True)
+    except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+        return None
+
+
+def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
+    """The pair's more useful member, marked significant with the route "together with
+    OTHER" (see :func:`_find_pair`)."""
+    first, other, rms, t_cv = found
+    first.significant = True
+    first.route = f"together with {other.term}"
+    first.pair = (other.term, rms, t_cv)
+    return first
+
+
+def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
+              chosen: Candidate, thetas0, folds: int, fl: float) -> Candidate | None:
+    """Far above the floor, a single term that leaves the model there may have been chosen
+    because two larger effects hide each other (see :data:`REDIRECT_RATIO`): the qualifying
+    pair of two *other* effects -- neither the chosen term nor one this log cannot tell
+    from it -- whose more useful member then leads; None to keep ``chosen``."""
+    if (chosen.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
+            or chosen.rms_holdout < FAR_RATIO * fl):
+        return None
+    same = {id(chosen)} | {id(c) for c in out if c.term in chosen.equivalents}
+    found = _find_pair(wd, base, base_specs, out, thetas0, folds, exclude=same,
+                       below=REDIRECT_RATIO * chosen.rms_holdout)
+    if found is None:
+        return None
+    # ... unless the chosen term with a partner does about as well: the next step finds it
+    for m in _pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
+                                      if chosen in ab]:
+        if m is chosen or m.spec is None or chosen.spec is None:
+            continue
+        r = _fit_pair(wd, base_specs, chosen, m, thetas0, folds)
+        if r is None:
+            continue
+        if r.rms_holdout * PAIR_MARGIN <= found[2]:
+            return None
+    pair = _mark_pair(found)
+    pair.displaced = (chosen.term, chosen.rms_holdout)
+    return pair
+
+
+#: the level and the square of one channel: a second-order sensitivity whose two terms
+#: nearly cancel over the stimulus range explains nothing term by term
+LEVEL_SQUARE = {"g": "g2", "T": "T2", "chan": "chan2", "Hx": "Hsq", "Hy": "Hsq", "Hz": "Hsq"}
+
+
+def _pairable(out: list[Candidate]) -> list[Candidate]:
+    """Candidates the pair search may use: fitted, not rejected, not replacing a term, not
+    a hysteresis branch (:data:`HYST_WEAK_CV_T`)."""
+    return [c for c in out if c.spec is not None and not c.replaces and c.rejected is None
+            and c._fit is not None and math.isfinite(c.rms_holdout) and c.spec.key != "hyst"]
+
+
+def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]:
+    """(level, square) candidate pairs of one channel (:data:`LEVEL_SQUARE`)."""
+    ok = _pairable(out)
+    pairs = []
+    for a in ok:
+        sq = LEVEL_SQUARE.get(a.spec.key)
+        b = next((o for o in ok if sq and o.spec.key == sq
+                  and o.spec.channels == a.spec.channels), None)
+        if b is not None:
+            pairs.append((a, b))
+    return pairs
+
+
+def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
+    """The candidates :func:`pair_step` pairs (see :data:`PAIR_TOP`, :data:`PAIR_MORE`)."""
+    ok = _pairable(out)
+
+    def group(c: Candidate):
+        return tuple(sorted(c.spec.channels)) or (c.spec.key,)
+
+    pool = [c for c in ok if c.improvement_pct >= 100 * PAIR_MIN_GAIN][:PAIR_TOP]
+    seen = {group(c) for c in pool}
+    more = 0
+    for c in ok:  # ranked best first
+        if more >= PAIR_MORE:
+            break
+        if c.improvement_pct >= 100 * PAIR_MIN_GAIN and group(c) not in seen:
+            pool.append(c)
+            seen.add(group(c))
+            more += 1
+            # a lag fitted beside a larger hidden effect may take a poor τ: the plain form
+            # of the same channel too
+            plain = UNLAGGED.get(c.spec.key)
+            sib = next((o for o in ok if plain and o.spec.key == plain
+                        and o.spec.channels == c.spec.channels
+                        and o.improvement_pct >= 100 * PAIR_MIN_GAIN), None)
+            if sib is not None and sib not in pool:
+                pool.append(sib)
+    fit_gain = sorted((c for c in ok if c not in pool and math.isfinite(c.rms_fit)
+                       and base.rms_fit > 0
+                       and 1 - c.rms_fit / base.rms_fit >= PAIR_FIT_GAIN),
+                      key=lambda c: c.rms_fit)
+    pool += fit_gain[:max(0, PAIR_POOL - len(pool))]
+    return pool

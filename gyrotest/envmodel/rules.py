@@ -1,0 +1,105 @@
+"""The decision thresholds of the workbench diagnosis (:mod:`gyrotest.envmodel.diagnose`):
+the routes by which a candidate term becomes a missing effect, the spectral gate, the pair
+search and the ranking ties. Each constant says what it guards against and on which
+campaign seeds it was tuned (the figures are in ``benchmarks/README.md``); the procedure
+that uses them is described in :mod:`gyrotest.envmodel.diagnose`."""
+
+from __future__ import annotations
+
+import math
+
+ALPHA = 0.001
+MIN_IMPROVEMENT = 0.01
+#: clear-gain route: minimum held-out gain, guard on p × trials, base/floor ratio
+CLEAR_GAIN = 0.05
+CLEAR_P = 0.01
+CLEAR_P_NUISANCE = 0.001
+ABOVE_FLOOR = 1.2
+#: a held-out gain this large shows the model was not at the floor, whatever its estimate
+BIG_GAIN = 0.2
+#: cross-validated evidence that stands without a strong HAC test (another missing effect
+#: inflates every HAC error): gain / (fold scatter/√folds) at least this, and p × trials
+#: below WEAK_P (the coefficient is not noise)
+CV_T = 4.0
+CV_T_NUISANCE = 6.0
+WEAK_P = 0.05
+#: cross-validated evidence that stands on its own (a short log gives a t test few degrees
+#: of freedom): gain ≥ 20 % at gain / (scatter/√folds) ≥ 10 (15 for nuisance terms)
+CV_STRONG = 10.0
+STRONG_P = 0.5
+#: a hysteresis branch (a near-step regressor with a searched width) gets HAC z values far
+#: beyond its held-out evidence: it must also help consistently across the folds,
+#: gain/(scatter/√folds) ≥ HYST_CV_T; on the weak routes (clear gain, far above the floor)
+#: ≥ HYST_WEAK_CV_T with p × trials < CLEAR_P, and it is never paired. A branch state fitted
+#: to a gyro's slow wander reaches 2-10 (20 at most) there; true hysteresis mostly 10-1000
+#: (tuned on the campaigns of seeds 1000-16699, benchmarks/README.md)
+HYST_CV_T = 4.0
+HYST_WEAK_CV_T = 10.0
+#: a model is at the floor when its held-out RMS is within this factor of it
+AT_FLOOR = 1.1
+#: far above the floor the floor itself says the model is incomplete; the question is only
+#: which candidate explains the gap, and the cross-validated gain answers it: a held-out gain
+#: of at least FAR_GAIN that is consistent across the folds -- gain / (fold scatter/√folds)
+#: at least the one-sided 95 % t quantile for 4 degrees of freedom (99 % for the flexible
+#: nuisance terms, which must also cut the held-out RMS by BIG_GAIN)
+FAR_RATIO = 2.0
+FAR_GAIN = 0.10
+FAR_T = 2.13
+FAR_T_NUISANCE = 3.75
+#: ... with the HAC test as a guard: the coefficient exceeds its own standard error
+FAR_Z = 1.0
+#: the weak routes (clear gain, far above the floor, pairs) also need the added coefficients
+#: to stand out of the candidate model's residual spectrum: spectral (Whittle) z at least
+#: SPECTRAL_Z (:func:`gyrotest.envmodel.stats.whittle_z`). A smooth channel fitted to a gyro's
+#: slow wander (random walk, bias instability) reaches 2-6 there; true effects mostly > 10
+#: (tuned on seeds 10000-11199, benchmarks/README.md)
+SPECTRAL_Z = 8.0
+#: ... except for a gain a fit to slow noise rarely gives: ≥ 40 % held-out and consistent
+#: across the folds (gain/(scatter/√folds) ≥ 5). A second missing effect that shares the
+#: candidate's stimulus pattern (two tilt terms) also lowers the spectral z; such pairs keep
+#: this route (14 % of wander fits on real noise pass it, 67-74 % of true effects)
+SPECTRAL_EXEMPT_GAIN = 0.40
+SPECTRAL_EXEMPT_T = 5.0
+#: ... and near the floor (the model's held-out RMS < SPECTRAL_NEAR_RATIO × the floor) the bar
+#: is SPECTRAL_Z_NEAR: the residual is then close to white/flicker noise, its smoothed
+#: periodogram weighs the lowest frequencies correctly, and the wander that needs the higher
+#: bar leaves a model 2-18 × above the short-τ floor; follow-up effects near the floor reach
+#: spectral z 5-6 (tuned on seeds 14000-15199, benchmarks/README.md)
+SPECTRAL_Z_NEAR = 4.0
+SPECTRAL_NEAR_RATIO = 2.0
+
+
+def spectral_bar(base_ratio: float) -> float:
+    """The spectral z a weak-route candidate needs at a model ``base_ratio`` × the floor:
+    :data:`SPECTRAL_Z_NEAR` below :data:`SPECTRAL_NEAR_RATIO`, else :data:`SPECTRAL_Z`."""
+    near = math.isfinite(base_ratio) and base_ratio < SPECTRAL_NEAR_RATIO
+    return SPECTRAL_Z_NEAR if near else SPECTRAL_Z
+
+
+#: far above the floor, when no single term (nor a field block) qualifies, two effects may
+#: each hide the other (every fold is dominated by a different one): pairs of the PAIR_TOP
+#: best candidates are fitted together, and a pair that cuts the held-out RMS at least
+#: PAIR_MARGIN below either member alone, consistently across the folds (the far-route
+#: thresholds), names its more useful member first -- the next step then tests the other
+PAIR_TOP = 4
+PAIR_MIN_GAIN = 0.05
+PAIR_MARGIN = 0.9
+#: ... the pool also holds the best candidate of up to PAIR_MORE channels not yet in it, and
+#: the candidates with the largest in-sample gain (≥ PAIR_FIT_GAIN of the base model's fit
+#: RMS): an effect hidden by another can predict the held-out folds worse than nothing
+#: (its coefficient is fitted to the other effect) and still fit the record far better
+PAIR_MORE = 2
+PAIR_FIT_GAIN = 0.2
+PAIR_POOL = 8
+#: a single term chosen far above the floor that leaves the model there (gain below
+#: REDIRECT_GAIN) gives way to a pair of two other candidates that brings the held-out RMS
+#: below REDIRECT_RATIO x the single term's: the pair's more useful member is named first
+REDIRECT_GAIN = 0.6
+REDIRECT_RATIO = 0.5
+#: candidates within this fraction of the best held-out RMS count as equal evidence
+TIE = 0.02
+#: a sinusoid on a stimulus period is that channel's effect when a term of the channel gets
+#: at least this share of the sinusoid's held-out gain
+PERIOD_SHARE = 0.5
+#: a lag term and the term it becomes when its time constant is not resolved
+UNLAGGED = {"Tlag": "T", "dTlagdt": "dTdt", "chanlag": "chan", "dchanlag": "dchan"}

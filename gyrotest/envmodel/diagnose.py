@@ -465,7 +465,8 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     zw = math.nan
     exempt = impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
     if (clear or far) and not strict:
-        zw = spectral_z(r, [c.label], wd)
+        keep = [TermSpec("T", c.channels)] if c.key == "Tlag" and replaces else None
+        zw = spectral_z(r, [c.label], wd, keep=keep)
         bar = spectral_bar(base_ratio)
         if not exempt and not zw >= bar:
             rejected = (f"its coefficient does not stand out of the residual's slow noise "

@@ -265,8 +265,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1); "
               "off the strict test, spectral (Whittle) z ≥ 8 against the residual's own "
               "spectrum (≥ 4 while the model is within 2x the floor) unless the gain is "
-              "≥ 40 % with fold consistency ≥ 5; "
-              "ties go to channel-based terms and to the channels the model already uses")
+              "≥ 40 % with fold consistency ≥ 5; hysteresis needs fold consistency ≥ 4 "
+              "(≥ 10 off the strict test); ties go to channel-based terms and to the channels the model already uses")
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)
@@ -453,7 +453,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
     within 2x the floor), unless the held-out gain is
     >= 40 % with fold consistency >= 5: a smooth channel fitted to the gyro's own slow
-    wander is not named. The noise floor is
+    wander is not named. A hysteresis branch also needs fold consistency >= 4 (>= 10 with
+    p x trials < 0.01 off the strict test) and is never paired. The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across
     steps of a logged channel left out), or from --reference.
     The verdict names the effect, how to add it (--terms or the equivalent --term), the

@@ -386,6 +386,24 @@ def smoothed_periodogram(e: np.ndarray) -> np.ndarray:
     return (c[b] - c[a]) / np.maximum(b - a, 1)
 
 
+def cosine_taper(a: np.ndarray, frac: float = 0.1) -> np.ndarray:
+    """``a`` (samples along axis 0) multiplied by a split cosine bell: 1 in the middle, a
+    half-cosine from 0 to 1 over ``frac``/2 of the record at each end. A linear operation:
+    applied to y, X and e = y − Xβ alike it keeps the regression. Source: D. B. Percival and
+    A. T. Walden, *Spectral Analysis for Physical Applications*, Cambridge University Press
+    1993, §6.4 (data tapers; the split cosine bell, their eq. 209)."""
+    a = np.asarray(a, dtype=float)
+    n = a.shape[0]
+    m = int(frac * n / 2)
+    if m < 1:
+        return a
+    w = np.ones(n)
+    ramp = 0.5 * (1.0 - np.cos(np.pi * (np.arange(m) + 0.5) / m))
+    w[:m] = ramp
+    w[n - m:] = ramp[::-1]
+    return a * (w if a.ndim == 1 else w[:, None])
+
+
 def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int]) -> float:
     """Significance of the coefficients ``idx`` of the regression y ≈ Xβ against noise with
     the spectrum of the residual ``e``: frequency-domain generalised least squares (Whittle
@@ -393,6 +411,14 @@ def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int]) -> fl
     bins (k = 1 … n/2 counted twice), Ŝ = :func:`smoothed_periodogram` of e.
 
     Returns z = √(β̂ᵀCov⁻¹β̂ / q), the root-mean-square z of the q coefficients.
+
+    X, y and e are first tapered (:func:`cosine_taper`, 10 %): the discrete Fourier transform
+    treats a record as one period of a periodic series, and the jump from its last value to
+    its first would otherwise appear in every bin. A regressor that trends over the record
+    (a temperature settling) and a residual that wanders (a random walk) then share that
+    sawtooth, and its high-frequency part, weighed against the residual's low white level,
+    gives a coefficient fitted to the end-to-end difference a precision it does not have
+    (spectral z 50-80 on real-noise nulls, 4-6 tapered).
 
     Unlike the HAC covariance, whose kernel bandwidth grows only as n^(1/3), the weights
     follow the residual's own spectrum to the lowest frequencies: a coefficient fitted to a
@@ -402,6 +428,7 @@ def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int]) -> fl
     for time series", in Time Series Analysis (Rosenblatt, ed.), Wiley 1963.
     """
     n = y.size
+    X, y, e = cosine_taper(X), cosine_taper(y), cosine_taper(e)
     S = smoothed_periodogram(e)
     pos = S > 0
     if not idx or n < 8 or not pos.any():

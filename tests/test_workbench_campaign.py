@@ -16,13 +16,20 @@ import pytest
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
-@pytest.fixture(scope="module")
-def quick():
+def _bench():
+    """The campaign runner and the independent simulator from ``benchmarks/``."""
     sys.path.insert(0, str(BENCH))
     try:
         import bench_workbench as bw
+        import workbench_sim as ws
     finally:
         sys.path.remove(str(BENCH))
+    return bw, ws
+
+
+@pytest.fixture(scope="module")
+def quick():
+    bw, _ = _bench()
     rows = bw.run_quick(jobs=1)
     return rows, bw.summarise(rows)["overall"]
 
@@ -48,12 +55,7 @@ def test_real_gyro_wander_is_not_named_as_a_channel(seed):
     been fitted by a smooth logged channel (a humidity rate, a lagged humidity) and named as
     the missing effect via the far route; the spectral (Whittle) z of that coefficient is
     1-2, so the verdict stays quiet (seeds from the tuning set of the Whittle gate)."""
-    sys.path.insert(0, str(BENCH))
-    try:
-        import bench_workbench as bw
-        import workbench_sim as ws
-    finally:
-        sys.path.remove(str(BENCH))
+    bw, ws = _bench()
     if not ws.real_noise_available():
         pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
     case = ws.make_case(seed, null=True)
@@ -70,12 +72,7 @@ def test_follow_up_effect_near_the_floor_is_added(seed, follow_up):
     spectral z was 5.8; the z part of a field term misaligned with the coil axes, 5.5),
     ending 1.15-1.3x the true model's held-out RMS (seeds of the unseen set 15000-15199 of
     the gate's first report, then used to tune this bar)."""
-    sys.path.insert(0, str(BENCH))
-    try:
-        import bench_workbench as bw
-        import workbench_sim as ws
-    finally:
-        sys.path.remove(str(BENCH))
+    bw, ws = _bench()
     row = bw.run_case(ws.make_case(seed))
     labels = [a["label"] for a in row["added"]]
     assert follow_up in labels, labels
@@ -89,12 +86,7 @@ def test_real_gyro_wander_is_not_named_as_hysteresis(seed):
     missing effect: gain/(scatter/√folds) 3.2-6.4, against 10-1000 for true hysteresis. The
     branch now needs ≥ 4 on the strict route and ≥ 10 (with p × trials < 0.01) on the weak
     ones (seeds from the tuning set 16500-16699 of that rule)."""
-    sys.path.insert(0, str(BENCH))
-    try:
-        import bench_workbench as bw
-        import workbench_sim as ws
-    finally:
-        sys.path.remove(str(BENCH))
+    bw, ws = _bench()
     if not ws.real_noise_available():
         pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
     row = bw.run_case(ws.make_case(seed, null=True))
@@ -105,12 +97,7 @@ def test_real_gyro_wander_is_not_named_as_hysteresis(seed):
 def test_true_hysteresis_near_threshold_is_still_named():
     """Thermal hysteresis at 3.2x the floor (synthetic noise) keeps its strict-route verdict
     under the hysteresis rule above (gain/(scatter/√folds) ≈ 115)."""
-    sys.path.insert(0, str(BENCH))
-    try:
-        import bench_workbench as bw
-        import workbench_sim as ws
-    finally:
-        sys.path.remove(str(BENCH))
+    bw, ws = _bench()
     row = bw.run_case(ws.make_case(16188))
     assert [a["label"] for a in row["added"]] == ["hyst(T_gyro)"], row["added"]
     assert row["final_over_true"] <= 1.1

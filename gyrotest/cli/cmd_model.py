@@ -266,7 +266,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "off the strict test, spectral (Whittle) z ≥ 8 against the residual's own "
               "spectrum (≥ 4 while the model is within 2x the floor) unless the gain is "
               "≥ 40 % with fold consistency ≥ 5; hysteresis needs fold consistency ≥ 4 "
-              "(≥ 10 off the strict test); ties go to channel-based terms and to the channels the model already uses")
+              "(≥ 10 off the strict test); ties go to channel-based terms and to the "
+              "channels the model already uses")
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)

@@ -166,8 +166,19 @@ def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> l
     return out
 
 
-__all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
-           "residual_corr", "uses_channel"]
+def with_terms(r: FitResult, wd: WorkData, keep: list[TermSpec] | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The design of the fitted model ``r`` with the blocks of the terms ``keep`` put back
+    beside it (terms a candidate replaced), its least-squares coefficients and residual;
+    without ``keep``, ``r``'s own."""
+    X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
+    if not keep:
+        beta = np.array([cf.value for cf in r.coefficients if cf.kind == "linear"])
+        return X, beta, r.resid
+    d = r._fitter.d  # type: ignore[attr-defined]
+    X = np.column_stack([X] + [d.block(s, None) for s in keep])
+    beta, _ = st.lstsq(X, wd.y)
+    return X, beta, wd.y - X @ beta
 
 
 def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
@@ -176,19 +187,17 @@ def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
     model ``r``, against the spectrum of its own residual
     (:func:`gyrotest.envmodel.stats.whittle_z`).
 
-    ``keep``: terms the candidate replaced in ``r``, put back beside it for the test. A lagged
-    core temperature replaces the plain sensor temperature; its coefficient then carries the
-    whole temperature effect the model already had, and only what T_core explains beyond T
-    is evidence of a lag (the HAC test does the same)."""
+    ``keep``: terms the candidate replaced in ``r``, put back beside it for the test
+    (:func:`with_terms`). A lagged core temperature replaces the plain sensor temperature;
+    its coefficient then carries the whole temperature effect the model already had, and
+    only what T_core explains beyond T is evidence of a lag (the HAC test does the same)."""
     idx = [i for i, cf in enumerate(r.coefficients) if cf.term in labels and cf.kind == "linear"]
     try:
-        X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
-        e = r.resid
-        if keep:
-            d = r._fitter.d  # type: ignore[attr-defined]
-            X = np.column_stack([X] + [d.block(s, None) for s in keep])
-            beta, _ = st.lstsq(X, wd.y)
-            e = wd.y - X @ beta
+        X, _, e = with_terms(r, wd, keep)
         return st.whittle_z(X, wd.y, e, idx)
     except (np.linalg.LinAlgError, ValueError):
         return math.nan
+
+
+__all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
+           "residual_corr", "spectral_z", "uses_channel", "with_terms"]

@@ -115,6 +115,7 @@ from .candidate import (
     residual_corr,
     spectral_z,
     uses_channel,
+    with_terms,
 )
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
@@ -141,13 +142,12 @@ from .rules import (
     HYST_WEAK_CV_T,
     MIN_IMPROVEMENT,
     PERIOD_SHARE,
-    SPECTRAL_EXEMPT_GAIN,
-    SPECTRAL_EXEMPT_T,
     STRONG_P,
     TIE,
     UNLAGGED,
     WEAK_P,
     spectral_bar,
+    spectral_exempt,
 )
 from .screen import (
     CLASS_ORDER,
@@ -443,6 +443,9 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
     t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
             else math.inf if impr > 0 else 0.0)
+    # a hysteresis branch off the strict route (:data:`HYST_WEAK_CV_T`)
+    hyst_weak = c.key != "hyst" or (t_cv >= HYST_WEAK_CV_T and math.isfinite(p_tr)
+                                     and p_tr < CLEAR_P)
     strict = bool(math.isfinite(p_adj) and p_adj < alpha
                   and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
                                else min_improvement)
@@ -454,21 +457,18 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                       or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
                       or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
                           and p_tr < STRONG_P))
-                 and (c.key != "hyst" or (t_cv >= HYST_WEAK_CV_T and p_tr < CLEAR_P)))
+                 and hyst_weak)
     far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
                and math.isfinite(z) and abs(z) >= FAR_Z
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
-               and (c.key != "hyst" or (t_cv >= HYST_WEAK_CV_T and math.isfinite(p_tr)
-                                        and p_tr < CLEAR_P)))
+               and hyst_weak)
     rejected = None
     zw = math.nan
-    exempt = impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
     if (clear or far) and not strict:
-        keep = [TermSpec("T", c.channels)] if c.key == "Tlag" and replaces else None
-        zw = spectral_z(r, [c.label], wd, keep=keep)
+        zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
         bar = spectral_bar(base_ratio)
-        if not exempt and not zw >= bar:
+        if not spectral_exempt(impr, t_cv) and not zw >= bar:
             rejected = (f"its coefficient does not stand out of the residual's slow noise "
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "
                         "the gyro's own drift")
@@ -599,32 +599,29 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
     return v, None
 
 
+def _kept(c: TermSpec, replaces: str | None) -> list[TermSpec] | None:
+    """The plain sensor temperature a lagged core temperature replaced, to be put back beside
+    it when its coefficient is tested (a lag effect means T_core explains what T does not);
+    None for every other candidate."""
+    return [TermSpec("T", c.channels)] if c.key == "Tlag" and replaces else None
+
+
 def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
                   ) -> tuple[float, float]:
-    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model,
-    against a t/F reference with the effective degrees of freedom of the added regressor(s)
+    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model
+    (with a replaced plain temperature put back, :func:`_kept`), against a t/F reference
+    with the effective degrees of freedom of the added regressor(s)
     (:func:`gyrotest.envmodel.stats.effective_df`)."""
-    fitter = r._fitter  # type: ignore[attr-defined]
-    th = r._thetas  # type: ignore[attr-defined]
-    X = fitter.X(th)
-    if replaces is None or c.key != "Tlag":
-        idx = [i for i, cf in enumerate(r.coefficients)
-               if cf.term == c.label and cf.kind == "linear"]
-        beta = np.array([r.coefficients[i].value for i in idx])
+    keep = _kept(c, replaces)
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term == c.label and cf.kind == "linear"]
+    X, beta, e = with_terms(r, wd, keep)
+    if keep is None:
         cov = r.cov[np.ix_(idx, idx)]
-        df = st.effective_df(X, idx, st.integrated_time(r.resid))
-        _, p, z = st.wald_t(beta, cov, df)
-        return z, p
-    # lag replacement: test the core-temperature column in the model that also has the plain
-    # sensor temperature (a lag effect means T_core explains what T does not)
-    a, _b = fitter._offsets()[c.label]
-    xb_plain = fitter.d.block(TermSpec("T", c.channels), None)
-    Xa = np.column_stack([X, xb_plain])
-    beta, _ = st.lstsq(Xa, wd.y)
-    e = wd.y - Xa @ beta
-    cov, info = st.hac_covariance(Xa, e)
-    df = st.effective_df(Xa, [a], st.integrated_time(e))
-    _, p, z = st.wald_t(beta[a:a + 1], cov[a:a + 1, a:a + 1], df)
+    else:
+        cov, _ = st.hac_covariance(X, e)
+        cov = cov[np.ix_(idx, idx)]
+    df = st.effective_df(X, idx, st.integrated_time(e))
+    _, p, z = st.wald_t(beta[idx], cov, df)
     return z, p
 
 

@@ -32,10 +32,9 @@ from .rules import (
     PAIR_TOP,
     REDIRECT_GAIN,
     REDIRECT_RATIO,
-    SPECTRAL_EXEMPT_GAIN,
-    SPECTRAL_EXEMPT_T,
     SPECTRAL_Z,
     UNLAGGED,
+    spectral_exempt,
 )
 
 
@@ -78,7 +77,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
                 else impr >= FAR_GAIN and t_cv >= FAR_T):
             continue
-        if (not (impr >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T)
+        if (not spectral_exempt(impr, t_cv)
                 and not spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z):  # far: ratio >= 2
             continue
         if best is None or r.rms_holdout < best[2].rms_holdout:

@@ -60,6 +60,12 @@ SPECTRAL_Z = 8.0
 #: this route (14 % of wander fits on real noise pass it, 67-74 % of true effects)
 SPECTRAL_EXEMPT_GAIN = 0.40
 SPECTRAL_EXEMPT_T = 5.0
+
+
+def spectral_exempt(gain: float, t_cv: float) -> bool:
+    """A held-out ``gain`` (fraction) at fold consistency ``t_cv`` that needs no spectral z:
+    ≥ :data:`SPECTRAL_EXEMPT_GAIN` at ≥ :data:`SPECTRAL_EXEMPT_T`."""
+    return gain >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
 #: ... and near the floor (the model's held-out RMS < SPECTRAL_NEAR_RATIO × the floor) the bar
 #: is SPECTRAL_Z_NEAR: the residual is then close to white/flicker noise, its smoothed
 #: periodogram weighs the lowest frequencies correctly, and the wander that needs the higher

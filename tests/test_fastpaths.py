@@ -203,6 +203,80 @@ def test_find_lines_chi2_only_above_the_snr_floor():
             assert got and abs(got[0].f_hz - 7.3) < 0.05
 
 
+def test_find_lines_merges_runs_at_the_ends_of_the_spectrum():
+    """Candidate runs are grouped without a loop over bins: a run that starts at bin 1 (bin 0
+    is never a line) and one that ends at the last bin are each one line, with the centroid
+    and amplitude of the brute-force grouping."""
+    from gyrotest.noise import spectral
+
+    f = np.arange(1, 4097) * 0.01
+    p = np.ones(f.size)
+    p[[0, 1, 2]] = 1e4  # bins 0–2: bin 0 excluded, 1–2 one run
+    p[[2000, 2001, 2002]] = [5e3, 9e3, 5e3]
+    p[[-2, -1]] = 2e4  # the last two bins
+    psd = spectral.PsdEstimate(f=f, psd=p, dof=200.0, nperseg=8192, tau0=0.01, n_used=10**6)
+    got = spectral.find_lines(psd, max_lines=5)
+    bg = spectral._background(f, p)
+    want = []
+    for i, j in ((1, 2), (2000, 2002), (f.size - 2, f.size - 1)):
+        a, b = max(i - 1, 0), min(j + 2, f.size)
+        ex = np.maximum(p[a:b] - bg[a:b], 0.0)
+        want.append((float(np.sum(f[a:b] * ex) / ex.sum()),
+                     math.sqrt(4.0 * ex.sum() * (f[1] - f[0]))))
+    assert sorted((ln.f_hz, ln.amplitude_dph) for ln in got) == sorted(want)
+
+
+@pytest.mark.parametrize("segments", [None, [(0, 150_000), (150_100, 400_000)]])
+def test_akdev_from_the_oadev_sums_equals_the_direct_estimator(segments):
+    """The trend check's AKDEV from the OADEV table (``reuse``: the mean second difference
+    telescoped, no pass over θ) equals the centred direct estimator, with a strong ramp (the
+    subtraction σ²_OA − d̄²/2 cancels most of σ²_OA there) and over gaps."""
+    from gyrotest.noise.deviations import compute_deviation
+
+    rng = np.random.default_rng(13)
+    n = 400_000
+    x = rng.standard_normal(n) + np.cumsum(rng.standard_normal(n)) * 2e-3
+    x += np.arange(n) * 4e-5  # a rate ramp: AKDEV well below OADEV at long τ
+    kw = dict(input_kind="rate", segments=segments, noise_id=False)
+    oa = compute_deviation(x, 0.01, kind="oadev", taus="decade10", segments=segments,
+                           input_kind="rate")
+    taus = oa.tau[-5:-1].tolist()
+    direct = compute_deviation(x, 0.01, kind="akdev", taus=taus, **kw)
+    reused = compute_deviation(x, 0.01, kind="akdev", taus=taus, reuse=oa, **kw)
+    assert np.all(direct.sigma < 0.5 * oa.sigma[np.isin(oa.tau, taus)])
+    np.testing.assert_allclose(reused.sigma, direct.sigma, rtol=1e-9)
+    for k in ("tau", "n", "edf", "alpha"):
+        np.testing.assert_array_equal(getattr(reused, k), getattr(direct, k))
+    # a τ not in the OADEV table is computed directly
+    other = compute_deviation(x, 0.01, kind="akdev", taus=[333.0, taus[0]], reuse=oa, **kw)
+    ref = compute_deviation(x, 0.01, kind="akdev", taus=[333.0, taus[0]], **kw)
+    np.testing.assert_allclose(other.sigma, ref.sigma, rtol=1e-9)
+
+
+def test_trend_check_computes_the_hadamard_deviation_only_as_trend_evidence():
+    """``allan``'s trend check: OHDEV at the long τ is computed when the Allan–Krobka
+    dispersion falls below the Allan deviation's interval (the KROBKA-M7 evidence, shown in
+    the warning's rows), and not on a record without a trend."""
+    from gyrotest.data import GyroConstants, GyroLog, Timing
+    from gyrotest.noise.analysis import analyse_allan
+
+    rng = np.random.default_rng(3)
+    n = 200_000
+    t = np.arange(n) * 0.1
+    for ramp, want in ((0.0, False), (0.2 / 3600.0, True)):  # deg/h per s
+        x = rng.standard_normal(n) * 0.3 + ramp * t
+        log = GyroLog(source="mem", rates={"x": x}, tau0=0.1,
+                      timing=Timing(n=n, tau0=0.1, duration_s=n * 0.1, source="test"),
+                      gyro=GyroConstants(output_kind="rate"))
+        ax = analyse_allan(log).axes[0]
+        assert (ax.ohdev is not None) is want, ramp
+        m7 = [w for w in ax.warnings if w.code == "KROBKA-M7"]
+        assert bool(m7) is want
+        if want:
+            assert all("hadamard" in r for r in m7[0].evidence["rows"])
+            assert ax.akdev is not None and ax.to_dict()["trend_check"]["ohdev"]["sigma"]
+
+
 def test_chi2_from_special_matches_stats():
     from scipy import stats
 

@@ -11,8 +11,10 @@ for JSON) without printing anything. Per rate axis it computes
    and Krobka's bounds, and unit conversions for other tools;
 3. model vs measurement and the diagnosis of missing terms (:mod:`gyrotest.noise.diagnose`),
    helped by the Welch PSD lines and the autocorrelation (:mod:`gyrotest.noise.spectral`);
-4. Krobka's warnings (:mod:`gyrotest.noise.warnings`), with the Allan–Krobka and Hadamard
-   deviations at long τ for the trend check;
+4. Krobka's warnings (:mod:`gyrotest.noise.warnings`), with the Allan–Krobka deviation at
+   long τ for the trend check (from the OADEV table's sums: no pass over θ) and the Hadamard
+   deviation there when the Allan–Krobka one falls below the Allan deviation's interval (the
+   trend warning's evidence; otherwise ``ohdev`` is None);
 5. the platform vs strapdown attitude-error prediction (:mod:`gyrotest.noise.impact`);
 
 and, for multi-axis logs, the cross-correlation of the axes.
@@ -59,7 +61,7 @@ from .spectral import (
     find_lines,
     welch_psd,
 )
-from .warnings import KrobkaWarning, krobka_checks
+from .warnings import KrobkaWarning, krobka_checks, trend_needs_hadamard
 
 #: samples of a streamed log's rate rebuilt for the axis cross-correlation
 STREAM_PREFIX = 1 << 24
@@ -770,9 +772,11 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     if trend_check:
         long_t = _long_taus(fit_dev.tau)
         if len(long_t) >= 2:
-            try:
-                ak = deviation("akdev", long_t, noise_id=False)
-                oh = deviation("ohdev", long_t, noise_id=False)
+            try:  # AKDEV from the OADEV's sums when the fit's table is one (no pass over θ);
+                ak = deviation("akdev", long_t, noise_id=False,  # OHDEV only as evidence of a
+                               reuse=fit_dev if fit_dev.kind == "oadev" else None)  # trend
+                if trend_needs_hadamard(fit, ak):
+                    oh = deviation("ohdev", long_t, noise_id=False)
             except (InputError, AnalysisError) as e:
                 notes.append(f"trend check skipped: {e}")
     warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,

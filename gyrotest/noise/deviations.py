@@ -747,8 +747,19 @@ PARALLEL_MIN_SAMPLES = 200_000
 PROGRESS: Callable[[float, int, str], None] | None = None
 
 
-def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> list:
-    """:func:`_raw_variance` for every averaging factor in ``ms``, in order.
+def _akdev_from_oadev(parts: Sequence[np.ndarray], m: int, var_oa: float, n_tot: int,
+                      ns: list[int]) -> tuple[float, int, list[int]]:
+    """AKDEV's raw variance from the OADEV's at the same m: (Σd² − n·d̄²)/(2n) = var_OA − d̄²/2,
+    with the mean second difference d̄ telescoped in O(m) (:func:`_d2_total`): no pass over θ."""
+    s1 = sum(_d2_total(p, m)[0] for p, nk in zip(parts, ns) if nk > 0)
+    mean = s1 / n_tot
+    return max(var_oa - 0.5 * mean * mean, 0.0), n_tot, ns
+
+
+def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int,
+                   known: dict[int, float] | None = None) -> list:
+    """:func:`_raw_variance` for every averaging factor in ``ms``, in order. ``known``: for
+    AKDEV, the OADEV raw variance of the same θ per m, from which AKDEV follows in O(m).
 
     The τ values are independent and the kernels spend their time in numpy calls that release
     the GIL, so long records are processed by a small thread pool (one thread per core, at
@@ -756,6 +767,16 @@ def _raw_variances(kind: str, parts: Sequence[np.ndarray], ms, longest: int) -> 
     many calls on small buffers, which contend for the GIL on threads (at 10⁶ samples, 2
     threads took 22 s of CPU and 20 s of wall time against 17 s and 17 s serially)."""
     ms = [int(m) for m in ms]
+    if kind == "akdev" and known:
+        done = {}
+        for m in ms:
+            if m in known:
+                ns = [_n_terms(kind, p.size, m) for p in parts]
+                n_tot = int(sum(ns))
+                done[m] = (_akdev_from_oadev(parts, m, known[m], n_tot, ns) if n_tot
+                           else (math.nan, 0, ns))
+        rest = iter(_raw_variances(kind, parts, [m for m in ms if m not in done], longest))
+        return [done[m] if m in done else next(rest) for m in ms]
     hook = PROGRESS
     out: list = []
     workers = min(os.cpu_count() or 1, 4, len(ms))
@@ -794,6 +815,7 @@ def compute_deviation(
     noise_id: bool = True,
     alpha: int | Sequence[int] | None = None,
     bias_correction: bool = False,
+    reuse: DeviationResult | None = None,
 ) -> DeviationResult:
     """Compute one deviation with noise identification, EDF and χ² confidence interval.
 
@@ -820,6 +842,9 @@ def compute_deviation(
         a = 0.481 (α = −1) or 0.750 (α = −2), T the (longest) segment length (no bias for
         α ≥ 0);
         MTOTDEV 0.94, 0.83, 0.73, 0.70, 0.69 for α = 2 … −2 (Howe & Vernotte 1999).
+    reuse : AKDEV only: an OADEV of the same data (same τ0, input kind and segments). At its
+        τ, AKDEV follows from its sums, σ²_AK = σ²_OA − (scale·d̄/τ)²/2 with the mean second
+        difference d̄ telescoped in O(m): no pass over θ (the trend check of ``allan``).
 
     Returns a :class:`DeviationResult`. Units: σ in the rate unit of the input (rate input) or
     angle unit per second (increment/angle input); TDEV in the angle unit (rate unit × s).
@@ -855,7 +880,14 @@ def compute_deviation(
     rows_n: list[int] = []
     rows_ns: list[list[int]] = []
     dropped: list[int] = []
-    for m, (var, n_tot, ns) in zip(grid.m, _raw_variances(kind, parts, grid.m, longest)):
+    known = None
+    if (reuse is not None and kind == "akdev" and reuse.kind == "oadev"
+            and reuse.input_kind == input_kind and math.isclose(reuse.tau0, series.tau0)
+            and list(reuse.segments) == list(series.segments)):
+        known = {int(mm): float((sg * tt / series.scale) ** 2)
+                 for mm, sg, tt in zip(reuse.m, reuse.sigma, reuse.tau)}
+    for m, (var, n_tot, ns) in zip(grid.m, _raw_variances(kind, parts, grid.m, longest,
+                                                           known)):
         m = int(m)
         if n_tot < 1:
             dropped.append(m)

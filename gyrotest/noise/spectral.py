@@ -224,14 +224,10 @@ def find_lines(psd: PsdEstimate, *, max_lines: int = 3, p_false: float = 1e-6,
     cand[0] = False  # the lowest bin is not a line
     lines: list[SpectralLine] = []
     df = f[1] - f[0] if nb > 1 else f[0]
-    i = 0
-    while i < nb:
-        if not cand[i]:
-            i += 1
-            continue
-        j = i
-        while j + 1 < nb and cand[j + 1]:
-            j += 1
+    idx = np.flatnonzero(cand)  # runs of adjacent candidate bins (no Python loop over bins)
+    starts = idx[np.r_[True, np.diff(idx) > 1]] if idx.size else idx
+    ends = idx[np.r_[np.diff(idx) > 1, True]] if idx.size else idx
+    for i, j in zip(starts.tolist(), ends.tolist()):
         a, b = max(i - 1, 0), min(j + 2, nb)
         excess = np.maximum(p[a:b] - bg[a:b], 0.0)
         tot = float(np.sum(excess))
@@ -240,7 +236,6 @@ def find_lines(psd: PsdEstimate, *, max_lines: int = 3, p_false: float = 1e-6,
             amp = math.sqrt(4.0 * tot * df)
             k = a + int(np.argmax(ratio[a:b]))
             lines.append(SpectralLine(fc, amp, float(ratio[k]), float(pv[k])))
-        i = j + 1
     lines.sort(key=lambda ln: -ln.amplitude_dph)
     return lines[:max_lines]
 

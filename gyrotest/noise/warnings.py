@@ -376,24 +376,40 @@ def _cluster_checks(fit: NoiseFit, out: list[KrobkaWarning]) -> None:
          "excluded_edf": fit.edf[dropped].tolist()}))
 
 
-def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=None,
-                  record_s: float | None = None) -> None:
-    if akdev is None:
-        return
-    rows = []
+def _trend_pairs(fit: NoiseFit, akdev) -> list[tuple[int, float, float]]:
+    """(fit row, τ, σ_AK) where the Allan–Krobka dispersion lies below the Allan deviation's
+    confidence interval (the KROBKA-M7 evidence)."""
+    out = []
     for t, s_o in zip(np.asarray(akdev.tau, float), np.asarray(akdev.sigma, float)):
         i = int(np.argmin(np.abs(fit.tau - t)))
         if abs(fit.tau[i] / t - 1) > 1e-6 or not math.isfinite(fit.sigma_lo[i]):
             continue
         if s_o < fit.sigma_lo[i] and fit.sigma[i] > 0:
-            diff = max(fit.sigma[i] ** 2 - s_o**2, 0.0)
-            R = math.sqrt(2.0 * diff) / t * 3600.0  # deg/h/h: a ramp adds ½(Rτ)²
-            row = {"tau_s": float(t), "allan": float(fit.sigma[i]), "allan_krobka": float(s_o),
-                   "ramp_deg_h_per_h": R}
-            if ohdev is not None:
-                j = int(np.argmin(np.abs(np.asarray(ohdev.tau) - t)))
-                row["hadamard"] = float(ohdev.sigma[j])
-            rows.append(row)
+            out.append((i, float(t), float(s_o)))
+    return out
+
+
+def trend_needs_hadamard(fit: NoiseFit, akdev) -> bool:
+    """Whether the trend check can warn (two or more τ with the Allan–Krobka dispersion below
+    the Allan deviation's interval), so that the Hadamard deviation at those τ is needed as
+    evidence; ``allan`` computes the OHDEV of the trend check only then (issue #13)."""
+    return akdev is not None and len(_trend_pairs(fit, akdev)) >= 2
+
+
+def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=None,
+                  record_s: float | None = None) -> None:
+    if akdev is None:
+        return
+    rows = []
+    for i, t, s_o in _trend_pairs(fit, akdev):
+        diff = max(fit.sigma[i] ** 2 - s_o**2, 0.0)
+        R = math.sqrt(2.0 * diff) / t * 3600.0  # deg/h/h: a ramp adds ½(Rτ)²
+        row = {"tau_s": t, "allan": float(fit.sigma[i]), "allan_krobka": s_o,
+               "ramp_deg_h_per_h": R}
+        if ohdev is not None:
+            j = int(np.argmin(np.abs(np.asarray(ohdev.tau) - t)))
+            row["hadamard"] = float(ohdev.sigma[j])
+        rows.append(row)
     if len(rows) < 2:
         return
     R_est = float(np.median([r["ramp_deg_h_per_h"] for r in rows]))

@@ -65,6 +65,7 @@ re-fitted); for a two-parameter term that was not found, the largest over its sh
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -251,6 +252,28 @@ def log_chi2_objective(x, s, nu) -> float:
     return float(np.sum(r * r / v))
 
 
+@functools.lru_cache(maxsize=8)
+def _allan_kernels(tau: tuple[float, ...], tau0: float, n_freq: int):
+    """The frequency grid f, its weights, and the kernels K_τ(f) and K_τ(f)² of
+    :func:`estimate_correlation` on it: they depend on the τ grid only, not on the model, so
+    the fits of one table (the requested model and the diagnosis' candidates, ≈ 14 calls)
+    share them (read-only arrays)."""
+    t = np.asarray(tau, float)
+    f = np.geomspace(1e-3 / float(t.max()), 0.5 / tau0, n_freq)
+    w = np.gradient(f)
+    x = np.pi * f[None, :] * t[:, None]
+    far = x > 40.0
+    s2 = np.sin(x)
+    s2 *= s2
+    s4 = s2 * s2
+    x2 = x * x
+    K = np.where(far, 0.375, s4) / x2
+    K8 = np.where(far, 35.0 / 128.0, s4 * s4) / (x2 * x2)
+    for a in (f, w, K, K8):
+        a.flags.writeable = False
+    return f, w, K, K8
+
+
 def estimate_correlation(tau, psd, tau0: float, *, n_freq: int = 1200) -> np.ndarray:
     """Model-implied correlation matrix ρ of overlapping Allan-variance estimates at ``tau``.
 
@@ -262,18 +285,9 @@ def estimate_correlation(tau, psd, tau0: float, *, n_freq: int = 1200) -> np.nda
     the diagonal). Deterministic terms (ramp, sinusoid) have no PSD here. Returns the identity
     when the PSD is zero."""
     t = np.asarray(tau, float)
-    f = np.geomspace(1e-3 / float(t.max()), 0.5 / tau0, n_freq)
-    w = np.gradient(f)
+    f, w, K, K8 = _allan_kernels(tuple(t.tolist()), float(tau0), int(n_freq))
     S = np.asarray(psd(f), float)
     S = np.where(np.isfinite(S) & (S > 0), S, 0.0)
-    x = np.pi * f[None, :] * t[:, None]
-    far = x > 40.0
-    s2 = np.sin(x)
-    s2 *= s2
-    s4 = s2 * s2
-    x2 = x * x
-    K = np.where(far, 0.375, s4) / x2
-    K8 = np.where(far, 35.0 / 128.0, s4 * s4) / (x2 * x2)
     q = S * S * w
     M = (K * q) @ K.T
     d = np.sqrt(np.maximum(K8 @ q, 0.0))

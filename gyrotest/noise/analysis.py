@@ -772,9 +772,11 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     if trend_check:
         long_t = _long_taus(fit_dev.tau)
         if len(long_t) >= 2:
-            try:  # AKDEV from the OADEV's sums when the fit's table is one (no pass over θ);
-                ak = deviation("akdev", long_t, noise_id=False,  # OHDEV only as evidence of a
-                               reuse=fit_dev if fit_dev.kind == "oadev" else None)  # trend
+            # AKDEV from the OADEV's sums when the fit's table is one (no pass over θ); OHDEV
+            # only as the evidence of a trend warning
+            try:
+                ak = deviation("akdev", long_t, noise_id=False,
+                               reuse=fit_dev if fit_dev.kind == "oadev" else None)
                 if trend_needs_hadamard(fit, ak):
                     oh = deviation("ohdev", long_t, noise_id=False)
             except (InputError, AnalysisError) as e:

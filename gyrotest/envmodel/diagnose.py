@@ -142,6 +142,7 @@ from .rules import (
     HYST_WEAK_CV_T,
     MIN_IMPROVEMENT,
     PERIOD_SHARE,
+    SPECTRAL_Z,
     STRONG_P,
     TIE,
     UNLAGGED,
@@ -459,13 +460,17 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                           and p_tr < STRONG_P))
                  and hyst_weak)
     far = bool(math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
-               and math.isfinite(z) and abs(z) >= FAR_Z
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
                and hyst_weak)
+    # the HAC guard, or (other missing effects inflating its error) the spectral z alone
+    far_hac = far and math.isfinite(z) and abs(z) >= FAR_Z
     rejected = None
     zw = math.nan
-    if (clear or far) and not strict:
+    if far and not (far_hac or clear or strict):
+        zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
+        far = bool(zw >= SPECTRAL_Z)
+    elif (clear or far) and not strict:
         zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
         bar = spectral_bar(base_ratio)
         if not spectral_exempt(impr, t_cv) and not zw >= bar:
@@ -551,6 +556,10 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
                   f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
                   "HAC test")
+            if not (math.isfinite(top.z) and abs(top.z) >= FAR_Z):
+                v += (f" (z = {top.z:.1f}: other missing effects inflate its error), with the "
+                      f"coefficient standing out of the residual's spectrum (spectral z "
+                      f"{top.spectral_z:.1f})")
         pair = top.pair
         if pair is not None:
             disp = top.displaced

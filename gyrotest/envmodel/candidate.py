@@ -54,6 +54,7 @@ class Candidate:
     displaced: tuple[str, float] | None = None
     cv_t: float = math.nan  # gain / (fold scatter / √folds)
     spectral_z: float = math.nan  # Whittle z of its coefficients (weak routes only)
+    hac_waived: bool = False  # qualified far above the floor on its spectral z, not HAC z
     _fit: FitResult | None = None
 
     @property

@@ -324,7 +324,9 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
 
     out.sort(key=score)
     _period_rule(out, wd.frame)
-    sig = [c for c in out if c.significant]
+    # a term whose HAC guard only the spectral z replaces is the last resort: after the
+    # terms with a HAC test behind them, the field blocks and the pairs
+    sig = [c for c in out if c.significant and not c.hac_waived]
     if not sig and candidates is None and math.isfinite(base_ratio) \
             and base_ratio >= FAR_RATIO:
         # no single term explains the gap: groups that only work together (a gyro whose
@@ -332,12 +334,14 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         for spec, repl in block_candidates(wd.frame, base.specs):
             out.append(_judge(wd, base, base_specs, spec, thetas0, n_c, base_ratio, alpha,
                               min_improvement, folds, replaces_labels=repl))
-        sig = [c for c in out if c.significant]
+        sig = [c for c in out if c.significant and not c.hac_waived]
     if not sig and candidates is None and math.isfinite(base_ratio) \
             and base_ratio >= FAR_RATIO:
         pair = pair_step(wd, base, base_specs, out, thetas0, folds)
         if pair is not None:
             sig = [pair]
+    if not sig:
+        sig = [c for c in out if c.significant]
     chosen = None
     if sig:
         best = sig[0]
@@ -467,7 +471,8 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     far_hac = far and math.isfinite(z) and abs(z) >= FAR_Z
     rejected = None
     zw = math.nan
-    if far and not (far_hac or clear or strict):
+    waived = far and not (far_hac or clear or strict)
+    if waived:
         zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:
@@ -502,6 +507,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     cand.r_residual = residual_corr(base, r, c)
     cand.cv_t = t_cv
     cand.spectral_z = zw
+    cand.hac_waived = bool(waived and sig)
     cand._fit = r
     cand.period_match = match
     return cand

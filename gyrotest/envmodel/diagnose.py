@@ -41,7 +41,12 @@ that the model under judgment cannot move:
      t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %); the
      HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its standard error. Far
      from the floor every missing effect inflates the HAC error of every other candidate,
-     so the test is a guard only where the model is near the floor.
+     so the test is a guard only where the model is near the floor. When several large
+     effects are missing at once even that guard fails (a warm-up of 100 × the floor beside
+     two others: z 0.7); the coefficient's spectral z ≥ 8 against the candidate model's
+     residual spectrum (no exemption) may then stand in for it. Such a term is chosen
+     last: only when no term with a HAC test behind it, no field block and no pair
+     qualifies.
    When no single candidate qualifies and the model is at least 2 × the floor, groups
    that only explain the data together are tried the same way: the field sensitivity
    along every axis (``Hvec``) and the full second-order field sensitivity (``Hquad``),

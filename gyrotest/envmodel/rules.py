@@ -48,11 +48,12 @@ FAR_T = 2.13
 FAR_T_NUISANCE = 3.75
 #: ... with the HAC test as a guard: the coefficient exceeds its own standard error
 FAR_Z = 1.0
-#: ... or, when other missing effects inflate that error (several at once, far above the
-#: floor, leave the HAC test of a warm-up of 100 × the floor at z 0.7), the coefficient stands
-#: out of the candidate model's residual spectrum at SPECTRAL_Z without the exemption below.
-#: Wander fits on real-noise nulls that fail the HAC guard reach spectral z 4-7 there
-#: (tuned on seeds 16000-16699 and 21000-21699, benchmarks/README.md)
+# ... or, when other missing effects inflate that error (several at once, far above the
+# floor, leave the HAC test of a warm-up of 100 × the floor at z 0.7), the coefficient stands
+# out of the candidate model's residual spectrum at SPECTRAL_Z without the exemption below;
+# such a term is chosen last (diagnose._step). Wander fits on real-noise nulls that fail the
+# HAC guard reach spectral z 4.8-6.6 there (tuned on seeds 21000-21699, benchmarks/README.md)
+
 #: the weak routes (clear gain, far above the floor, pairs) also need the added coefficients
 #: to stand out of the candidate model's residual spectrum: spectral (Whittle) z at least
 #: SPECTRAL_Z (:func:`gyrotest.envmodel.stats.whittle_z`). A smooth channel fitted to a gyro's

@@ -447,7 +447,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     term qualifies (or the one that does cuts < 60 % and a pair of two others halves its
     held-out RMS), the best candidates, further channels and the largest in-sample gains are
     also tried in pairs, and so are the level and square of each channel (two effects that
-    hide each other are named one after the other). A
+    hide each other are named one after the other); last of all, a term whose |z| < 1 only
+    because other missing effects inflate its error, when its coefficient stands out of the
+    residual's spectrum (spectral z >= 8). A
     sinusoid on the period of a logged stimulus is rejected when a term of that channel
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     Off the strict test, the added coefficients must also stand out of the candidate

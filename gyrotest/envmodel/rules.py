@@ -53,7 +53,6 @@ FAR_Z = 1.0
 # out of the candidate model's residual spectrum at SPECTRAL_Z without the exemption below;
 # such a term is chosen last (diagnose._step). Wander fits on real-noise nulls that fail the
 # HAC guard reach spectral z 4.8-6.6 there (tuned on seeds 21000-21699, benchmarks/README.md)
-
 #: the weak routes (clear gain, far above the floor, pairs) also need the added coefficients
 #: to stand out of the candidate model's residual spectrum: spectral (Whittle) z at least
 #: SPECTRAL_Z (:func:`gyrotest.envmodel.stats.whittle_z`). A smooth channel fitted to a gyro's
@@ -72,6 +71,8 @@ def spectral_exempt(gain: float, t_cv: float) -> bool:
     """A held-out ``gain`` (fraction) at fold consistency ``t_cv`` that needs no spectral z:
     ≥ :data:`SPECTRAL_EXEMPT_GAIN` at ≥ :data:`SPECTRAL_EXEMPT_T`."""
     return gain >= SPECTRAL_EXEMPT_GAIN and t_cv >= SPECTRAL_EXEMPT_T
+
+
 #: ... and near the floor (the model's held-out RMS < SPECTRAL_NEAR_RATIO × the floor) the bar
 #: is SPECTRAL_Z_NEAR: the residual is then close to white/flicker noise, its smoothed
 #: periodogram weighs the lowest frequencies correctly, and the wander that needs the higher

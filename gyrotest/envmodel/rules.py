@@ -35,6 +35,11 @@ STRONG_P = 0.5
 #: (tuned on the campaigns of seeds 1000-16699, benchmarks/README.md)
 HYST_CV_T = 4.0
 HYST_WEAK_CV_T = 10.0
+#: a hysteresis branch and the level of the same temperature, both missing, each hide the
+#: other (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`): the pair is tried far above
+#: the floor like any pair, and each member's coefficient must reach this HAC z in the pair's
+#: own fit (seed 22154: 9.2 and 8.0; tuned on seeds 22000-22699, benchmarks/README.md)
+HYST_PAIR_Z = 4.0
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: far above the floor the floor itself says the model is incomplete; the question is only

@@ -27,8 +27,10 @@ working resolution) and
   held-out RMS, and its coefficients are compared with the injected ones (z = (fit −
   truth)/σ_HAC);
 * the **plain user loop**: start from ``case.base_terms``; ``diagnose``; when it reports a
-  missing effect, drop the base term it replaces (if any) and add the top one; repeat, at
-  most ``--max-steps`` (5) diagnoses; the final model is what the loop ends with.
+  missing effect, drop the base term it replaces (if any) and add the top one; when it
+  finds none but says "the model does better without X: remove it", remove X (once per
+  term); repeat, at most ``--max-steps`` (5) diagnoses; the final model is what the loop
+  ends with.
 
 Measures (per missing effect e, with B() = gyrotest's own smoother + block means, i.e.
 ``wd.bmean(wd.smooth(x))``, and floor = RMS of B(noise), the noise actually injected, at the
@@ -374,6 +376,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         terms = resolve_terms(parse_terms(case.base_terms), wd.frame)
         total = sum((m["block"] for m in mags.values()), np.zeros(wd.nb))
         added: list[dict] = []
+        removed: set[str] = set()
         final_fit = None
         X_base = None
         for k in range(max_steps):
@@ -410,6 +413,14 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                                "class": getattr(top, "klass", None)}
                 added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,
                               "equivalents": list(getattr(top, "equivalents", None) or [])})
+            rm = getattr(d, "remove", None)
+            if not found and rm is not None and rm.term not in removed:
+                # "the model does better without X: remove it" -- the user removes it
+                step["removed"] = rm.to_dict()
+                removed.add(rm.term)
+                row["steps"].append(step)
+                terms = [s for s in terms if s.label != rm.term]
+                continue
             row["steps"].append(step)
             if not found:
                 final_fit = d.base

@@ -127,6 +127,7 @@ from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .pairs import pair_step, redirect
 from .prepare import prepare_log
+from .prune import Unneeded, unneeded_term
 from .rules import (
     ABOVE_FLOOR,
     ALPHA,
@@ -181,6 +182,7 @@ class Diagnosis:
     chosen: Candidate | None = None
     path: list[dict] = field(default_factory=list)
     possible: Candidate | None = None  # "possible missing effect" (gain > scatter, no test)
+    remove: Unneeded | None = None  # a term the model does better without (no effect found)
 
     @property
     def found(self) -> list[Candidate]:
@@ -207,6 +209,7 @@ class Diagnosis:
             "resolution_note": self.base.resolution_note,
             "missing_effect": self.found[0].term if self.found else None,
             "possible_effect": self.possible.term if self.possible else None,
+            "remove_term": self.remove.to_dict() if self.remove else None,
             "add": self.found[0].add_hint if self.found else None,
             "verdict": self.verdict,
             "path": self.path,
@@ -282,10 +285,13 @@ def diagnose(wd: WorkData, base_terms, candidates=None, *, alpha: float = ALPHA,
             path.append(_path_entry(nxt, cur, fl))
             cur = nxt._fit
     verdict, possible = _verdict(base, cands, chosen, path, fl, ratio)
+    remove = unneeded_term(wd, base, folds) if chosen is None else None
+    if remove is not None:
+        verdict += "; " + remove.text
     return Diagnosis(base=base, candidates=cands, verdict=verdict, noise_floor_dph=fl,
                      ratio_to_floor=ratio, alpha=alpha,
                      min_improvement_pct=100 * min_improvement, floor_basis=floor.basis,
-                     chosen=chosen, path=path, possible=possible)
+                     chosen=chosen, path=path, possible=possible, remove=remove)
 
 
 def _path_entry(c: Candidate, before: FitResult, floor: float) -> dict:

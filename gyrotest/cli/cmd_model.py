@@ -458,7 +458,11 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     within 2x the floor), unless the held-out gain is
     >= 40 % with fold consistency >= 5: a smooth channel fitted to the gyro's own slow
     wander is not named. A hysteresis branch also needs fold consistency >= 4 (>= 10 with
-    p x trials < 0.01 off the strict test) and is never paired. The noise floor is
+    p x trials < 0.01 off the strict test) and is paired only with the level of its own
+    temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit.
+    When no missing effect is found, each term of the model is left out once: one whose
+    removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
+    ("the model does better without X: remove it"). The noise floor is
     fixed before any model is fitted: from the log's short-tau noise (differences across
     steps of a logged channel left out), or from --reference.
     The verdict names the effect, how to add it (--terms or the equivalent --term), the

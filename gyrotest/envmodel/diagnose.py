@@ -76,9 +76,12 @@ that the model under judgment cannot move:
    (gain/(scatter/√folds) ≥ 5) is exempt: a second missing effect with the candidate's
    stimulus pattern lowers its spectral z too.
    A hysteresis branch (a near-step regressor with a searched width) takes the clear-gain
-   and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01, and is never
-   one of a pair: fitted to a gyro's slow wander it reaches 2-10 there (20 at most), true
-   hysteresis 10-1000.
+   and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01, and is not in
+   the pair pool: fitted to a gyro's slow wander it reaches 2-10 there (20 at most), true
+   hysteresis 10-1000. It is paired only with the level of its own temperature (hyst(c) with
+   T(c): a heating/cooling offset on top of the linear sensitivity, each alone fitting the
+   other's part), and that pair also needs a HAC z ≥ 4 for each coefficient in the pair's own
+   fit (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`).
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -98,6 +101,12 @@ that the model under judgment cannot move:
 6. **Forward path**: the chosen term is added and the procedure repeats (at most
    ``path_steps`` times) until no candidate is a missing effect or the held-out RMS is at
    the floor; the verdict names the first effect and the path that follows.
+
+7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
+   every term of the model is left out once; one whose removal lowers the held-out RMS by
+   ≥ 5 % (gain/(fold scatter/√folds) ≥ 1) is named for removal ("the model does better
+   without X: remove it") -- a flexible term named early, far above the floor, may have
+   taken part of effects added after it.
 
 "No missing effect" is said when the held-out RMS is within 1.1 × the floor, or when no
 candidate cuts the held-out RMS by more than the fold-to-fold scatter of its gain (and 1 %);

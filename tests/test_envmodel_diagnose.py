@@ -86,5 +86,7 @@ def test_diagnose_reports_noise_floor_comparison(simdir):
     assert "noise floor" in d.verdict
     doc = d.to_dict()
     assert doc["missing_effect"] is None and doc["candidates"]
+    # the backward check: every term of the complete model is needed, none is named for removal
+    assert doc["remove_term"] is None and "remove it" not in d.verdict
     assert {"term", "effect", "rms_holdout_dph", "improvement_pct", "evidence"} <= set(
         doc["candidates"][0])

@@ -61,10 +61,9 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     pairs += [(a, b) for a, b in _polynomial_pairs(out)
               if id(a) not in skip and id(b) not in skip
               and frozenset((id(a), id(b))) not in seen]
-    hyst_level = {frozenset((id(a), id(b))) for a, b in _hyst_level_pairs(out)
-                  if id(a) not in skip and id(b) not in skip}
-    pairs += [(a, b) for a, b in _hyst_level_pairs(out)
-              if frozenset((id(a), id(b))) in hyst_level]
+    hl = [(a, b) for a, b in _hyst_level_pairs(out) if id(a) not in skip and id(b) not in skip]
+    hyst_level = {frozenset((id(a), id(b))) for a, b in hl}
+    pairs += hl
     best = None
     for a, b in pairs:
         r = _fit_pair(wd, base_specs, a, b, thetas0, folds)

@@ -200,5 +200,32 @@ def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
         return math.nan
 
 
+def kept_terms(c: TermSpec, replaces: str | None) -> list[TermSpec] | None:
+    """The plain sensor temperature a lagged core temperature replaced, to be put back beside
+    it when its coefficient is tested (a lag effect means T_core explains what T does not);
+    None for every other candidate."""
+    return [TermSpec("T", c.channels)] if c.key == "Tlag" and replaces else None
+
+
+def significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
+                 ) -> tuple[float, float]:
+    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model
+    (with a replaced plain temperature put back, :func:`kept_terms`), against a t/F reference
+    with the effective degrees of freedom of the added regressor(s)
+    (:func:`gyrotest.envmodel.stats.effective_df`)."""
+    keep = kept_terms(c, replaces)
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term == c.label and cf.kind == "linear"]
+    X, beta, e = with_terms(r, wd, keep)
+    if keep is None:
+        cov = r.cov[np.ix_(idx, idx)]
+    else:
+        cov, _ = st.hac_covariance(X, e)
+        cov = cov[np.ix_(idx, idx)]
+    df = st.effective_df(X, idx, st.integrated_time(e))
+    _, p, z = st.wald_t(beta[idx], cov, df)
+    return z, p
+
+
 __all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
-           "residual_corr", "spectral_z", "uses_channel", "with_terms"]
+           "kept_terms", "residual_corr", "significance", "spectral_z", "uses_channel",
+           "with_terms"]

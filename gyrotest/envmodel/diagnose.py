@@ -126,10 +126,11 @@ from .candidate import (
     Candidate,
     equivalents,
     gain_scatter,
+    kept_terms,
     residual_corr,
+    significance,
     spectral_z,
     uses_channel,
-    with_terms,
 )
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
@@ -460,7 +461,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
         return Candidate(c.label, describe(c), replaces, math.nan, math.nan, math.nan,
                          math.nan, math.nan, math.nan, trials, False, spec=c,
                          error=f"could not fit: {e}", klass=klass)
-    z, p = _significance(r, c, replaces, wd)
+    z, p = significance(r, c, replaces, wd)
     p_adj = min(1.0, p * trials * n_c) if math.isfinite(p) else math.nan
     impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
     scatter = gain_scatter(base, r)
@@ -493,10 +494,10 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     zw = math.nan
     waived = far and not (far_hac or clear or strict)
     if waived:
-        zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
+        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:
-        zw = spectral_z(r, [c.label], wd, keep=_kept(c, replaces))
+        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
         bar = spectral_bar(base_ratio)
         if not spectral_exempt(impr, t_cv) and not zw >= bar:
             rejected = (f"its coefficient does not stand out of the residual's slow noise "
@@ -632,32 +633,6 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
     if rej:
         v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
     return v, None
-
-
-def _kept(c: TermSpec, replaces: str | None) -> list[TermSpec] | None:
-    """The plain sensor temperature a lagged core temperature replaced, to be put back beside
-    it when its coefficient is tested (a lag effect means T_core explains what T does not);
-    None for every other candidate."""
-    return [TermSpec("T", c.channels)] if c.key == "Tlag" and replaces else None
-
-
-def _significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
-                  ) -> tuple[float, float]:
-    """HAC Wald test of the candidate's added coefficient(s) in the fitted candidate model
-    (with a replaced plain temperature put back, :func:`_kept`), against a t/F reference
-    with the effective degrees of freedom of the added regressor(s)
-    (:func:`gyrotest.envmodel.stats.effective_df`)."""
-    keep = _kept(c, replaces)
-    idx = [i for i, cf in enumerate(r.coefficients) if cf.term == c.label and cf.kind == "linear"]
-    X, beta, e = with_terms(r, wd, keep)
-    if keep is None:
-        cov = r.cov[np.ix_(idx, idx)]
-    else:
-        cov, _ = st.hac_covariance(X, e)
-        cov = cov[np.ix_(idx, idx)]
-    df = st.effective_df(X, idx, st.integrated_time(e))
-    _, p, z = st.wald_t(beta[idx], cov, df)
-    return z, p
 
 
 __all__ = ["ALPHA", "Candidate", "Diagnosis", "NUISANCE", "diagnose", "diagnose_log",

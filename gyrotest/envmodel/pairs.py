@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..errors import AnalysisError, InputError
-from .candidate import Candidate, gain_scatter, spectral_z
+from .candidate import Candidate, gain_scatter, significance, spectral_z
 from .fit import FitResult, WorkData, fit_model
 from .rules import (
     BIG_GAIN,
@@ -203,12 +203,10 @@ def _hyst_level_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]
 
 def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData) -> bool:
     """Both members' coefficients stand out in the pair's own fit: HAC z of each at least
-    :data:`HYST_PAIR_Z` (the test of :func:`gyrotest.envmodel.diagnose._significance`)."""
-    from .diagnose import _significance
-
+    :data:`HYST_PAIR_Z` (the test of :func:`gyrotest.envmodel.candidate.significance`)."""
     for c in (a, b):
         try:
-            z, _ = _significance(r, c.spec, None, wd)
+            z, _ = significance(r, c.spec, None, wd)
         except (ValueError, np.linalg.LinAlgError, IndexError):
             return False
         if not (math.isfinite(z) and abs(z) >= HYST_PAIR_Z):

@@ -135,7 +135,7 @@ from .candidate import (
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
-from .pairs import pair_step, redirect
+from .pairs import lookahead, pair_step, redirect
 from .prepare import prepare_log
 from .prune import Unneeded, unneeded_term
 from .rules import (
@@ -158,6 +158,7 @@ from .rules import (
     HYST_WEAK_CV_T,
     MIN_IMPROVEMENT,
     PERIOD_SHARE,
+    SPECTRAL_REJECT,
     SPECTRAL_Z,
     STRONG_P,
     TIE,
@@ -372,6 +373,9 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                                           _new_channels(c, used),
                                           FORM_ORDER.get(c.spec.key if c.spec else "", 5),
                                           score(c)))
+        if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+                and chosen.pair is None):
+            chosen = lookahead(wd, base, base_specs, out, tied, chosen, thetas0, folds)
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = equivalents(chosen, out, base)
         if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
@@ -500,7 +504,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
         zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
         bar = spectral_bar(base_ratio)
         if not spectral_exempt(impr, t_cv) and not zw >= bar:
-            rejected = (f"its coefficient does not stand out of the residual's slow noise "
+            rejected = (f"{SPECTRAL_REJECT} "
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "
                         "the gyro's own drift")
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]

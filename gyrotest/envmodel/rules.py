@@ -40,6 +40,13 @@ HYST_WEAK_CV_T = 10.0
 #: the floor like any pair, and each member's coefficient must reach this HAC z in the pair's
 #: own fit (seed 22154: 9.2 and 8.0; tuned on seeds 22000-22699, benchmarks/README.md)
 HYST_PAIR_Z = 4.0
+#: ... the same joint test admits pairs of a *hidden* candidate -- a hysteresis branch, or a
+#: term rejected by the spectral gate (:data:`SPECTRAL_REJECT`) -- with the pair pool: at
+#: most HIDDEN_TOP hidden candidates, best held-out gain first (seed 23147: a warm-up beside
+#: a missing hysteresis; tuned on seeds 23000-23199, benchmarks/README.md)
+HIDDEN_TOP = 2
+#: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.diagnose._judge`)
+SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1
 #: far above the floor the floor itself says the model is incomplete; the question is only
@@ -116,6 +123,12 @@ REDIRECT_GAIN = 0.6
 REDIRECT_RATIO = 0.5
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02
+#: ... far above the floor, at most this many tied candidates are told apart by the step
+#: after them (:func:`gyrotest.envmodel.pairs.lookahead`; seed 23141)
+LOOKAHEAD_TOP = 3
+#: ... each with the pair pool and at most this many second-order forms of the channels the
+#: model uses
+LOOKAHEAD_MORE = 6
 #: a sinusoid on a stimulus period is that channel's effect when a term of the channel gets
 #: at least this share of the sinusoid's held-out gain
 PERIOD_SHARE = 0.5

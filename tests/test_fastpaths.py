@@ -32,7 +32,9 @@ def _modules_after(code: str, *args: str) -> set[str]:
         "sys.argv = ['gyrotest', *json.loads(sys.argv[1])]\n"
         f"{code}\n"
     )
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    # the normal exit (atexit runs): the console script otherwise skips the teardown
+    env = dict(os.environ, GYROTEST_FAST_EXIT="0",
+               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     p = subprocess.run([sys.executable, "-c", full, json.dumps(list(args))], capture_output=True,
                        text=True, env=env, cwd=ROOT, timeout=300)
     line = [ln for ln in p.stderr.splitlines() if ln.startswith("MODULES=")]
@@ -497,3 +499,32 @@ def test_cli_turns_off_numpy_huge_page_advice_unless_the_user_sets_it():
     env["NUMPY_MADVISE_HUGEPAGE"] = "1"
     on = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert on.stdout.strip() == "True", on.stderr
+
+
+def test_console_script_fast_exit_keeps_output_and_exit_codes(tmp_path):
+    """``python -m gyrotest`` ends without the interpreter's teardown
+    (``gyrotest.cli._fast_exit``): the JSON on a pipe and a plot file are complete, a bad
+    input still exits 2 with its one-line error, and the output equals the normal exit's."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+               MPLBACKEND="Agg")
+    S = ROOT / "sample_data"
+    png = tmp_path / "a.png"
+    args = [sys.executable, "-m", "gyrotest", "allan", str(S / "static.parquet"), "--profile",
+            str(S / "static.profile.toml"), "--taus", "octave", "--json"]
+    fast = subprocess.run(args + ["--plot", str(png)], capture_output=True, text=True,
+                          env=env, cwd=ROOT, timeout=300)
+    assert fast.returncode == 0, fast.stderr
+    doc = json.loads(fast.stdout)
+    assert doc["logs"] and png.stat().st_size > 10_000
+    assert png.read_bytes().endswith(b"IEND\xaeB`\x82")  # the PNG is whole
+    slow = subprocess.run(args, capture_output=True, text=True, cwd=ROOT, timeout=300,
+                          env=dict(env, GYROTEST_FAST_EXIT="0"))
+    assert slow.returncode == 0, slow.stderr
+    a, b = (json.loads(slow.stdout)["logs"][0]["axes"][0]["table"],
+            doc["logs"][0]["axes"][0]["table"])
+    assert a and json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
+    bad = subprocess.run([sys.executable, "-m", "gyrotest", "allan",
+                          str(tmp_path / "missing.csv")], capture_output=True, text=True,
+                         env=env, cwd=ROOT, timeout=300)
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1 and "missing.csv" in bad.stderr

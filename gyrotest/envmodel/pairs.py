@@ -38,9 +38,11 @@ from .rules import (
     REDIRECT_RATIO,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
+    TIE,
     UNLAGGED,
     spectral_exempt,
 )
+from .terms import TermSpec
 
 
 def pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
@@ -197,16 +199,7 @@ def lookahead(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     partners += [m for m in _pairable(out) if id(m) not in skip and m not in partners
                  and m.spec.key in HIGHER_ORDER and m.spec.channels
                  and set(m.spec.channels) <= used][:LOOKAHEAD_MORE]
-    best: dict[int, tuple[float, str]] = {}
-    for c in alts:
-        if c.spec is None or c._fit is None:
-            continue
-        for m in partners:
-            if m.spec is None:
-                continue
-            r = _fit_pair(wd, base_specs, c, m, thetas0, folds)
-            if r is not None and r.rms_holdout < best.get(id(c), (math.inf, ""))[0]:
-                best[id(c)] = (r.rms_holdout, m.term)
+    best = _best_partners(wd, base_specs, alts, partners, thetas0, folds)
     if id(chosen) not in best:
         return chosen
     lead = min(alts, key=lambda c: best.get(id(c), (math.inf, ""))[0])
@@ -216,6 +209,66 @@ def lookahead(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                  f"reaches {best[id(lead)][0]:.4g} deg/h, {chosen.term} at best "
                  f"{best[id(chosen)][0]:.4g} deg/h (with {best[id(chosen)][1]})")
     return lead
+
+
+def _best_partners(wd: WorkData, base_specs, alts: list[Candidate],
+                   partners: list[Candidate], thetas0, folds: int
+                   ) -> dict[int, tuple[float, str]]:
+    """For each candidate of ``alts`` (by ``id``): the lowest held-out RMS it reaches with
+    one of ``partners`` and that partner's term."""
+    best: dict[int, tuple[float, str]] = {}
+    for c in alts:
+        if c.spec is None or c._fit is None:
+            continue
+        for m in partners:
+            if m.spec is None or m is c:
+                continue
+            r = _fit_pair(wd, base_specs, c, m, thetas0, folds)
+            if r is not None and r.rms_holdout < best.get(id(c), (math.inf, ""))[0]:
+                best[id(c)] = (r.rms_holdout, m.term)
+    return best
+
+
+def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
+                 chosen: Candidate, thetas0, folds: int) -> Candidate:
+    """Far above the floor, a lag form chosen (``Tlag(c)``, ``chanlag(c)``) while its plain
+    form is a missing effect too: the lag's time constant may stand in for a rate term that
+    is also missing (a lag is the level minus τ times its rate). Each is fitted with the
+    pair pool and the rate forms (:data:`RATE_FORMS`); the plain form leads when its best
+    partner brings the held-out RMS within :data:`TIE` of the lag's best or below.
+
+    Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the missing rate of a lagged node,
+    T(tc2) reaches 0.168 deg/h, Tlag(tc2) 0.336."""
+    key = chosen.spec.key if chosen.spec else ""
+    if key not in ("Tlag", "chanlag") or chosen._fit is None:
+        return chosen
+    label = TermSpec(UNLAGGED[key], chosen.spec.channels).label
+    plain = next((c for c in out if c.term == label and c.significant and c._fit is not None
+                  and c.rejected is None and math.isfinite(c.rms_holdout)), None)
+    if plain is None:
+        return chosen
+    own = set(chosen.spec.channels)
+    lags = ("Tlag", "chanlag", "T", "chan")
+    partners = [m for m in _pair_pool(base, out) if m is not chosen and m is not plain
+                and not (m.spec.key in lags and set(m.spec.channels) == own)]
+    rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
+                    and m not in partners and m.improvement_pct > 0),
+                   key=lambda m: -m.improvement_pct)
+    partners += rates[:LOOKAHEAD_MORE]
+    best = _best_partners(wd, base_specs, [chosen, plain], partners, thetas0, folds)
+    if id(chosen) not in best or id(plain) not in best:
+        return chosen
+    if best[id(plain)][0] > (1 + TIE) * best[id(chosen)][0]:
+        return chosen
+    plain.note = (f"{chosen.term} fits better alone, but with {best[id(plain)][1]} {plain.term} "
+                  f"reaches {best[id(plain)][0]:.4g} deg/h and {chosen.term} "
+                  f"{best[id(chosen)][0]:.4g} deg/h (with {best[id(chosen)][1]}): the lag's "
+                  "time constant stood in for a missing rate term")
+    return plain
+
+
+#: rate forms :func:`lag_or_plain` tries beside a lag and its plain form
+RATE_FORMS = ("dTdt", "dTlagdt", "dGdt", "dchan", "dchanlag")
 
 
 #: second-order forms a lookahead tries beside a tied candidate (:func:`lookahead`)

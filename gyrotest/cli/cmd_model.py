@@ -459,7 +459,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     >= 40 % with fold consistency >= 5: a smooth channel fitted to the gyro's own slow
     wander is not named. A hysteresis branch also needs fold consistency >= 4 (>= 10 with
     p x trials < 0.01 off the strict test) and is paired only with the level of its own
-    temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit.
+    temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit; the
+    same joint test (and a gain >= 40 % at fold consistency >= 5) admits a hysteresis or a
+    term set aside by the spectral test beside another candidate (a warm-up hidden by a
+    missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
+    after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
+    plain form when that does as well beside a missing rate term.
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

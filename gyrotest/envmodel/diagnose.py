@@ -81,7 +81,11 @@ that the model under judgment cannot move:
    hysteresis 10-1000. It is paired only with the level of its own temperature (hyst(c) with
    T(c): a heating/cooling offset on top of the linear sensitivity, each alone fitting the
    other's part), and that pair also needs a HAC z ≥ 4 for each coefficient in the pair's own
-   fit (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`).
+   fit (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`). The same joint test admits
+   *hidden* pairs: the two best hysteresis branches or terms set aside by the spectral test
+   (whose "slow noise" may be the other missing effect) with a member of the pool, when
+   the pair also cuts the held-out RMS by ≥ 40 % at gain/(scatter/√folds) ≥ 5
+   (:func:`gyrotest.envmodel.pairs._hidden_pairs`): a warm-up beside a missing hysteresis.
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, which says the floor is wrong.
    A sinusoid whose period is that of a logged stimulus (a channel or its square explains
@@ -93,7 +97,15 @@ that the model under judgment cannot move:
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
    generic channel < nuisance; within a class the one that brings fewer new channels into the
-   model, then the simpler form, x before x²), a lag whose
+   model, then the simpler form, x before x²). At ≥ 2 × the floor, tied candidates that
+   are not exact equivalents are told apart by the step after them: each is fitted with the
+   pair pool and the second-order forms of the model's channels, and the one whose best
+   partner brings the held-out RMS ≥ 10 % lower leads (:func:`gyrotest.envmodel.pairs.
+   lookahead`: a ramp and the lag of a drifting decoy channel). A lag form chosen there
+   (``Tlag``, ``chanlag``) gives way to its plain form, itself a missing effect, when the
+   plain form with its best partner among the pool and the rate forms does within 2 % as
+   well as the lag with its own: the lag's time constant stood in for a missing rate term
+   (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term, and candidates whose fitted contributions correlate at
    |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log. Candidates the

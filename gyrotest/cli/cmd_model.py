@@ -464,7 +464,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     term set aside by the spectral test beside another candidate (a warm-up hidden by a
     missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
-    plain form when that does as well beside a missing rate term.
+    plain form when that does >= 10 % better beside a missing rate term of another channel.
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

@@ -103,8 +103,9 @@ that the model under judgment cannot move:
    partner brings the held-out RMS ≥ 10 % lower leads (:func:`gyrotest.envmodel.pairs.
    lookahead`: a ramp and the lag of a drifting decoy channel). A lag form chosen there
    (``Tlag``, ``chanlag``) gives way to its plain form, itself a missing effect, when the
-   plain form with its best partner among the pool and the rate forms does within 2 % as
-   well as the lag with its own: the lag's time constant stood in for a missing rate term
+   plain form with its best partner among the pool and the rate forms of other channels
+   brings the held-out RMS ≥ 10 % below the lag with its own: the lag's time constant stood
+   in for a missing rate term
    (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term, and candidates whose fitted contributions correlate at

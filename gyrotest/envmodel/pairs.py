@@ -38,7 +38,6 @@ from .rules import (
     REDIRECT_RATIO,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
-    TIE,
     UNLAGGED,
     spectral_exempt,
 )
@@ -235,10 +234,12 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     form is a missing effect too: the lag's time constant may stand in for a rate term that
     is also missing (a lag is the level minus τ times its rate). Each is fitted with the
     pair pool and the rate forms (:data:`RATE_FORMS`); the plain form leads when its best
-    partner brings the held-out RMS within :data:`TIE` of the lag's best or below.
+    partner brings the held-out RMS at least :data:`PAIR_MARGIN` below the lag's best. The
+    rate forms of the lag's own channel are not the plain form's partners: T(c) with the
+    rate of c is the lag's own first-order expansion, not a second effect.
 
-    Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the missing rate of a lagged node,
-    T(tc2) reaches 0.168 deg/h, Tlag(tc2) 0.336."""
+    Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the missing rate of a lagged node of
+    another sensor, T(tc2) reaches 0.168 deg/h, Tlag(tc2) at best 0.225."""
     key = chosen.spec.key if chosen.spec else ""
     if key not in ("Tlag", "chanlag") or chosen._fit is None:
         return chosen
@@ -255,10 +256,13 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
                     and m not in partners and m.improvement_pct > 0),
                    key=lambda m: -m.improvement_pct)
     partners += rates[:LOOKAHEAD_MORE]
-    best = _best_partners(wd, base_specs, [chosen, plain], partners, thetas0, folds)
+    best = _best_partners(wd, base_specs, [chosen], partners, thetas0, folds)
+    best.update(_best_partners(wd, base_specs, [plain], [
+        m for m in partners if not (m.spec.key in RATE_FORMS and set(m.spec.channels) & own)],
+        thetas0, folds))
     if id(chosen) not in best or id(plain) not in best:
         return chosen
-    if best[id(plain)][0] > (1 + TIE) * best[id(chosen)][0]:
+    if best[id(plain)][0] > PAIR_MARGIN * best[id(chosen)][0]:
         return chosen
     plain.note = (f"{chosen.term} fits better alone, but with {best[id(plain)][1]} {plain.term} "
                   f"reaches {best[id(plain)][0]:.4g} deg/h and {chosen.term} "

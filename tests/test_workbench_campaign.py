@@ -192,3 +192,16 @@ def test_tied_candidates_are_told_apart_by_the_next_step():
     assert labels == ["ramp", "chanprod(incl_x,incl_y)"], labels
     assert "tied with chanlag(P_lab)" in row["steps"][0]["verdict"]
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_a_lag_that_stood_in_for_a_rate_term_gives_way_to_the_plain_temperature():
+    """T(tc2) and the rate of a lagged node of another sensor, both missing: alone the lag
+    Tlag(tc2) wins (-66 % against -39 %), its time constant absorbing part of the rate term;
+    beside that rate term the plain T(tc2) reaches 0.168 deg/h and the lag 0.225. The first
+    step names T(tc2) (seed 23183: Tlag(tc2) before, the true T never named)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(23183))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[0] == "T(tc2)", labels
+    assert "stood in for a missing rate term" in row["steps"][0]["verdict"]
+    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])

@@ -38,6 +38,7 @@ from .rules import (
     REDIRECT_RATIO,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
+    TIE,
     UNLAGGED,
     spectral_exempt,
 )
@@ -104,6 +105,13 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     if best is None:
         return None
     a, b, r, t_cv = best
+    if frozenset((id(a), id(b))) in hidden and "hyst" in (a.spec.key, b.spec.key):
+        h, m = (a, b) if a.spec.key == "hyst" else (b, a)
+        found = _plain_level(wd, base_specs, out, h, m, r, thetas0, folds)
+        if found is not None:  # the simpler form of the same pair
+            lv, r2 = found
+            return (m, lv, r2.rms_holdout, t_cv) if m.rms_holdout <= lv.rms_holdout \
+                else (lv, m, r2.rms_holdout, t_cv)
     first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
     if frozenset((id(a), id(b))) in hyst_level:  # tested together (_joint_z_ok)
         return first, other, r.rms_holdout, t_cv
@@ -361,6 +369,24 @@ def _hidden_pairs(out: list[Candidate], pool: list[Candidate]
                 continue
             pairs.append((h, m))
     return pairs
+
+
+def _plain_level(wd: WorkData, base_specs, out: list[Candidate], h: Candidate,
+                 m: Candidate, r: FitResult, thetas0, folds: int
+                 ) -> tuple[Candidate, FitResult] | None:
+    """For a qualifying pair of a hysteresis ``h`` and ``m`` (fit ``r``): the level T(c) of
+    the same temperature when T(c) with ``m`` does as well (held-out RMS within
+    :data:`TIE`): a branch offset as wide as the excursions is that level (seed 22078: the
+    ramp with hyst(T_gyro) or with T(T_gyro), 0.0218 deg/h both; T alone helps nothing)."""
+    lv = next((o for o in out if o.spec is not None and o.spec.key == "T"
+               and o.spec.channels == h.spec.channels and not o.replaces
+               and o._fit is not None and math.isfinite(o.rms_holdout)), None)
+    if lv is None:
+        return None
+    r2 = _fit_pair(wd, base_specs, lv, m, thetas0, folds)
+    if r2 is None or r2.rms_holdout > (1 + TIE) * r.rms_holdout:
+        return None
+    return lv, r2
 
 
 def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData) -> bool:

@@ -237,6 +237,19 @@ def test_iso_timestamps(tmp_path, rng):
     assert log.timing.start.startswith("2026-03-01T10:00:00")
 
 
+def test_stray_text_in_a_seconds_time_column_is_named(tmp_path):
+    """A column of seconds with one text cell is read as text; the error names that cell
+    (row 2), not the first row, whose '1' is a fine number."""
+    p = tmp_path / "garb.csv"
+    p.write_text("time,rate\n1,2\nabc,def\n3,4\n")
+    with pytest.raises(InputError, match=r"cannot read time 'abc' in column 'time', row 2"):
+        read_log(p, overrides=ov(rate_unit="deg/h"))
+    q = tmp_path / "iso.csv"
+    q.write_text("time,rate\n2024-01-01T00:00:00,1\nxx,2\n2024-01-01T00:00:02,3\n")
+    with pytest.raises(InputError, match=r"cannot read time 'xx' in column 'time', row 2"):
+        read_log(q, overrides=ov(rate_unit="deg/h"))
+
+
 def test_duplicate_identical_rows_dropped(tmp_path):
     d = pd.DataFrame({"t": [0, 1, 1, 2, 3.0], "rate": [1, 2, 2, 3, 4.0]})
     log = read_log(write_csv(tmp_path / "d.csv", d), overrides=ov(rate_unit="deg/h"))

@@ -72,15 +72,15 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     hp = [(a, b) for a, b in _hidden_pairs(out, pool)
           if id(a) not in skip and id(b) not in skip and frozenset((id(a), id(b))) not in seen]
     hidden = {frozenset((id(a), id(b))) for a, b in hp}
-    # tested jointly (_joint_z_ok)
-    hyst_level = {frozenset((id(a), id(b))) for a, b in hl} | hidden
+    # pairs tested jointly (_joint_z_ok)
+    joint = {frozenset((id(a), id(b))) for a, b in hl} | hidden
     pairs += hl + hp
     best = None
     for a, b in pairs:
         r = _fit_pair(wd, base_specs, a, b, thetas0, folds)
         if r is None:
             continue
-        if frozenset((id(a), id(b))) in hyst_level and not _joint_z_ok(r, a, b, wd):
+        if frozenset((id(a), id(b))) in joint and not _joint_z_ok(r, a, b, wd):
             continue
         if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
                                     below):
@@ -113,7 +113,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
             return (m, lv, r2.rms_holdout, t_cv) if m.rms_holdout <= lv.rms_holdout \
                 else (lv, m, r2.rms_holdout, t_cv)
     first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
-    if frozenset((id(a), id(b))) in hyst_level:  # tested together (_joint_z_ok)
+    if frozenset((id(a), id(b))) in joint:  # tested together (_joint_z_ok)
         return first, other, r.rms_holdout, t_cv
     if not (math.isfinite(first.z) and abs(first.z) >= FAR_Z):
         first, other = other, first

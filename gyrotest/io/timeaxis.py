@@ -97,7 +97,12 @@ def _iso_to_ns(raw: RawTable, col: str, s) -> tuple[np.ndarray, str, list[str]]:
             except (ValueError, TypeError):
                 ts = None
         if ts is None:
-            bad = pd.to_datetime(s, errors="coerce", format="ISO8601", utc=True)
+            num = pd.to_numeric(s, errors="coerce")
+            if num.notna().any() and num.isna().any():
+                # a column of seconds with a stray text cell: name that cell, not the first row
+                bad = num
+            else:
+                bad = pd.to_datetime(s, errors="coerce", format="ISO8601", utc=True)
             i = int(np.flatnonzero(bad.isna().to_numpy())[0]) if bad.isna().any() else 0
             raise InputError(f"{raw.source}: cannot read time {str(s.iloc[i])[:40]!r} in column "
                              f"{col!r}, {raw.where(i)}; use seconds or ISO-8601 timestamps") from None

@@ -156,7 +156,7 @@ def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> l
     for c in cands:
         if c is chosen or c._fit is None or not math.isfinite(c.rms_holdout):
             continue
-        if c.rms_holdout > chosen.rms_holdout * 1.05:
+        if not chosen.rms_holdout / 1.05 <= c.rms_holdout <= chosen.rms_holdout * 1.05:
             continue
         try:
             x = contribution(c._fit, c.term)

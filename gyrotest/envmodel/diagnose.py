@@ -148,7 +148,7 @@ from .candidate import (
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
-from .pairs import lag_or_plain, lookahead, pair_step, redirect
+from .pairs import lag_or_plain, lookahead, marginal, pair_step, redirect
 from .prepare import prepare_log
 from .prune import Unneeded, unneeded_term
 from .rules import (
@@ -390,6 +390,8 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                 and chosen.pair is None):
             chosen = lookahead(wd, base, base_specs, out, tied, chosen, thetas0, folds)
             chosen = lag_or_plain(wd, base, base_specs, out, chosen, thetas0, folds)
+        if candidates is None and chosen.pair is None:
+            chosen = marginal(wd, base, base_specs, out, chosen, thetas0, folds)
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = equivalents(chosen, out, base)
         if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO

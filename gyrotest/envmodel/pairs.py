@@ -34,7 +34,6 @@ from .rules import (
     PAIR_MORE,
     PAIR_POOL,
     PAIR_TOP,
-    REDIRECT_GAIN,
     REDIRECT_RATIO,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
@@ -159,7 +158,7 @@ def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     because two larger effects hide each other (see :data:`REDIRECT_RATIO`): the qualifying
     pair of two *other* effects -- neither the chosen term nor one this log cannot tell
     from it -- whose more useful member then leads; None to keep ``chosen``."""
-    if (chosen.improvement_pct >= 100 * REDIRECT_GAIN or not math.isfinite(fl) or fl <= 0
+    if (not math.isfinite(fl) or fl <= 0
             or chosen.rms_holdout < FAR_RATIO * fl):
         return None
     same = {id(chosen)} | {id(c) for c in out if c.term in chosen.equivalents}

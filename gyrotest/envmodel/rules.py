@@ -116,10 +116,12 @@ PAIR_MARGIN = 0.9
 PAIR_MORE = 2
 PAIR_FIT_GAIN = 0.2
 PAIR_POOL = 8
-#: a single term chosen far above the floor that leaves the model there (gain below
-#: REDIRECT_GAIN) gives way to a pair of two other candidates that brings the held-out RMS
-#: below REDIRECT_RATIO x the single term's: the pair's more useful member is named first
-REDIRECT_GAIN = 0.6
+#: a single term chosen far above the floor that leaves the model there (at least
+#: FAR_RATIO x the floor) gives way to a pair of two other candidates that brings the
+#: held-out RMS below REDIRECT_RATIO x the single term's: the pair's more useful member is
+#: named first. Until the twelfth pass this also needed the single term's gain to be below
+#: 60 %; a rate term of the wrong sensor took −79 % and left the model 14x the floor while
+#: the true pair (the lagging sensor's rate and a humidity level) reached 3x (seed 24162)
 REDIRECT_RATIO = 0.5
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02

@@ -445,10 +445,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
     folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
-    term qualifies (or the one that does cuts < 60 % and a pair of two others halves its
-    held-out RMS), the best candidates, further channels and the largest in-sample gains are
-    also tried in pairs, and so are the level and square of each channel (two effects that
-    hide each other are named one after the other); last of all, a term whose |z| < 1 only
+    term qualifies (or a pair of two others halves the held-out RMS of the one that does),
+    the best candidates, further channels and the largest in-sample gains are also tried
+    in pairs, and so are the level and square of each channel and a ramp beside each of
+    them (two effects that hide each other are named one after the other); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the
     residual's spectrum (spectral z >= 8). A
     sinusoid on the period of a logged stimulus is rejected when a term of that channel
@@ -465,6 +465,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel.
+    A product of two channels gives way to the level terms of its factors when those do at
+    least as well together (no interaction without its main effects).
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

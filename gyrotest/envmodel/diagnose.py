@@ -60,11 +60,14 @@ that the model under judgment cannot move:
    nearly cancel, so neither predicts anything alone); a pair that cuts the
    held-out RMS ≥ 10 % below either member alone, consistently across the folds (the
    nuisance thresholds, ≥ 20 % and 3.75, when either member is a nuisance term), names
-   its more useful member first, and the next step tests the other. A single term chosen
-   this far above the floor that cuts the held-out RMS by < 60 % and leaves the model
-   ≥ 2 × the floor also gives way to a qualifying pair of two other candidates whose
-   held-out RMS is below half of its own -- unless the term itself, paired with one of the
-   pool, comes within 10 % of that pair (then the next step finds the partner).
+   its more useful member first, and the next step tests the other. A trend (``ramp``) is
+   also paired with every member of the pool, whatever its own gain (beside a missing
+   lagged coil an ageing ramp gains nothing alone, not even in sample), under the joint
+   HAC test below (:func:`gyrotest.envmodel.pairs._trend_pairs`). A single term chosen
+   this far above the floor that leaves the model ≥ 2 × the floor also gives way to a
+   qualifying pair of two other candidates whose held-out RMS is below half of its own --
+   unless the term itself, paired with one of the pool, comes within 10 % of that pair
+   (then the next step finds the partner).
    On the clear-gain and far routes and for pairs, the added coefficients must also stand
    out of the candidate model's own residual spectrum: frequency-domain GLS (Whittle) z
    ≥ 8 (:func:`gyrotest.envmodel.stats.whittle_z`). The short-τ floor cannot see a gyro's
@@ -106,7 +109,12 @@ that the model under judgment cannot move:
    plain form with its best partner among the pool and the rate forms of other channels
    brings the held-out RMS ≥ 10 % below the lag with its own: the lag's time constant stood
    in for a missing rate term
-   (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A lag whose
+   (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A product of two channels (``chanprod``,
+   ``gprod``, ``Hprod``) chosen while the first-order terms of its factors are not in the
+   model gives way to those terms when, fitted together, they do at least as well and pass
+   the far-route consistency: no interaction without its main effects (two stepped
+   stimuli, each with its own level effect, make a product that fits much of both;
+   :func:`gyrotest.envmodel.pairs.marginal`). A lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term, and candidates whose fitted contributions correlate at
    |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log. Candidates the

@@ -327,6 +327,25 @@ class _Fitter:
             thetas = self.optimise(thetas, None, local=True)
         return thetas
 
+    def incremental(self) -> dict[str, dict]:
+        """The nonlinear parameters found the way a model is built: the nonlinear terms
+        added one at a time in the order given, each searched globally with the earlier
+        ones warm-started, then re-checked (:meth:`recheck_taus`, :meth:`rescan`). A joint
+        search from scratch over three time constants and a hysteresis width can land in a
+        trap the diagnosis never saw (seed 24070: a warm-up, a hysteresis, the rate of a
+        lagged node and a gradient rate; from scratch the node's τ fell to 38 s and the
+        larger model fitted worse in sample than the smaller one, 0.47 against 0.41 deg/h)."""
+        th: dict[str, dict] = {}
+        for k in range(len(self.nl)):
+            sub = _Fitter(self.d, [x for x in self.specs if not x.effect.nonlinear
+                                   or x in self.nl[:k + 1]])
+            known = set(th)
+            th = sub.optimise(th, None, local=True)
+            if known:
+                th = sub.recheck_taus(th, known)
+                th = sub.rescan(th, known)
+        return th
+
     def rescan(self, thetas: dict[str, dict], warm: set[str],
                min_gain: float = 0.1) -> dict[str, dict]:
         """A new nonlinear term searched while the warm-started time constants sit at values
@@ -516,6 +535,10 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     if thetas0:
         thetas = fitter.recheck_taus(thetas, set(thetas0))
         thetas = fitter.rescan(thetas, set(thetas0))
+    elif len(fitter.nl) > 1:
+        alt = fitter.incremental()
+        if fitter.solve(alt, None)[1] < fitter.solve(thetas, None)[1]:
+            thetas = alt
     X = fitter.X(thetas)
     beta, rss = st.lstsq(X, wd.y)
     yhat = X @ beta

@@ -47,13 +47,11 @@ that the model under judgment cannot move:
      residual spectrum (no exemption) may then stand in for it. Such a term is chosen
      last: only when no term with a HAC test behind it, no field block and no pair
      qualifies.
-   While the model is at least 2 × the floor, groups that explain the data together are
-   tried beside the single terms, the same way: the field sensitivity along every axis
-   (``Hvec``) and the full second-order field sensitivity (``Hquad``), which a gyro whose
-   axes are not the coils' needs (one field product in rotated axes is five products and
-   squares in the coils' axes, which single terms would add one per step); they replace the
-   model's own per-component field terms. If no single term nor group qualifies, **pairs**
-   are fitted: two effects may each
+   When no single candidate qualifies and the model is at least 2 × the floor, groups
+   that only explain the data together are tried the same way: the field sensitivity
+   along every axis (``Hvec``) and the full second-order field sensitivity (``Hquad``),
+   which a gyro whose axes are not the coils' needs; they replace the model's own
+   per-component field terms. If none does, **pairs** are fitted: two effects may each
    hide the other (every fold dominated by a different one; an effect's coefficient
    fitted to the other's signal predicts held-out data worse than nothing). The pool is
    the four best candidates, the best of two more channels (with the plain form of a
@@ -371,14 +369,15 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     _period_rule(out, wd.frame)
     # a term whose HAC guard only the spectral z replaces is the last resort: after the
     # terms with a HAC test behind them, the field blocks and the pairs
-    if candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO:
-        # groups that only work together, or better than their members one by one (a gyro
-        # whose axes are not the coils' needs every field component at once)
+    sig = [c for c in out if c.significant and not c.hac_waived]
+    if not sig and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio >= FAR_RATIO:
+        # no single term explains the gap: groups that only work together (a gyro whose
+        # axes are not the coils' needs every field component at once)
         for spec, repl in block_candidates(wd.frame, base.specs):
             out.append(_judge(wd, base, base_specs, spec, thetas0, n_c, base_ratio, alpha,
                               min_improvement, folds, replaces_labels=repl))
-        out.sort(key=score)
-    sig = [c for c in out if c.significant and not c.hac_waived]
+        sig = [c for c in out if c.significant and not c.hac_waived]
     if not sig and candidates is None and math.isfinite(base_ratio) \
             and base_ratio >= FAR_RATIO:
         pair = pair_step(wd, base, base_specs, out, thetas0, folds)

@@ -256,14 +256,3 @@ def test_a_ramp_that_gains_nothing_alone_is_paired():
     assert labels[:2] == ["Tlag(T_air)", "ramp"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
-
-def test_a_rotated_field_product_is_named_as_the_full_second_order_block():
-    """One field product in a gyro misaligned to the coils by 4.3° is five products and
-    squares in the coils' axes: the full second-order block Hquad is tried beside the single
-    terms and named in one step (seed 24148: five single terms over the loop's five steps,
-    1.19x the true model)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(24148))
-    labels = [a["label"] for a in row["added"]]
-    assert labels[0] == "Hquad(Bx,By,Bz)", labels
-    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])

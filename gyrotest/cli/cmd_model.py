@@ -465,8 +465,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel.
-    A product of two channels gives way to the level terms of its factors when those do at
-    least as well together (no interaction without its main effects).
+    A product of two channels gives way to the level terms of its factors when those do
+    >= 10 % better together (no interaction without its main effects).
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

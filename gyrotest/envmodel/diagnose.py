@@ -111,7 +111,7 @@ that the model under judgment cannot move:
    in for a missing rate term
    (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A product of two channels (``chanprod``,
    ``gprod``, ``Hprod``) chosen while the first-order terms of its factors are not in the
-   model gives way to those terms when, fitted together, they do at least as well and pass
+   model gives way to those terms when, fitted together, they do ≥ 10 % better and pass
    the far-route consistency: no interaction without its main effects (two stepped
    stimuli, each with its own level effect, make a product that fits much of both;
    :func:`gyrotest.envmodel.pairs.marginal`). A lag whose

@@ -125,6 +125,17 @@ def gain_scatter(base: FitResult, r: FitResult) -> float:
     return float(np.std(g, ddof=1))
 
 
+def held_out_gain(base: FitResult, r: FitResult, folds: int) -> tuple[float, float, float]:
+    """The relative held-out gain of ``r`` over ``base``, its fold-to-fold scatter
+    (:func:`gain_scatter`) and its fold consistency gain / (scatter/√folds) (∞ for a positive
+    gain without scatter, 0 for none)."""
+    gain = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+    scatter = gain_scatter(base, r)
+    t_cv = (gain * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
+            else math.inf if gain > 0 else 0.0)
+    return gain, scatter, t_cv
+
+
 def contribution(r: FitResult, label: str) -> np.ndarray:
     from .fit import predict_blocks
 
@@ -227,5 +238,5 @@ def significance(r: FitResult, c: TermSpec, replaces: str | None, wd: WorkData
 
 
 __all__ = ["Candidate", "EQUIVALENT_R", "contribution", "equivalents", "gain_scatter",
-           "kept_terms", "residual_corr", "significance", "spectral_z", "uses_channel",
+           "held_out_gain", "kept_terms", "residual_corr", "significance", "spectral_z", "uses_channel",
            "with_terms"]

@@ -146,7 +146,7 @@ from . import stats as st
 from .candidate import (
     Candidate,
     equivalents,
-    gain_scatter,
+    held_out_gain,
     kept_terms,
     residual_corr,
     significance,
@@ -491,12 +491,9 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                          error=f"could not fit: {e}", klass=klass)
     z, p = significance(r, c, replaces, wd)
     p_adj = min(1.0, p * trials * n_c) if math.isfinite(p) else math.nan
-    impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-    scatter = gain_scatter(base, r)
+    impr, scatter, t_cv = held_out_gain(base, r, folds)
     p_tr = min(1.0, p * trials) if math.isfinite(p) else math.nan
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
-    t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
-            else math.inf if impr > 0 else 0.0)
     # a hysteresis branch off the strict route (:data:`HYST_WEAK_CV_T`)
     hyst_weak = c.key != "hyst" or (t_cv >= HYST_WEAK_CV_T and math.isfinite(p_tr)
                                      and p_tr < CLEAR_P)

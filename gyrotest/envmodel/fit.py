@@ -368,8 +368,7 @@ class _Fitter:
         rss_old = st.lstsq(self.d.matrix(old, thetas), self.wd.y)[1]
         if not cur < 0.8 * rss_old:
             return thetas
-        fresh = {k: v for k, v in thetas.items() if not any(s.label == k for s in self.nl)}
-        th = self.optimise(fresh, None, local=False)
+        th = self.optimise(None, None)
         if self.solve(th, None)[1] < cur * (1.0 - min_gain):
             return th
         return thetas

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..errors import AnalysisError, InputError
-from .candidate import Candidate, equivalents, gain_scatter, significance, spectral_z
+from .candidate import Candidate, equivalents, held_out_gain, significance, spectral_z
 from .fit import FitResult, WorkData, fit_model
 from .rules import (
     BIG_GAIN,
@@ -87,10 +87,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
                                     below):
             continue
-        impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-        scatter = gain_scatter(base, r)
-        t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter)
-                and scatter > 0 else math.inf if impr > 0 else 0.0)
+        impr, _, t_cv = held_out_gain(base, r, folds)
         # a free frequency or width in the pair: the flexible-term thresholds
         nuisance = a.klass == "nuisance" or b.klass == "nuisance"
         if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
@@ -323,10 +320,7 @@ def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
         r = _fit_pair(wd, base_specs, mains[0], mains[1], thetas0, folds)
     if r is None or not r.rms_holdout <= PAIR_MARGIN * chosen.rms_holdout:
         return chosen
-    impr = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-    scatter = gain_scatter(base, r)
-    t_cv = (impr * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
-            else math.inf if impr > 0 else 0.0)
+    impr, _, t_cv = held_out_gain(base, r, folds)
     if not (impr >= FAR_GAIN and t_cv >= FAR_T):
         return chosen
     first = min(mains, key=lambda c: c.rms_holdout)

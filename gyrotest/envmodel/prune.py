@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AnalysisError, InputError
-from .candidate import gain_scatter
+from .candidate import held_out_gain
 from .fit import FitResult, WorkData, fit_model
 
 #: minimum held-out gain (fraction) of the model without the term
@@ -83,10 +83,7 @@ def unneeded_term(wd: WorkData, base: FitResult, folds: int = 5) -> Unneeded | N
             continue
         if not math.isfinite(r.rms_holdout):
             continue
-        gain = (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-        scatter = gain_scatter(base, r)
-        t_cv = (gain * math.sqrt(folds) / scatter if math.isfinite(scatter) and scatter > 0
-                else math.inf if gain > 0 else 0.0)
+        gain, _, t_cv = held_out_gain(base, r, folds)
         if gain >= DROP_GAIN and t_cv >= DROP_T and (
                 best is None or r.rms_holdout < best.rms_holdout_without_dph):
             best = Unneeded(term=s.label, rms_holdout_with_dph=base.rms_holdout,

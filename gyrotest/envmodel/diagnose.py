@@ -143,6 +143,7 @@ import numpy as np
 
 from ..errors import AnalysisError, InputError
 from . import stats as st
+from .axes import axes_step
 from .candidate import (
     Candidate,
     equivalents,
@@ -163,6 +164,7 @@ from .rules import (
     ABOVE_FLOOR,
     ALPHA,
     AT_FLOOR,
+    AT_FLOOR_GAIN,
     BIG_GAIN,
     CLEAR_GAIN,
     CLEAR_P,
@@ -408,6 +410,11 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             if pair is not None:
                 chosen = pair
                 chosen.equivalents = equivalents(chosen, out, base)
+    if chosen is None and candidates is None:
+        # no new effect: the field effects the model has, in the gyro's own axes
+        _, chosen = axes_step(wd, base, base_specs, thetas0, folds)
+        if chosen is not None:
+            out.insert(0, chosen)
     return out, chosen
 
 
@@ -533,9 +540,11 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     if c.key == "sin" and (strict or clear or far):
         # judged in _step against the matched channel's own candidates
         match = period_matches(wd.frame, float(theta["f_Hz"])) or None
-    if rejected is None and (strict or clear) and base_ratio <= AT_FLOOR and impr < BIG_GAIN:
-        # a model at the floor is complete: only a gain it could not give (>= 20 %) says
-        # the floor is wrong
+    floor_wrong = strict and impr >= AT_FLOOR_GAIN and t_cv >= CV_T
+    if (rejected is None and (strict or clear) and base_ratio <= AT_FLOOR and impr < BIG_GAIN
+            and not floor_wrong):
+        # a model at the floor is complete: only a gain it could not give (>= 20 %, or a
+        # strict >= 10 % consistent across the folds) says the floor is wrong
         rejected = (f"the model is at the noise floor (held-out/floor {base_ratio:.2f}) and "
                     f"the gain ({100 * impr:.1f} %) is below {100 * BIG_GAIN:.0f} %")
     sig = (strict or clear or far) and rejected is None
@@ -612,6 +621,11 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
                 v += (f" (z = {top.z:.1f}: other missing effects inflate its error), with the "
                       f"coefficient standing out of the residual's spectrum (spectral z "
                       f"{top.spectral_z:.1f})")
+        if top.route == "field axes":
+            v += (f"; no new effect qualifies, but the field effect the model has fits better "
+                  f"in the gyro's own axes: {top.term} replaces {top.replaces} (the z tests "
+                  "what it adds beyond them; gain/(fold scatter/sqrt(folds)) = "
+                  f"{top.cv_t:.1f})")
         pair = top.pair
         if pair is not None:
             disp = top.displaced

@@ -1,0 +1,113 @@
+"""The gyro's own axes for a field effect the model already has.
+
+A Helmholtz run logs the field in the coils' axes; a gyro mounted a few degrees off them
+sees each of its field sensitivities as a mix of every coil axis. The forward selection
+names the dominant coil component (``Hy``) or product (``Hprod(Bx,By)``) first; what the
+small cross-axis parts leave behind is then below what a *new* effect must show near the
+floor, and the model ends 10-20 % above the true one.
+
+When no new effect qualifies and the model has field terms of an order, the block of that
+order over every field component the run moves (``Hvec`` for Hx/Hy/Hz, ``Hquad`` for
+Hsq/Hprod/Hmag2; :func:`gyrotest.envmodel.screen.block_candidates`) is tried in their
+place. It is not a new physical effect but the same one in rotated axes, so it is judged
+by a test of exactly what it adds -- the HAC Wald test that the block's coefficients lie
+in the span of the terms it replaces (:func:`axes_test`) -- with the held-out gain and its
+fold consistency (:data:`gyrotest.envmodel.rules.AXES_GAIN`, ``AXES_T``, ``AXES_Z``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import AnalysisError, InputError
+from . import stats as st
+from .candidate import Candidate, held_out_gain
+from .channel_terms import custom_text
+from .fit import FitResult, WorkData, fit_model
+from .rules import AXES_GAIN, AXES_T, AXES_Z
+from .screen import block_candidates, term_class
+from .terms import TermSpec, describe
+
+#: the library field terms of each order a block stands for
+ORDER_KEYS = {"Hvec": ("Hx", "Hy", "Hz"), "Hquad": ("Hsq", "Hprod", "Hmag2")}
+
+
+def axes_test(r: FitResult, spec: TermSpec, replaced: list[TermSpec], wd: WorkData
+              ) -> tuple[float, float]:
+    """HAC Wald test that the block ``spec``'s coefficients w in the fitted model ``r`` lie in
+    the span of the terms it ``replaced`` (what the block adds beyond them).
+
+    Formula: with B the block's columns and R those of the replaced terms, A = B⁺R (R = B·A
+    exactly when the replaced terms are members of the block); L spans the left null space
+    of A (L·A = 0), and H0 "w = A·γ for some γ" is L·w = 0:
+    W = (L·w)ᵀ (L·Σ·Lᵀ)⁻¹ (L·w), Σ the HAC covariance of w, referred to F(q, df) with
+    q = rank L and df the block's effective degrees of freedom
+    (:func:`gyrotest.envmodel.stats.effective_df`). Returns (z, p); (nan, nan) when the
+    block adds nothing. Source: gyrotest (a linear-restriction Wald test, e.g. Greene,
+    *Econometric Analysis*, §5.3)."""
+    d = r._fitter.d  # type: ignore[attr-defined]
+    B = d.block(spec, None)
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term == spec.label
+           and cf.kind == "linear"]
+    if not replaced or len(idx) != B.shape[1]:
+        return math.nan, math.nan
+    R = np.column_stack([d.block(s, None) for s in replaced])
+    A, *_ = np.linalg.lstsq(B, R, rcond=None)
+    # rows spanning the left null space of A (L·A = 0)
+    u, sv, _ = np.linalg.svd(A, full_matrices=True)
+    rank = int(np.sum(sv > 1e-9 * max(float(sv.max(initial=0.0)), 1e-300)))
+    L = u[:, rank:].T
+    if L.shape[0] == 0:
+        return math.nan, math.nan
+    beta = np.array([r.coefficients[i].value for i in idx])
+    cov = r.cov[np.ix_(idx, idx)]
+    X = r._fitter.X(r._thetas)  # type: ignore[attr-defined]
+    df = st.effective_df(X, idx, st.integrated_time(r.resid))
+    _, p, z = st.wald_t(L @ beta, L @ cov @ L.T, df)
+    return z, p
+
+
+def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0: dict,
+              folds: int) -> tuple[list[Candidate], Candidate | None]:
+    """Try each field block in place of the model's own field terms of its order; return
+    the judged blocks and the one that qualifies (the best by held-out RMS), or None.
+
+    A block qualifies when it cuts the held-out RMS by ≥ :data:`AXES_GAIN`, consistently
+    across the folds (gain/(scatter/√folds) ≥ :data:`AXES_T`), and what it adds beyond the
+    replaced terms exceeds its HAC standard error (:func:`axes_test`, z ≥ :data:`AXES_Z`)."""
+    out: list[Candidate] = []
+    for spec, repl in block_candidates(wd.frame, base.specs):
+        keys = ORDER_KEYS.get(spec.key, ())
+        replaced = [s for s in base_specs if s.label in repl and s.key in keys]
+        if not replaced:
+            continue  # not a field effect the model has: a new effect, judged elsewhere
+        specs = [s for s in base_specs if s.label not in repl] + [spec]
+        try:
+            r = fit_model(wd, specs, folds=folds, thetas0=thetas0, light=True)
+            z, p = axes_test(r, spec, replaced, wd)
+        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+            continue
+        gain, scatter, t_cv = held_out_gain(base, r, folds)
+        ok = bool(gain >= AXES_GAIN and t_cv >= AXES_T and math.isfinite(z)
+                  and abs(z) >= AXES_Z)
+        replaces = "; ".join(repl)
+        try:
+            custom = custom_text(spec, {}, wd.frame)
+        except InputError:
+            custom = None
+        c = Candidate(spec.label, describe(spec) + f" (replaces {replaces})", replaces, r.rms_fit, r.rms_holdout,
+                      100 * gain, z, p, p, 1, ok,
+                      [c2.to_dict() for c2 in r.coefficients if c2.term == spec.label],
+                      r.n_params, spec=spec, klass=term_class(spec),
+                      route="field axes" if ok else None, gain_scatter_pct=100 * scatter,
+                      custom=custom)
+        c.cv_t = t_cv
+        c._fit = r
+        out.append(c)
+    ok = [c for c in out if c.significant]
+    return out, min(ok, key=lambda c: c.rms_holdout, default=None)
+
+
+__all__ = ["ORDER_KEYS", "axes_step", "axes_test"]

@@ -191,3 +191,59 @@ def test_two_large_effects_that_hide_each_other_are_found_as_a_pair(tmp_path):
     labels = {s.label for s in specs}
     assert "warmup" in labels and "Hx(Hx_uT)" in labels, labels
     assert steps[-1][0].ratio_to_floor <= 1.3, steps[-1][0].verdict
+
+
+# ------------------------------------------------------------- the gyro's own axes
+def _small_rotation_log(deg: float, seed: int = 5, w_y: float = 0.5):
+    """A gyro sensitive along its own y axis, mounted ``deg`` off the coils about x and z:
+    a model with Hy alone leaves the small cross-axis parts."""
+    rng = np.random.default_rng(seed)
+    n = int(6 * HOUR)
+    H = helmholtz(n) + 0.05 * rng.normal(size=(3, n))
+    w = _rot(deg, 0.0).T @ _rot(0.0, deg).T @ np.array([0.0, w_y, 0.0])
+    rate = 0.4 + w @ (H / 100.0) + 0.2 * noise(n, rng)
+    return make_log(rate, 1.0, field={"Bx": H[0], "By": H[1], "Bz": H[2]}), w
+
+
+def test_axes_test_is_the_restriction_to_the_replaced_terms():
+    """Closed form: the Wald test of Hvec against Hy alone is the test of w[Bx] = w[Bz] = 0
+    (L·A = 0 spans exactly those coefficients), F(2, df)."""
+    from gyrotest.envmodel import stats as st
+    from gyrotest.envmodel.axes import axes_test
+
+    log, _ = _small_rotation_log(3.0)
+    wd = prepare(log)
+    r = fit_model(wd, ["Hvec"])
+    vec, hy = resolve_terms(parse_terms("Hvec,Hy(By)"), wd.frame)
+    z, p = axes_test(r, vec, [hy], wd)
+    idx = [i for i, cf in enumerate(r.coefficients) if cf.term == vec.label]
+    sel = [idx[0], idx[2]]
+    beta = np.array([r.coefficients[i].value for i in sel])
+    X = r._fitter.X(r._thetas)
+    df = st.effective_df(X, idx, st.integrated_time(r.resid))
+    _, p_ref, z_ref = st.wald_t(beta, r.cov[np.ix_(sel, sel)], df)
+    assert p == pytest.approx(p_ref, rel=1e-9) and z == pytest.approx(z_ref, rel=1e-9)
+    # a block that adds nothing beyond what it replaces has no test
+    assert np.isnan(axes_test(r, vec, [resolve_terms(parse_terms("Hvec"), wd.frame)[0]],
+                              wd)[0])
+
+
+@pytest.mark.parametrize("deg, named", [(4.0, True), (0.0, False)])
+def test_axes_step_names_the_block_only_for_a_rotated_gyro(deg, named):
+    """With Hy in the model, a gyro 4° off the coils gets Hvec in its place (the cross-axis
+    parts are 7 % of the effect); an aligned one does not."""
+    from gyrotest.envmodel.axes import axes_step
+
+    log, w = _small_rotation_log(deg)
+    wd = prepare(log)
+    base = fit_model(wd, ["Hy(By)"])
+    specs = [s for s in base.specs if s.key != "bias"]
+    judged, chosen = axes_step(wd, base, specs, dict(base._thetas), 5)
+    assert [c.term for c in judged] == ["Hvec(Bx,By,Bz)"]
+    if named:
+        assert chosen is not None and chosen.replaces == "Hy(By)"
+        assert chosen.route == "field axes" and chosen.improvement_pct >= 8
+        got = [cf["value"] for cf in chosen.coefficients]
+        assert np.allclose(got, w, atol=0.005), (got, w)
+    else:
+        assert chosen is None, judged[0].improvement_pct

@@ -267,8 +267,10 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "off the strict test, spectral (Whittle) z ≥ 8 against the residual's own "
               "spectrum (≥ 4 while the model is within 2x the floor) unless the gain is "
               "≥ 40 % with fold consistency ≥ 5; hysteresis needs fold consistency ≥ 4 "
-              "(≥ 10 off the strict test); ties go to channel-based terms and to the "
-              "channels the model already uses")
+              "(≥ 10 off the strict test); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
+              "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
+              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; ties go to channel-based "
+              "terms and to the channels the model already uses")
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)
@@ -466,7 +468,13 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel.
     A product of two channels gives way to the level terms of its factors when those do
-    >= 10 % better together (no interaction without its main effects).
+    >= 10 % better together (no interaction without its main effects). A model within 1.1x
+    the floor takes a new term only at a gain >= 20 %, or >= 10 % on the strict test with
+    fold consistency >= 4. When no new effect qualifies, the model's own field terms of an
+    order are tried in the gyro's axes: the block over every moving field axis (Hvec for
+    Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
+    >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1 (a gyro
+    mounted a few degrees off the coils).
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

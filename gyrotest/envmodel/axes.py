@@ -30,9 +30,6 @@ from .rules import AXES_GAIN, AXES_T, AXES_Z
 from .screen import block_candidates, term_class
 from .terms import TermSpec, describe
 
-#: the library field terms of each order a block stands for
-ORDER_KEYS = {"Hvec": ("Hx", "Hy", "Hz"), "Hquad": ("Hsq", "Hprod", "Hmag2")}
-
 
 def axes_test(r: FitResult, spec: TermSpec, replaced: list[TermSpec], wd: WorkData
               ) -> tuple[float, float]:
@@ -79,8 +76,7 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
     replaced terms exceeds its HAC standard error (:func:`axes_test`, z ≥ :data:`AXES_Z`)."""
     out: list[Candidate] = []
     for spec, repl in block_candidates(wd.frame, base.specs):
-        keys = ORDER_KEYS.get(spec.key, ())
-        replaced = [s for s in base_specs if s.label in repl and s.key in keys]
+        replaced = [s for s in base_specs if s.label in repl]
         if not replaced:
             continue  # not a field effect the model has: a new effect, judged elsewhere
         specs = [s for s in base_specs if s.label not in repl] + [spec]
@@ -97,8 +93,8 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
             custom = custom_text(spec, {}, wd.frame)
         except InputError:
             custom = None
-        c = Candidate(spec.label, describe(spec) + f" (replaces {replaces})", replaces, r.rms_fit, r.rms_holdout,
-                      100 * gain, z, p, p, 1, ok,
+        c = Candidate(spec.label, describe(spec) + f" (replaces {replaces})", replaces,
+                      r.rms_fit, r.rms_holdout, 100 * gain, z, p, p, 1, ok,
                       [c2.to_dict() for c2 in r.coefficients if c2.term == spec.label],
                       r.n_params, spec=spec, klass=term_class(spec),
                       route="field axes" if ok else None, gain_scatter_pct=100 * scatter,
@@ -110,4 +106,4 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
     return out, min(ok, key=lambda c: c.rms_holdout, default=None)
 
 
-__all__ = ["ORDER_KEYS", "axes_step", "axes_test"]
+__all__ = ["axes_step", "axes_test"]

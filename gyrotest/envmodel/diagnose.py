@@ -556,7 +556,9 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
         # a model at the floor is complete: only a gain it could not give (>= 20 %, or a
         # strict >= 10 % consistent across the folds) says the floor is wrong
         rejected = (f"the model is at the noise floor (held-out/floor {base_ratio:.2f}) and "
-                    f"the gain ({100 * impr:.1f} %) is below {100 * BIG_GAIN:.0f} %")
+                    f"the gain ({100 * impr:.1f} %) is below {100 * BIG_GAIN:.0f} % (or "
+                    f"{100 * AT_FLOOR_GAIN:.0f} % on the strict test, consistent across the "
+                    "folds)")
     sig = (strict or clear or far) and rejected is None
     route = (("strict" if strict else "clear gain" if clear else "far above the floor")
              if sig else None)

@@ -238,3 +238,27 @@ def test_diagnose_magnetic_sample_names_hy_then_hz():
     d = json.loads(r.out)
     assert d["missing_effect"] == "Hy(Hy_uT)", d["verdict"]
     assert [p["term"] for p in d["path"]][:2] == ["Hy(Hy_uT)", "Hz(Hz_uT)"]
+
+
+def test_diagnose_magnetic_sample_completes_the_field_vector_with_hx():
+    """With Hy and Hz in the model no new effect qualifies (Hx alone: -10 %, z 1.7), but the
+    field effect the model has fits better with its third component: the axes step names
+    Hx(Hx_uT) (true w_x = -0.037 deg/h per 100 µT, 7 % of |w|), and the fitted w_x covers
+    the truth within 2 standard errors."""
+    from pathlib import Path
+
+    s = Path(__file__).resolve().parent.parent / "sample_data"
+    prof = ["--profile", s / "magnetic.profile.toml"]
+    r = run_cli(["model", "diagnose", s / "magnetic.parquet", *prof, "--terms", "T,Hy,Hz",
+                 "--json"])
+    assert r.code == 0, r.err
+    d = json.loads(r.out)
+    assert d["missing_effect"] == "Hx(Hx_uT)", d["verdict"]
+    assert "completes its field vector" in d["verdict"]
+    top = d["candidates"][0]
+    assert top["term"] == "Hx(Hx_uT)" and top["route"] == "field axes"
+    r = run_cli(["model", "fit", s / "magnetic.parquet", *prof, "--terms", "Hx,Hy,Hz",
+                 "--json"])
+    assert r.code == 0, r.err
+    wx = next(c for c in json.loads(r.out)["coefficients"] if c["term"] == "Hx(Hx_uT)")
+    assert abs(wx["value"] - (-0.037)) <= 2 * wx["stderr"], wx

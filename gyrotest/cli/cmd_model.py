@@ -474,7 +474,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     order are tried in the gyro's axes: the block over every moving field axis (Hvec for
     Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
     >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1 (a gyro
-    mounted a few degrees off the coils).
+    mounted a few degrees off the coils); with all but one field axis in the model, that
+    axis's term (Hx, Hy or Hz) is named instead.
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

@@ -42,20 +42,23 @@ def axes_test(r: FitResult, spec: TermSpec, replaced: list[TermSpec], wd: WorkDa
     W = (L·w)ᵀ (L·Σ·Lᵀ)⁻¹ (L·w), Σ the HAC covariance of w, referred to F(q, df) with
     q = rank L and df the block's effective degrees of freedom
     (:func:`gyrotest.envmodel.stats.effective_df`). Returns (z, p); (nan, nan) when the
-    block adds nothing. Source: gyrotest (a linear-restriction Wald test, e.g. Greene,
+    block adds nothing; with nothing replaced, the test of every coefficient. Source: gyrotest (a linear-restriction Wald test, e.g. Greene,
     *Econometric Analysis*, §5.3)."""
     d = r._fitter.d  # type: ignore[attr-defined]
     B = d.block(spec, None)
     idx = [i for i, cf in enumerate(r.coefficients) if cf.term == spec.label
            and cf.kind == "linear"]
-    if not replaced or len(idx) != B.shape[1]:
+    if len(idx) != B.shape[1]:
         return math.nan, math.nan
-    R = np.column_stack([d.block(s, None) for s in replaced])
-    A, *_ = np.linalg.lstsq(B, R, rcond=None)
-    # rows spanning the left null space of A (L·A = 0)
-    u, sv, _ = np.linalg.svd(A, full_matrices=True)
-    rank = int(np.sum(sv > 1e-9 * max(float(sv.max(initial=0.0)), 1e-300)))
-    L = u[:, rank:].T
+    if replaced:
+        R = np.column_stack([d.block(s, None) for s in replaced])
+        A, *_ = np.linalg.lstsq(B, R, rcond=None)
+        # rows spanning the left null space of A (L·A = 0)
+        u, sv, _ = np.linalg.svd(A, full_matrices=True)
+        rank = int(np.sum(sv > 1e-9 * max(float(sv.max(initial=0.0)), 1e-300)))
+        L = u[:, rank:].T
+    else:
+        L = np.eye(len(idx))  # nothing replaced: every coefficient is new
     if L.shape[0] == 0:
         return math.nan, math.nan
     beta = np.array([r.coefficients[i].value for i in idx])
@@ -64,6 +67,19 @@ def axes_test(r: FitResult, spec: TermSpec, replaced: list[TermSpec], wd: WorkDa
     df = st.effective_df(X, idx, st.integrated_time(r.resid))
     _, p, z = st.wald_t(L @ beta, L @ cov @ L.T, df)
     return z, p
+
+
+def _simplest(spec: TermSpec, replaced: list[TermSpec], repl: list[str], frame
+              ) -> tuple[TermSpec, list[TermSpec], list[str]]:
+    """``Hvec`` in place of all but one of the moving components' Hx/Hy/Hz is the model with
+    that one component added: name the single term (IEEE 952's w_x, w_y or w_z), which
+    replaces nothing."""
+    if spec.key != "Hvec" or len(spec.channels) - len(replaced) != 1:
+        return spec, replaced, repl
+    have = {s.channels[0] for s in replaced}
+    (ch,) = [c for c in spec.channels if c not in have]
+    axis = list(frame.field_uT).index(ch)
+    return TermSpec(("Hx", "Hy", "Hz")[axis], (ch,)), [], []
 
 
 def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0: dict,
@@ -79,6 +95,7 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
         replaced = [s for s in base_specs if s.label in repl]
         if not replaced:
             continue  # not a field effect the model has: a new effect, judged elsewhere
+        spec, replaced, repl = _simplest(spec, replaced, repl, wd.frame)
         specs = [s for s in base_specs if s.label not in repl] + [spec]
         try:
             r = fit_model(wd, specs, folds=folds, thetas0=thetas0, light=True)
@@ -88,12 +105,12 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
         gain, scatter, t_cv = held_out_gain(base, r, folds)
         ok = bool(gain >= AXES_GAIN and t_cv >= AXES_T and math.isfinite(z)
                   and abs(z) >= AXES_Z)
-        replaces = "; ".join(repl)
+        replaces = "; ".join(repl) or None
         try:
             custom = custom_text(spec, {}, wd.frame)
         except InputError:
             custom = None
-        c = Candidate(spec.label, describe(spec) + f" (replaces {replaces})", replaces,
+        c = Candidate(spec.label, describe(spec) + (f" (replaces {replaces})" if replaces else ""), replaces,
                       r.rms_fit, r.rms_holdout, 100 * gain, z, p, p, 1, ok,
                       [c2.to_dict() for c2 in r.coefficients if c2.term == spec.label],
                       r.n_params, spec=spec, klass=term_class(spec),

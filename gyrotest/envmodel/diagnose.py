@@ -132,6 +132,8 @@ that the model under judgment cannot move:
    cross-axis parts are below what a new effect must show near the floor. The block is
    chosen when it cuts the held-out RMS by ≥ 8 % at fold consistency ≥ 2.5 and what it
    adds beyond the replaced terms has HAC |z| ≥ 1 (:func:`gyrotest.envmodel.axes.axes_test`).
+   ``Hvec`` in place of all but one moving component is named as that component's term
+   (the model "completes its field vector" with Hx, Hy or Hz).
 
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
@@ -424,7 +426,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # no new effect: the field effects the model has, in the gyro's own axes
         _, chosen = axes_step(wd, base, base_specs, thetas0, folds)
         if chosen is not None:
-            out.insert(0, chosen)
+            out = [chosen] + [c for c in out if c.term != chosen.term]
     return out, chosen
 
 
@@ -634,10 +636,12 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
                       f"coefficient standing out of the residual's spectrum (spectral z "
                       f"{top.spectral_z:.1f})")
         if top.route == "field axes":
-            v += (f"; no new effect qualifies, but the field effect the model has fits better "
-                  f"in the gyro's own axes: {top.term} replaces {top.replaces} (the z tests "
-                  "what it adds beyond them; gain/(fold scatter/sqrt(folds)) = "
-                  f"{top.cv_t:.1f})")
+            v += ("; no new effect qualifies, but the field effect the model has fits better "
+                  "in the gyro's own axes: "
+                  + (f"{top.term} replaces {top.replaces} (the z tests what it adds beyond "
+                     "them" if top.replaces else f"{top.term} completes its field vector "
+                     "(the z tests its coefficient")
+                  + f"; gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f})")
         pair = top.pair
         if pair is not None:
             disp = top.displaced

@@ -42,8 +42,8 @@ def axes_test(r: FitResult, spec: TermSpec, replaced: list[TermSpec], wd: WorkDa
     W = (L·w)ᵀ (L·Σ·Lᵀ)⁻¹ (L·w), Σ the HAC covariance of w, referred to F(q, df) with
     q = rank L and df the block's effective degrees of freedom
     (:func:`gyrotest.envmodel.stats.effective_df`). Returns (z, p); (nan, nan) when the
-    block adds nothing; with nothing replaced, the test of every coefficient. Source: gyrotest (a linear-restriction Wald test, e.g. Greene,
-    *Econometric Analysis*, §5.3)."""
+    block adds nothing; with nothing replaced, the test of every coefficient. Source:
+    gyrotest (a linear-restriction Wald test, e.g. Greene, *Econometric Analysis*, §5.3)."""
     d = r._fitter.d  # type: ignore[attr-defined]
     B = d.block(spec, None)
     idx = [i for i, cf in enumerate(r.coefficients) if cf.term == spec.label
@@ -110,8 +110,9 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
             custom = custom_text(spec, {}, wd.frame)
         except InputError:
             custom = None
-        c = Candidate(spec.label, describe(spec) + (f" (replaces {replaces})" if replaces else ""), replaces,
-                      r.rms_fit, r.rms_holdout, 100 * gain, z, p, p, 1, ok,
+        effect = describe(spec) + (f" (replaces {replaces})" if replaces else "")
+        c = Candidate(spec.label, effect, replaces, r.rms_fit, r.rms_holdout, 100 * gain,
+                      z, p, p, 1, ok,
                       [c2.to_dict() for c2 in r.coefficients if c2.term == spec.label],
                       r.n_params, spec=spec, klass=term_class(spec),
                       route="field axes" if ok else None, gain_scatter_pct=100 * scatter,

@@ -198,6 +198,7 @@ from .rules import (
     STRONG_P,
     TIE,
     UNLAGGED,
+    WARMUP_SPECTRAL_Z,
     WEAK_P,
     spectral_bar,
     spectral_exempt,
@@ -532,10 +533,16 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                and (impr >= FAR_GAIN and t_cv >= FAR_T if klass != "nuisance"
                     else impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE)
                and hyst_weak)
+    zw = math.nan
+    if (not far and c.key == "warmup" and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO
+            and impr >= BIG_GAIN and t_cv >= FAR_T):
+        # a warm-up lives in the first chunks: fold consistency understates it
+        # (:data:`WARMUP_SPECTRAL_Z`)
+        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
+        far = bool(zw >= WARMUP_SPECTRAL_Z)
     # the HAC guard, or (other missing effects inflating its error) the spectral z alone
     far_hac = far and math.isfinite(z) and abs(z) >= FAR_Z
     rejected = None
-    zw = math.nan
     waived = far and not (far_hac or clear or strict)
     if waived:
         zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))

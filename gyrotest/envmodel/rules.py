@@ -67,6 +67,12 @@ FAR_T = 2.13
 FAR_T_NUISANCE = 3.75
 #: ... with the HAC test as a guard: the coefficient exceeds its own standard error
 FAR_Z = 1.0
+#: ... a warm-up transient lives in the first chunks of the record, so most folds cannot see
+#: it and its fold consistency stays low however large it is (seed 26125: −55 % held-out at
+#: 25 × the floor, consistency 2.9 < FAR_T_NUISANCE): far above the floor a warm-up with
+#: gain ≥ BIG_GAIN at consistency ≥ FAR_T qualifies when its coefficient stands out of the
+#: residual's slow noise at spectral z ≥ WARMUP_SPECTRAL_Z
+WARMUP_SPECTRAL_Z = 8.0
 # ... or, when other missing effects inflate that error (several at once, far above the
 # floor, leave the HAC test of a warm-up of 100 × the floor at z 0.7), the coefficient stands
 # out of the candidate model's residual spectrum at SPECTRAL_Z without the exemption below;

@@ -38,10 +38,12 @@ that the model under judgment cannot move:
      floor already says the model is incomplete and the question is only which candidate
      explains the gap: the candidate cuts the held-out RMS by ≥ 10 % and the gain is
      consistent across the folds, gain / (fold scatter/√folds) ≥ 2.13 (the one-sided 95 %
-     t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %); the
-     HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its standard error. Far
-     from the floor every missing effect inflates the HAC error of every other candidate,
-     so the test is a guard only where the model is near the floor. When several large
+     t quantile, 4 degrees of freedom); nuisance terms need ≥ 20 % and 3.75 (99 %) --
+     except a warm-up, which lives in the first chunks, so most folds cannot see it: ≥ 20 %
+     at 2.13 when its coefficient also stands out of the residual's slow noise (spectral
+     z ≥ 8, below); the HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its
+     standard error. Far from the floor every missing effect inflates the HAC error of
+     every other candidate, so the test is a guard only where the model is near the floor. When several large
      effects are missing at once even that guard fails (a warm-up of 100 × the floor beside
      two others: z 0.7); the coefficient's spectral z ≥ 8 against the candidate model's
      residual spectrum (no exemption) may then stand in for it. Such a term is chosen

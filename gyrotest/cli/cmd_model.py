@@ -448,7 +448,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
     while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
-    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1); there, when no single
+    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1; ramp, warm-up, sinusoid
+    and hysteresis >= 20 % at >= 3.75, a warm-up, which most folds cannot see, at >= 2.13
+    with spectral z >= 8); there, when no single
     term qualifies (or a pair of two others halves the held-out RMS of the one that does),
     the best candidates, further channels and the largest in-sample gains are also tried
     in pairs, and so are the level and square of each channel and a ramp beside each of
@@ -459,8 +461,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     Off the strict test, the added coefficients must also stand out of the candidate
     model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
-    within 2x the floor), unless the held-out gain is
-    >= 40 % with fold consistency >= 5: a smooth channel fitted to the gyro's own slow
+    within 2x the floor), unless the held-out gain is >= 55 % with fold consistency >= 5
+    or >= 40 % at >= 10 (a pair: >= 40 % at >= 5): a smooth channel fitted to the gyro's own slow
     wander is not named. A hysteresis branch also needs fold consistency >= 4 (>= 10 with
     p x trials < 0.01 off the strict test) and is paired only with the level of its own
     temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit; the

@@ -294,3 +294,17 @@ def test_a_short_warm_up_seen_by_one_fold_is_named_far_above_the_floor():
     assert labels[:2] == ["warmup", "chan(rh)"], labels
     assert all(t["named"] for t in row["truth"] if t["missing"]), row["truth"]
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
+
+
+@pytest.mark.parametrize("seed", [26568, 26622])
+def test_real_wander_fit_below_the_single_term_exemption_stays_quiet(seed):
+    """Null cases on real ADIS16405 noise, 7-19x the short-τ floor: a warm-up (26568, -42 %
+    held-out at fold consistency 5.1) and T² of a chamber sensor (26622, -43 % at 8.6), both at
+    spectral z < 6, had passed the spectral gate through its exemption (≥ 40 % at ≥ 5); a
+    single term now needs ≥ 55 % (or ≥ 40 % at ≥ 10) to skip it."""
+    bw, ws = _bench()
+    if not ws.real_noise_available():
+        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
+    row = bw.run_case(ws.make_case(seed, null=True))
+    assert row["noise"]["type"] == "real"
+    assert not row["alarm"], row["added"]

@@ -27,6 +27,16 @@ def _bench():
     return bw, ws
 
 
+def _assert_real_null_quiet(seed: int) -> None:
+    """A null case on real ADIS16405 noise (skipped without ``../shared``): no alarm."""
+    bw, ws = _bench()
+    if not ws.real_noise_available():
+        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
+    row = bw.run_case(ws.make_case(seed, null=True))
+    assert row["noise"]["type"] == "real"
+    assert not row["alarm"], row["added"]
+
+
 @pytest.fixture(scope="module")
 def quick():
     bw, _ = _bench()
@@ -55,13 +65,7 @@ def test_real_gyro_wander_is_not_named_as_a_channel(seed):
     been fitted by a smooth logged channel (a humidity rate, a lagged humidity) and named as
     the missing effect via the far route; the spectral (Whittle) z of that coefficient is
     1-2, so the verdict stays quiet (seeds from the tuning set of the Whittle gate)."""
-    bw, ws = _bench()
-    if not ws.real_noise_available():
-        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
-    case = ws.make_case(seed, null=True)
-    row = bw.run_case(case)
-    assert row["noise"]["type"] == "real"
-    assert not row["alarm"], row["added"]
+    _assert_real_null_quiet(seed)
 
 
 @pytest.mark.parametrize("seed, follow_up", [(15000, "dTdt(Tcase)"),
@@ -86,12 +90,7 @@ def test_real_gyro_wander_is_not_named_as_hysteresis(seed):
     missing effect: gain/(scatter/√folds) 3.2-6.4, against 10-1000 for true hysteresis. The
     branch now needs ≥ 4 on the strict route and ≥ 10 (with p × trials < 0.01) on the weak
     ones (seeds from the tuning set 16500-16699 of that rule)."""
-    bw, ws = _bench()
-    if not ws.real_noise_available():
-        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
-    row = bw.run_case(ws.make_case(seed, null=True))
-    assert row["noise"]["type"] == "real"
-    assert not row["alarm"], row["added"]
+    _assert_real_null_quiet(seed)
 
 
 def test_true_hysteresis_near_threshold_is_still_named():
@@ -133,12 +132,7 @@ def test_real_wander_fit_without_hac_support_stays_quiet():
     """Real ADIS16405 noise with a lagged-node rate fitted to its wander: 80 % held-out gain,
     consistent across the folds (7.3), HAC z 0.3 and spectral z 5.9 -- below the bar of 8 that
     replaces the HAC guard, so no alarm (null seed 20561 of an earlier unseen set)."""
-    bw, ws = _bench()
-    if not ws.real_noise_available():
-        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
-    row = bw.run_case(ws.make_case(20561, null=True))
-    assert row["noise"]["type"] == "real"
-    assert not row["alarm"], row["added"]
+    _assert_real_null_quiet(20561)
 
 
 def test_hysteresis_and_its_temperature_level_are_found_as_a_pair():
@@ -302,9 +296,4 @@ def test_real_wander_fit_below_the_single_term_exemption_stays_quiet(seed):
     held-out at fold consistency 5.1) and T² of a chamber sensor (26622, -43 % at 8.6), both at
     spectral z < 6, had passed the spectral gate through its exemption (≥ 40 % at ≥ 5); a
     single term now needs ≥ 55 % (or ≥ 40 % at ≥ 10) to skip it."""
-    bw, ws = _bench()
-    if not ws.real_noise_available():
-        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
-    row = bw.run_case(ws.make_case(seed, null=True))
-    assert row["noise"]["type"] == "real"
-    assert not row["alarm"], row["added"]
+    _assert_real_null_quiet(seed)

@@ -43,12 +43,12 @@ that the model under judgment cannot move:
      at 2.13 when its coefficient also stands out of the residual's slow noise (spectral
      z ≥ 8, below); the HAC test is a guard only: |z| ≥ 1, the coefficient exceeds its
      standard error. Far from the floor every missing effect inflates the HAC error of
-     every other candidate, so the test is a guard only where the model is near the floor. When several large
-     effects are missing at once even that guard fails (a warm-up of 100 × the floor beside
-     two others: z 0.7); the coefficient's spectral z ≥ 8 against the candidate model's
-     residual spectrum (no exemption) may then stand in for it. Such a term is chosen
-     last: only when no term with a HAC test behind it, no field block and no pair
-     qualifies.
+     every other candidate, so the test is a guard only where the model is near the floor.
+     When several large effects are missing at once even that guard fails (a warm-up of
+     100 × the floor beside two others: z 0.7); the coefficient's spectral z ≥ 8 against
+     the candidate model's residual spectrum (no exemption) may then stand in for it.
+     Such a term is chosen last: only when no term with a HAC test behind it, no field
+     block and no pair qualifies.
    When no single candidate qualifies and the model is at least 2 × the floor, groups
    that only explain the data together are tried the same way: the field sensitivity
    along every axis (``Hvec``) and the full second-order field sensitivity (``Hquad``),
@@ -548,11 +548,11 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     far_hac = far and math.isfinite(z) and abs(z) >= FAR_Z
     rejected = None
     waived = far and not (far_hac or clear or strict)
-    if waived:
+    if (waived or clear or far) and not strict and not math.isfinite(zw):
         zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
+    if waived:
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:
-        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
         bar = spectral_bar(base_ratio)
         if not spectral_exempt(impr, t_cv, single=True) and not zw >= bar:
             rejected = (f"{SPECTRAL_REJECT} "
@@ -642,6 +642,12 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
                   f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
                   "HAC test")
+            if (top.spec is not None and top.spec.key == "warmup"
+                    and top.cv_t < FAR_T_NUISANCE):
+                v += ("; a warm-up lives in the first chunks of the record, which most folds "
+                      "cannot see, so a low consistency is accepted when its coefficient "
+                      "stands out of the residual's slow noise (spectral z "
+                      f"{top.spectral_z:.1f} >= {WARMUP_SPECTRAL_Z:g})")
             if not (math.isfinite(top.z) and abs(top.z) >= FAR_Z):
                 v += (f" (z = {top.z:.1f}: other missing effects inflate its error), with the "
                       f"coefficient standing out of the residual's spectrum (spectral z "

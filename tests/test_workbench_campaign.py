@@ -190,14 +190,19 @@ def test_a_term_hidden_by_another_effect_is_found_as_a_pair():
 
 def test_tied_candidates_are_told_apart_by_the_next_step():
     """An ageing ramp and the lag of a drifting pressure channel (a decoy) cut the held-out
-    RMS equally (-41 %); only beside the ramp does the missing g cross term come out. The
-    lookahead names the ramp, then the product (seed 23141: the decoy's lag was named and
-    the loop stopped at 4.7x the true model)."""
+    RMS equally (-41 %); only beside the ramp does the missing g cross term come out (seed
+    23141: the decoy's lag was named and the loop stopped at 4.7x the true model). Until the
+    fourteenth pass the lookahead named the ramp, then the product. Since a single term needs
+    ≥ 55 % (or ≥ 40 % at fold consistency ≥ 10) to skip the spectral test, neither tied
+    candidate (41 % at 5.8-6.8, spectral z 6.6-7.5) qualifies at the first step; a warm-up
+    paired with a lagged-node rate is named first (the cost of that rule, benchmarks/README.md),
+    then the product and the ramp: the decoy is still never named and the loop still ends at
+    the true model."""
     bw, ws = _bench()
     row = bw.run_case(ws.make_case(23141))
     labels = [a["label"] for a in row["added"]]
-    assert labels == ["ramp", "chanprod(incl_x,incl_y)"], labels
-    assert "tied with chanlag(P_lab)" in row["steps"][0]["verdict"]
+    assert "ramp" in labels and "chanprod(incl_x,incl_y)" in labels, labels
+    assert not any(lab.startswith("chanlag(P_lab") for lab in labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
 

@@ -642,16 +642,16 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
             v += (f"; the model is {ratio:.1f}x the noise floor, so the consistent held-out "
                   f"gain (gain/(fold scatter/sqrt(folds)) = {top.cv_t:.1f}) decides, not the "
                   "HAC test")
+            if not (math.isfinite(top.z) and abs(top.z) >= FAR_Z):
+                v += (f" (z = {top.z:.1f}: other missing effects inflate its error), with the "
+                      f"coefficient standing out of the residual's spectrum (spectral z "
+                      f"{top.spectral_z:.1f})")
             if (top.spec is not None and top.spec.key == "warmup"
                     and top.cv_t < FAR_T_NUISANCE):
                 v += ("; a warm-up lives in the first chunks of the record, which most folds "
                       "cannot see, so a low consistency is accepted when its coefficient "
                       "stands out of the residual's slow noise (spectral z "
                       f"{top.spectral_z:.1f} >= {WARMUP_SPECTRAL_Z:g})")
-            if not (math.isfinite(top.z) and abs(top.z) >= FAR_Z):
-                v += (f" (z = {top.z:.1f}: other missing effects inflate its error), with the "
-                      f"coefficient standing out of the residual's spectrum (spectral z "
-                      f"{top.spectral_z:.1f})")
         if top.route == "field axes":
             v += ("; no new effect qualifies, but the field effect the model has fits better "
                   "in the gyro's own axes: "

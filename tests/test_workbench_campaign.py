@@ -302,3 +302,30 @@ def test_real_wander_fit_below_the_single_term_exemption_stays_quiet(seed):
     spectral z < 6, had passed the spectral gate through its exemption (≥ 40 % at ≥ 5); a
     single term now needs ≥ 55 % (or ≥ 40 % at ≥ 10) to skip it."""
     _assert_real_null_quiet(seed)
+
+
+def test_two_effects_whose_single_z_the_other_inflates_are_named_as_a_pair():
+    """A humidity channel (212x the floor) and the rate of a 1677 s lagged node (207x) hide
+    each other: alone each cuts the held-out RMS by 8-16 % at HAC z 0.1-0.6; together they
+    reach the floor, each coefficient at HAC z ≥ 4 in the pair's own fit. Before, the pair
+    was dropped on its members' single z and the loop ended 132x the true model (seed
+    27086)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(27086))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:2] == ["chan(RH_pct)", "dTlagdt(T_case_C)"], labels
+    assert all(t["named"] for t in row["truth"] if t["missing"]), row["truth"]
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]
+
+
+def test_two_forms_of_one_sensor_that_hide_each_other_are_found_as_a_block():
+    """The rate of a lagged node of T_gyro and T² of the same sensor: alone the rate gains
+    -10 % held-out and T² -97 % (neither enters the pair pool); the four forms of T_gyro
+    fitted as one block reach the floor, and the pair of two of them passes the joint HAC
+    test. Before, nothing was added and the loop ended 24x the true model (seed 27119)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(27119))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[0] == "dTlagdt(T_gyro)", labels
+    assert "T2(T_gyro)" in labels, labels
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]

@@ -93,6 +93,13 @@ that the model under judgment cannot move:
    (whose "slow noise" may be the other missing effect) with a member of the pool, when
    the pair also cuts the held-out RMS by ≥ 40 % at gain/(scatter/√folds) ≥ 5
    (:func:`gyrotest.envmodel.pairs._hidden_pairs`): a warm-up beside a missing hysteresis.
+   The same joint test decides a pair whose members' own HAC z (each fitted alone, where
+   the other effect inflates its error) are both below 1, and the pairs of one channel's
+   forms -- level, square, rate and the rate of a lagged node, fitted together as one block
+   first, from the base's and from the members' own time constants -- when that block cuts
+   the held-out RMS ≥ 10 % consistently and ≥ 10 % below its best member alone
+   (:func:`gyrotest.envmodel.pairs._channel_pairs`): T² and the rate of a lagged node of
+   one sensor can hide each other so well that neither helps alone.
    A model at the floor (held-out within 1.1 × the floor) is complete: a candidate is then a
    missing effect only if it cuts the held-out RMS by ≥ 20 %, or by ≥ 10 % on the strict
    test with fold consistency ≥ 4, which says the floor is wrong (the short-τ estimate can

@@ -43,7 +43,10 @@ HYST_PAIR_Z = 4.0
 #: ... the same joint test admits pairs of a *hidden* candidate -- a hysteresis branch, or a
 #: term rejected by the spectral gate (:data:`SPECTRAL_REJECT`) -- with the pair pool: at
 #: most HIDDEN_TOP hidden candidates, best held-out gain first (seed 23147: a warm-up beside
-#: a missing hysteresis; tuned on seeds 23000-23199, benchmarks/README.md)
+#: a missing hysteresis; tuned on seeds 23000-23199, benchmarks/README.md); it also decides
+#: pairs whose members' own HAC z (each fitted alone) are both below FAR_Z, and the pairs of
+#: one channel's forms (:func:`gyrotest.envmodel.pairs._channel_pairs`; seeds 27086 and
+#: 27119, tuned on seeds 27000-27199)
 HIDDEN_TOP = 2
 #: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.diagnose._judge`)
 SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"

@@ -84,7 +84,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     # pairs tested jointly (_joint_z_ok)
     joint = {frozenset((id(a), id(b))) for a, b in hl + tp + cp} | hidden
     pairs += hl + hp + tp + cp
-    best = None
+    best, lowest = None, math.inf
     for a, b in pairs:
         r = _fit_pair(wd, base_specs, a, b, thetas0, folds,
                       start=start.get(frozenset((id(a), id(b)))))
@@ -107,8 +107,9 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if (not spectral_exempt(impr, t_cv)
                 and not spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z):  # far: ratio >= 2
             continue
-        if best is not None and r.rms_holdout >= best[2].rms_holdout:
+        if r.rms_holdout >= lowest:
             continue
+        lowest = r.rms_holdout
         key = frozenset((id(a), id(b)))
         if key not in joint and not any(math.isfinite(c.z) and abs(c.z) >= FAR_Z
                                         for c in (a, b)):
@@ -118,7 +119,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
                 continue
             joint.add(key)
         best = (a, b, r, t_cv)
-    if best is None:
+    # the best pair decides: one that failed its HAC guard does not hand over to the next
+    if best is None or best[2].rms_holdout > lowest:
         return None
     a, b, r, t_cv = best
     if frozenset((id(a), id(b))) in hidden and "hyst" in (a.spec.key, b.spec.key):

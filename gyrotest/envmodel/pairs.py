@@ -491,13 +491,10 @@ def _channel_pairs(wd: WorkData, base: FitResult, base_specs, out: list[Candidat
           and (c.rejected is None or c.rejected.startswith(SPECTRAL_REJECT))]
     have = {(s.key, s.channels) for s in base_specs}
     pairs: list[tuple[Candidate, Candidate, dict]] = []
-    chans = []
-    for c in ok:
-        if c.spec.key in CHANNEL_BLOCK and c.spec.channels not in chans:
-            chans.append(c.spec.channels)
-    for ch in chans:
-        forms = next(v for k, v in CHANNEL_BLOCK.items()
-                     if any(c.spec.key == k and c.spec.channels == ch for c in ok))
+    # a channel's block is keyed on its level candidate (not tried when the model has it)
+    chans = {c.spec.channels: CHANNEL_BLOCK[c.spec.key] for c in ok
+             if c.spec.key in CHANNEL_BLOCK}
+    for ch, forms in chans.items():
         members = [c for k in forms for c in ok
                    if c.spec.key == k and c.spec.channels == ch and (k, ch) not in have]
         if len(members) < 2:
@@ -506,7 +503,7 @@ def _channel_pairs(wd: WorkData, base: FitResult, base_specs, out: list[Candidat
         for c in members:
             own.update(getattr(c._fit, "_thetas", {}) or {})
         r = None
-        for th in (dict(thetas0), own):
+        for th in [dict(thetas0)] + ([own] if own != thetas0 else []):
             try:
                 f = fit_model(wd, list(base_specs) + [c.spec for c in members], folds=folds,
                               thetas0=th, light=True)

@@ -329,3 +329,17 @@ def test_two_forms_of_one_sensor_that_hide_each_other_are_found_as_a_block():
     assert labels[0] == "dTlagdt(T_gyro)", labels
     assert "T2(T_gyro)" in labels, labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
+
+
+def test_an_effect_that_hurts_alone_is_found_as_the_partner_of_the_best_candidate():
+    """A sensor lagging its node by 313 s (a term in the case temperature's rate) beside a
+    warm-up: dT/dt alone makes the held-out prediction worse (it enters no pair pool), the
+    warm-up alone gains -27 % at HAC z 0.3; the warm-up with dT/dt as its partner gains
+    -92 % at z 8 and 9. Before, the loop took a spurious ramp first and ended 13x the true
+    model (seed 28086)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(28086))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[0] == "warmup", labels
+    assert "ramp" not in labels, labels
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]

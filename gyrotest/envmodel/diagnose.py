@@ -65,7 +65,10 @@ that the model under judgment cannot move:
    its more useful member first, and the next step tests the other. A trend (``ramp``) is
    also paired with every member of the pool, whatever its own gain (beside a missing
    lagged coil an ageing ramp gains nothing alone, not even in sample), under the joint
-   HAC test below (:func:`gyrotest.envmodel.pairs._trend_pairs`). A single term chosen
+   HAC test below (:func:`gyrotest.envmodel.pairs._trend_pairs`); likewise the two best
+   members of the pool with every other candidate, for an effect that hides behind a larger
+   one so well that alone it predicts the held-out data worse than nothing
+   (:func:`gyrotest.envmodel.pairs._partner_pairs`). A single term chosen
    this far above the floor that leaves the model ≥ 2 × the floor also gives way to a
    qualifying pair of two other candidates whose held-out RMS is below half of its own --
    unless the term itself, paired with one of the pool, comes within 10 % of that pair

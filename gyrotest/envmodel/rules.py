@@ -46,7 +46,8 @@ HYST_PAIR_Z = 4.0
 #: a missing hysteresis; tuned on seeds 23000-23199, benchmarks/README.md); it also decides
 #: pairs whose members' own HAC z (each fitted alone) are both below FAR_Z, and the pairs of
 #: one channel's forms (:func:`gyrotest.envmodel.pairs._channel_pairs`; seeds 27086 and
-#: 27119, tuned on seeds 27000-27199)
+#: 27119, tuned on seeds 27000-27199) and the best pool members' partners outside the pool
+#: (:func:`gyrotest.envmodel.pairs._partner_pairs`; seed 28086, tuned on seeds 28000-29199)
 HIDDEN_TOP = 2
 #: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.diagnose._judge`)
 SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"

@@ -484,7 +484,8 @@ def _partner_pairs(out: list[Candidate], pool: list[Candidate]
     and 8.9). Such a pair must pass the joint HAC test of :func:`_joint_z_ok` like the
     other pairs that no single-term evidence backs."""
     lead = [c for c in pool[:PARTNER_TOP] if c.spec.key not in TRENDS]
-    rest = [c for c in _pairable(out) if c not in pool and c.spec.key not in TRENDS]
+    in_pool = {id(c) for c in pool}
+    rest = [c for c in _pairable(out) if id(c) not in in_pool and c.spec.key not in TRENDS]
     return [(a, m) for a in lead for m in rest]
 
 

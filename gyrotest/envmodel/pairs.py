@@ -80,10 +80,13 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     seen |= {frozenset((id(a), id(b))) for a, b in pp}
     cp, start = [], {}
     for a, b, th in _channel_pairs(wd, base, base_specs, out, thetas0, folds):
-        if id(a) in skip or id(b) in skip or frozenset((id(a), id(b))) in seen:
+        if id(a) in skip or id(b) in skip:
             continue
-        cp.append((a, b))
+        # the block's start holds also for a pair another route proposed (seed 27119: a
+        # partner pair of the same two forms of T_gyro, started cold, missed the lag)
         start[frozenset((id(a), id(b)))] = th
+        if frozenset((id(a), id(b))) not in seen:
+            cp.append((a, b))
     # pairs tested jointly (_joint_z_ok)
     joint = {frozenset((id(a), id(b))) for a, b in hl + tp + pp + cp} | hidden
     pairs += hl + hp + tp + pp + cp

@@ -62,9 +62,24 @@ def console():
                 width = max(120, int(os.environ.get("COLUMNS", 120)))
             except ValueError:
                 width = 120
-        _console = Console(file=sys.stdout, highlight=False, soft_wrap=not sys.stdout.isatty(),
-                           width=width)
+        _console = _quiet_pipe_console(Console)(file=sys.stdout, highlight=False,
+                                                soft_wrap=not sys.stdout.isatty(), width=width)
     return _console
+
+
+@functools.cache
+def _quiet_pipe_console(base):
+    """``base`` (rich's Console) whose closed-pipe handling hands back to the command line:
+    rich's own ``on_broken_pipe`` raises SystemExit(1), so ``gyrotest … | head`` exited 1;
+    this one silences the console and raises BrokenPipeError, which ``gyrotest.cli`` turns
+    into exit 0 (downstream closing the pipe is not an error)."""
+
+    class QuietPipeConsole(base):
+        def on_broken_pipe(self) -> None:
+            self.quiet = True
+            raise BrokenPipeError
+
+    return QuietPipeConsole
 
 
 def err_console():

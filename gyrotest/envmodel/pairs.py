@@ -28,6 +28,7 @@ from .rules import (
     HYST_PAIR_Z,
     LOOKAHEAD_MORE,
     LOOKAHEAD_TOP,
+    PAIR_EXEMPT_SPECTRAL_Z,
     PAIR_FIT_GAIN,
     PAIR_MARGIN,
     PAIR_MIN_GAIN,
@@ -110,8 +111,9 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         # a member that failed a test alone: the gain that needs no spectral test
         if frozenset((id(a), id(b))) in hidden and not spectral_exempt(impr, t_cv):
             continue
-        if (not spectral_exempt(impr, t_cv)
-                and not spectral_z(r, [a.term, b.term], wd) >= SPECTRAL_Z):  # far: ratio >= 2
+        # far: ratio >= 2; an exempt gain still needs a pair's own bar
+        bar = PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) else SPECTRAL_Z
+        if not spectral_z(r, [a.term, b.term], wd) >= bar:
             continue
         if r.rms_holdout >= lowest:
             continue

@@ -194,7 +194,7 @@ def with_terms(r: FitResult, wd: WorkData, keep: list[TermSpec] | None = None
 
 
 def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
-               keep: list[TermSpec] | None = None) -> float:
+               keep: list[TermSpec] | None = None, red: bool = True) -> float:
     """Spectral (Whittle) z of the linear coefficients of the terms ``labels`` in the fitted
     model ``r``, against the spectrum of its own residual
     (:func:`gyrotest.envmodel.stats.whittle_z`).
@@ -202,11 +202,16 @@ def spectral_z(r: FitResult, labels: list[str], wd: WorkData,
     ``keep``: terms the candidate replaced in ``r``, put back beside it for the test
     (:func:`with_terms`). A lagged core temperature replaces the plain sensor temperature;
     its coefficient then carries the whole temperature effect the model already had, and
-    only what T_core explains beyond T is evidence of a lag (the HAC test does the same)."""
+    only what T_core explains beyond T is evidence of a lag (the HAC test does the same).
+
+    ``red``: the low-frequency floor of a red residual
+    (:func:`gyrotest.envmodel.stats.red_floor`); False near the noise floor, where the
+    residual is white/flicker noise and the bar is lower
+    (:func:`gyrotest.envmodel.rules.spectral_bar`)."""
     idx = [i for i, cf in enumerate(r.coefficients) if cf.term in labels and cf.kind == "linear"]
     try:
         X, _, e = with_terms(r, wd, keep)
-        return st.whittle_z(X, wd.y, e, idx)
+        return st.whittle_z(X, wd.y, e, idx, red=red)
     except (np.linalg.LinAlgError, ValueError):
         return math.nan
 

@@ -441,12 +441,13 @@ def cosine_taper(a: np.ndarray, frac: float = 0.1) -> np.ndarray:
     return a * (w if a.ndim == 1 else w[:, None])
 
 
-def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int]) -> float:
+def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int],
+              red: bool = True) -> float:
     """Significance of the coefficients ``idx`` of the regression y ≈ Xβ against noise with
     the spectrum of the residual ``e``: frequency-domain generalised least squares (Whittle
     likelihood), β̂ = (X̃ᴴWX̃)⁻¹X̃ᴴWỹ, Cov = (X̃ᴴWX̃)⁻¹ with W = 1/(n·Ŝ_k) on the real FFT
     bins (k = 1 … n/2 counted twice), Ŝ = :func:`smoothed_periodogram` of e with the
-    low-frequency floor of a red residual (:func:`red_floor`).
+    low-frequency floor of a red residual (:func:`red_floor`) unless ``red`` is False.
 
     Returns z = √(β̂ᵀCov⁻¹β̂ / q), the root-mean-square z of the q coefficients.
 
@@ -467,7 +468,9 @@ def whittle_z(X: np.ndarray, y: np.ndarray, e: np.ndarray, idx: list[int]) -> fl
     """
     n = y.size
     X, y, e = cosine_taper(X), cosine_taper(y), cosine_taper(e)
-    S = red_floor(smoothed_periodogram(e))
+    S = smoothed_periodogram(e)
+    if red:
+        S = red_floor(S)
     pos = S > 0
     if not idx or n < 8 or not pos.any():
         return float("nan")

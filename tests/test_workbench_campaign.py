@@ -210,12 +210,17 @@ def test_a_lag_that_stood_in_for_a_rate_term_gives_way_to_the_plain_temperature(
     """T(tc2) and the rate of a lagged node of another sensor, both missing: alone the lag
     Tlag(tc2) wins (-66 % against -39 %), its time constant absorbing part of the rate term;
     beside that rate term the plain T(tc2) reaches 0.168 deg/h and the lag 0.225. The first
-    step names T(tc2) (seed 23183: Tlag(tc2) before, the true T never named)."""
+    step names T(tc2) (seed 23183: Tlag(tc2) before, the true T never named). Since the
+    eighteenth pass the pair search finds T(tc2) with the rate term directly (a candidate
+    the spectral test rejected alone may join a pair), and the verdict says what the lag
+    alone would leave."""
     bw, ws = _bench()
     row = bw.run_case(ws.make_case(23183))
     labels = [a["label"] for a in row["added"]]
     assert labels[0] == "T(tc2)", labels
-    assert "stood in for a missing rate term" in row["steps"][0]["verdict"]
+    verdict = row["steps"][0]["verdict"]
+    assert ("stood in for a missing rate term" in verdict
+            or ("Tlag(tc2) alone would leave" in verdict and "dTlagdt(tc0)" in verdict)), verdict
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
 

@@ -217,6 +217,7 @@ from .rules import (
     UNLAGGED,
     WARMUP_SPECTRAL_Z,
     WEAK_P,
+    red_floor_for,
     spectral_bar,
     spectral_exempt,
 )
@@ -555,7 +556,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
             and impr >= BIG_GAIN and t_cv >= FAR_T):
         # a warm-up lives in the first chunks: fold consistency understates it
         # (:data:`WARMUP_SPECTRAL_Z`)
-        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces))
+        zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces), red=False)
         far = bool(zw >= WARMUP_SPECTRAL_Z)
     # the HAC guard, or (other missing effects inflating its error) the spectral z alone
     far_hac = far and math.isfinite(z) and abs(z) >= FAR_Z
@@ -566,7 +567,8 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
         # floor leaves white/flicker noise, and the red floor cost a true follow-up effect
         # there its z: seed 15000, dT/dt 5.8 -> 3.8 against a bar of 4)
         zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces),
-                        red=waived or spectral_bar(base_ratio) == SPECTRAL_Z)
+                        red=((waived or spectral_bar(base_ratio) == SPECTRAL_Z)
+                             and red_floor_for([c.key])))
     if waived:
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:

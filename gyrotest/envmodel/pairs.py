@@ -112,8 +112,13 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         # a member that failed a test alone: the gain that needs no spectral test
         if frozenset((id(a), id(b))) in hidden and not spectral_exempt(impr, t_cv):
             continue
-        # far: ratio >= 2; an exempt gain still needs a pair's own bar
-        bar = PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) else SPECTRAL_Z
+        # far: ratio >= 2; an exempt gain still needs a pair's own bar, and a member the
+        # spectral test rejected alone gets no exemption: the pair must pass that test
+        # (null seed 31680: a ramp and a channel lag, both rejected alone, fitted together
+        # to real-gyro wander at −58 %, spectral z 6.2)
+        spec_rej = any(c.rejected and c.rejected.startswith(SPECTRAL_REJECT) for c in (a, b))
+        bar = (PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) and not spec_rej
+               else SPECTRAL_Z)
         red = red_floor_for([a.spec.key, b.spec.key]) if a.spec and b.spec else True
         if not spectral_z(r, [a.term, b.term], wd, red=red) >= bar:
             continue

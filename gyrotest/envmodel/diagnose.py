@@ -77,7 +77,8 @@ that the model under judgment cannot move:
    out of the candidate model's own residual spectrum: frequency-domain GLS (Whittle) z ≥ 8
    (:func:`gyrotest.envmodel.stats.whittle_z`; far from the floor the lowest bins of a red
    residual's spectrum are raised to the power law of the band above, since the candidate's
-   own fit removes the wander there, :func:`gyrotest.envmodel.stats.red_floor`). The short-τ
+   own fit removes the wander there, :func:`gyrotest.envmodel.stats.red_floor`; not for a
+   warm-up, whose power lies in those bins by construction). The short-τ
    floor cannot see a gyro's slow wander (random walk, bias instability), and a smooth
    channel fitted to it gains 25-45 % held-out; against the residual's spectrum its z stays
    at 2-6, where true effects reach 10-100. While the model is within 2 × the floor the bar
@@ -86,7 +87,9 @@ that the model under judgment cannot move:
    folds (gain/(scatter/√folds) ≥ 5), or ≥ 40 % at ≥ 10, is exempt: a second missing effect
    with the candidate's stimulus pattern lowers its spectral z too (a pair: ≥ 40 % at ≥ 5,
    and then spectral z ≥ 6 all the same: two terms fitted together to a real gyro's wander
-   gained 42-53 % at 6-13 and reached z 2-4, true pairs 8 and more). Fitted to the slow
+   gained 42-53 % at 6-13 and reached z 2-4, true pairs 8 and more). A candidate set aside
+   by the spectral test alone may still join a pair -- a second missing effect lowers its
+   z -- but that pair must then pass the spectral test itself, exempt gain or not. Fitted to the slow
    wander of a real gyro far above the short-τ floor, single terms reached 41-51 % at 5-9.
    A hysteresis branch (a near-step regressor with a searched width) takes the clear-gain
    and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01, and is not in

@@ -571,7 +571,7 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
         # there its z: seed 15000, dT/dt 5.8 -> 3.8 against a bar of 4)
         zw = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces),
                         red=((waived or spectral_bar(base_ratio) == SPECTRAL_Z)
-                             and red_floor_for([c.key])))
+                             and red_floor_for([c.key], z)))
     if waived:
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:

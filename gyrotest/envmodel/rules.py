@@ -124,9 +124,21 @@ SINGLE_EXEMPT_T = 10.0
 TIME_TERMS = ("warmup",)
 
 
-def red_floor_for(keys) -> bool:
+#: ... nor a term whose coefficient already stands out on the HAC test at |z| ≥
+#: RED_FLOOR_HAC_Z: the floor is a conservative correction of the spectral test against a
+#: wander the candidate absorbs, and a coefficient the time-domain test already sees does
+#: not rest on it. The wander fits on real-noise nulls it stops had HAC z 1.1-2.6 (seeds
+#: 30536-31682); true slow effects it cost reached 4.0-4.1 (a lagged gyro temperature,
+#: a tilt channel's lag, seeds 33105 and 33198: spectral z 8+ → 1.7 and 6.0 with the floor)
+RED_FLOOR_HAC_Z = 3.5
+
+
+def red_floor_for(keys, hac_z: float = math.nan) -> bool:
     """Whether the spectral z of terms with these effect keys uses the red-residual floor:
-    False when any of them is a warm-up (:data:`TIME_TERMS`)."""
+    False when any of them is a warm-up (:data:`TIME_TERMS`) or when the candidate's HAC
+    ``hac_z`` is at least :data:`RED_FLOOR_HAC_Z` in size."""
+    if math.isfinite(hac_z) and abs(hac_z) >= RED_FLOOR_HAC_Z:
+        return False
     return not any(k in TIME_TERMS for k in keys)
 
 

@@ -270,7 +270,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
               "% at ≥ 5, then z ≥ 6; none when a member failed the test alone); far "
               "above the floor a red residual's lowest bins are floored at the power law "
-              "of the band above (not for a warm-up); hysteresis needs fold consistency ≥ 4 "
+              "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis needs fold consistency ≥ 4 "
               "(≥ 10 off the strict test); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; ties go to channel-based "
@@ -467,7 +467,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     or >= 40 % at >= 10 (a pair: >= 40 % at >= 5, then z >= 6; no exemption for a pair with a
     member that failed the test alone): a smooth channel fitted to the gyro's own slow
     wander is not named. Far above the floor the lowest bins of a red residual's spectrum
-    are raised to the power law of the band above (not for a warm-up). A hysteresis branch also needs fold consistency >= 4 (>= 10 with
+    are raised to the power law of the band above (not for a warm-up, nor for a coefficient
+    at HAC |z| >= 3.5). A hysteresis branch also needs fold consistency >= 4 (>= 10 with
     p x trials < 0.01 off the strict test) and is paired only with the level of its own
     temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit; the
     same joint test (and a gain >= 40 % at fold consistency >= 5) admits a hysteresis or a

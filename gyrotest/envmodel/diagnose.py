@@ -78,7 +78,8 @@ that the model under judgment cannot move:
    (:func:`gyrotest.envmodel.stats.whittle_z`; far from the floor the lowest bins of a red
    residual's spectrum are raised to the power law of the band above, since the candidate's
    own fit removes the wander there, :func:`gyrotest.envmodel.stats.red_floor`; not for a
-   warm-up, whose power lies in those bins by construction). The short-τ
+   warm-up, whose power lies in those bins by construction, nor for a coefficient whose HAC
+   z is already ≥ 3.5, :func:`gyrotest.envmodel.rules.red_floor_for`). The short-τ
    floor cannot see a gyro's slow wander (random walk, bias instability), and a smooth
    channel fitted to it gains 25-45 % held-out; against the residual's spectrum its z stays
    at 2-6, where true effects reach 10-100. While the model is within 2 × the floor the bar

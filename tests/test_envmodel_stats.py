@@ -67,6 +67,18 @@ def test_whittle_z_discounts_a_smooth_channel_fitted_to_slow_wander():
     assert np.mean(np.array(true_w) >= 8.0) > 0.99
 
 
+def _null_and_true_z(x: np.ndarray, y_null: np.ndarray, y_true: np.ndarray
+                     ) -> tuple[float, float]:
+    """Spectral z of the channel ``x`` (with an intercept) fitted to a record without its
+    effect and to one with it."""
+    X = np.column_stack([np.ones(x.size), x])
+    out = []
+    for y in (y_null, y_true):
+        _, e = _ols_z(X, y, 1)
+        out.append(st.whittle_z(X, y, e, [1]))
+    return out[0], out[1]
+
+
 def test_whittle_z_is_not_fooled_by_the_end_to_end_jump():
     """A channel that settles over the record (1 − e^(−t/τ)) and a residual that wanders
     (random walk): both jump from their last value back to their first in the FFT's periodic
@@ -78,13 +90,10 @@ def test_whittle_z_is_not_fooled_by_the_end_to_end_jump():
     spur, true = [], []
     for _ in range(120):
         x = 1.0 - np.exp(-t / rng.uniform(100, 600))
-        X = np.column_stack([np.ones(n), x])
         y = np.cumsum(rng.normal(size=n)) * 0.2 + rng.normal(size=n)
-        _, e = _ols_z(X, y, 1)
-        spur.append(st.whittle_z(X, y, e, [1]))
-        y2 = 20.0 * x + rng.normal(size=n)
-        _, e2 = _ols_z(X, y2, 1)
-        true.append(st.whittle_z(X, y2, e2, [1]))
+        z_spur, z_true = _null_and_true_z(x, y, 20.0 * x + rng.normal(size=n))
+        spur.append(z_spur)
+        true.append(z_true)
     assert np.mean(np.array(spur) >= 8.0) < 0.15, np.percentile(spur, [50, 90])
     assert np.mean(np.array(true) >= 8.0) > 0.95, np.percentile(true, [10, 50])
 
@@ -123,12 +132,9 @@ def test_whittle_z_of_a_slow_channel_fitted_to_a_random_walk_is_near_its_null_di
     for _ in range(150):
         x = np.sin(2 * np.pi * t / n * rng.uniform(0.5, 2.0) + rng.uniform(0, 6))
         x = (x - x.mean()) / x.std()
-        X = np.column_stack([np.ones(n), x])
         y = np.cumsum(rng.normal(size=n)) * rng.choice([0.05, 0.15, 0.3]) + rng.normal(size=n)
-        _, e = _ols_z(X, y, 1)
-        spur.append(st.whittle_z(X, y, e, [1]))
-        y3 = 0.4 * x + rng.normal(size=n)
-        _, e3 = _ols_z(X, y3, 1)
-        true.append(st.whittle_z(X, y3, e3, [1]))
+        z_spur, z_true = _null_and_true_z(x, y, 0.4 * x + rng.normal(size=n))
+        spur.append(z_spur)
+        true.append(z_true)
     assert np.mean(np.array(spur) >= 4.0) < 0.09, np.percentile(spur, [50, 90])
     assert np.median(true) > 11.0 and np.mean(np.array(true) >= 8.0) > 0.9

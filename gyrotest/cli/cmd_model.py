@@ -270,8 +270,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
               "% at ≥ 5, then z ≥ 6; none when a member failed the test alone); far "
               "above the floor a red residual's lowest bins are floored at the power law "
-              "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis needs fold consistency ≥ 4 "
-              "(≥ 10 off the strict test); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
+              "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
+              "needs fold consistency ≥ 4 (≥ 10 off the strict test); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; ties go to channel-based "
               "terms and to the channels the model already uses")

@@ -194,10 +194,11 @@ def test_tied_candidates_are_told_apart_by_the_next_step():
     23141: the decoy's lag was named and the loop stopped at 4.7x the true model). Until the
     fourteenth pass the lookahead named the ramp, then the product. Since a single term needs
     ≥ 55 % (or ≥ 40 % at fold consistency ≥ 10) to skip the spectral test, neither tied
-    candidate (41 % at 5.8-6.8, spectral z 6.6-7.5) qualifies at the first step; a warm-up
-    paired with a lagged-node rate is named first (the cost of that rule, benchmarks/README.md),
-    then the product and the ramp: the decoy is still never named and the loop still ends at
-    the true model."""
+    candidate (41 % at 5.8-6.8, spectral z 6.6-7.5) qualifies at the first step. Since the
+    eighteenth pass a candidate the spectral test rejected alone may join a pair (which must
+    then pass that test itself), and a trend may lead the partner pairs: the ramp and the
+    product are found together (-87 %, pair spectral z 45), the ramp named first, then the
+    product; the decoy is never named and the loop ends at the true model."""
     bw, ws = _bench()
     row = bw.run_case(ws.make_case(23141))
     labels = [a["label"] for a in row["added"]]

@@ -116,10 +116,10 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         # spectral test rejected alone gets no exemption: the pair must pass that test
         # (null seed 31680: a ramp and a channel lag, both rejected alone, fitted together
         # to real-gyro wander at −58 %, spectral z 6.2)
-        spec_rej = any(c.rejected and c.rejected.startswith(SPECTRAL_REJECT) for c in (a, b))
+        spec_rej = _spectral_rejected(a) or _spectral_rejected(b)
         bar = (PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) and not spec_rej
                else SPECTRAL_Z)
-        red = red_floor_for([a.spec.key, b.spec.key]) if a.spec and b.spec else True
+        red = red_floor_for([a.spec.key, b.spec.key])
         if not spectral_z(r, [a.term, b.term], wd, red=red) >= bar:
             continue
         if r.rms_holdout >= lowest:
@@ -387,6 +387,12 @@ HIGHER_ORDER = ("chan2", "chanprod", "T2", "g2", "gprod", "Hsq", "Hprod", "Hmag2
 LEVEL_SQUARE = {"g": "g2", "T": "T2", "chan": "chan2", "Hx": "Hsq", "Hy": "Hsq", "Hz": "Hsq"}
 
 
+def _spectral_rejected(c: Candidate) -> bool:
+    """Whether ``c`` alone was set aside by the spectral test (its coefficient did not stand
+    out of the residual's slow noise)."""
+    return bool(c.rejected) and c.rejected.startswith(SPECTRAL_REJECT)
+
+
 def _pairable(out: list[Candidate]) -> list[Candidate]:
     """Candidates the pair search may use: fitted, not replacing a term, not a hysteresis
     branch (:data:`HYST_WEAK_CV_T`), not rejected -- except by the spectral test (its
@@ -395,7 +401,7 @@ def _pairable(out: list[Candidate]) -> list[Candidate]:
     ageing ramp alone −41 % at spectral z 6.6, the anisoelastic product beside it hidden;
     together −87 % at z 45)."""
     return [c for c in out if c.spec is not None and not c.replaces
-            and (c.rejected is None or c.rejected.startswith(SPECTRAL_REJECT))
+            and (c.rejected is None or _spectral_rejected(c))
             and c._fit is not None and math.isfinite(c.rms_holdout) and c.spec.key != "hyst"]
 
 

@@ -211,6 +211,7 @@ from .rules import (
     FAR_T_NUISANCE,
     FAR_Z,
     HYST_CV_T,
+    HYST_STRONG_CV_T,
     HYST_WEAK_CV_T,
     MIN_IMPROVEMENT,
     PERIOD_SHARE,
@@ -538,7 +539,8 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     guard = CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
     # a hysteresis branch off the strict route (:data:`HYST_WEAK_CV_T`)
     hyst_weak = c.key != "hyst" or (t_cv >= HYST_WEAK_CV_T and math.isfinite(p_tr)
-                                     and p_tr < CLEAR_P)
+                                     and (p_tr < CLEAR_P
+                                          or (t_cv >= HYST_STRONG_CV_T and p_tr < WEAK_P)))
     strict = bool(math.isfinite(p_adj) and p_adj < alpha
                   and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
                                else min_improvement)

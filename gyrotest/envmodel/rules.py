@@ -35,6 +35,11 @@ STRONG_P = 0.5
 #: (tuned on the campaigns of seeds 1000-16699, benchmarks/README.md)
 HYST_CV_T = 4.0
 HYST_WEAK_CV_T = 10.0
+#: ... at a fold consistency of HYST_STRONG_CV_T or more -- five times the most a wander fit
+#: reached -- the HAC guard of the weak routes is p × trials < WEAK_P: a chamber run with few
+#: heating/cooling cycles gives the branch regressor few effective degrees of freedom (seed
+#: 35027: a hysteresis of 99 × the floor, −95 % held-out at consistency 745, p × trials 0.011)
+HYST_STRONG_CV_T = 100.0
 #: a hysteresis branch and the level of the same temperature, both missing, each hide the
 #: other (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`): the pair is tried far above
 #: the floor like any pair, and each member's coefficient must reach this HAC z in the pair's

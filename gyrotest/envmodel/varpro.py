@@ -65,6 +65,20 @@ def _rss(X: np.ndarray, y: np.ndarray) -> float:
 
 #: points of the global log-spaced search grid of a time constant
 TAU_GRID = 14
+#: periodogram peaks tried when a free frequency is searched from scratch (see _opt_one)
+PEAKS = 4
+
+
+def _simplex(x0: list[float], lo: list[float], hi: list[float],
+             step: float = 0.15) -> np.ndarray:
+    """A starting simplex around ``x0`` (log time constants): ±``step`` along each axis,
+    toward the middle of the range where ``x0`` sits at a bound."""
+    n = len(x0)
+    sim = np.tile(np.asarray(x0, float), (n + 1, 1))
+    for i in range(n):
+        up = x0[i] + step <= hi[i]
+        sim[i + 1, i] = x0[i] + step if up else max(lo[i], x0[i] - step)
+    return sim
 
 
 class _Fitter:
@@ -119,6 +133,46 @@ class _Fitter:
                 thetas[s.label] = self._opt_one(
                     s, thetas, mask, local=(local and s.label in known) or rnd >= n_global)
         return thetas
+
+    def polish_joint(self, thetas: dict[str, dict], mask: np.ndarray | None = None
+                     ) -> dict[str, dict]:
+        """Two or more time constants (or widths) that trade off against each other lie in a
+        narrow curved valley of the residual sum of squares, along which the one-parameter
+        moves of :meth:`optimise` creep and stop: a joint Nelder–Mead search over their
+        logarithms from ``thetas`` (bounded by their search ranges; frequencies held), kept
+        when it lowers the residual sum of squares. Seed 34102: a warm-up beside the lag of
+        the case temperature, from scratch τ 778 s and 648 s, RSS 10.2; jointly 637 s and
+        482 s, RSS 1.2 (held-out 0.38 → 0.11 deg/h, the true model's 0.10)."""
+        taus = [s for s in self.nl if s.effect.nonlinear[0].kind == "tau" and s.label in thetas]
+        if len(taus) < 2:
+            return thetas
+        names, lo, hi, x0 = [], [], [], []
+        for s in taus:
+            (pname, (a, b)), = self.bounds[s.label].items()
+            v = min(max(thetas[s.label][pname], a), b)
+            names.append((s.label, pname))
+            lo.append(math.log(a))
+            hi.append(math.log(b))
+            x0.append(math.log(v))
+
+        def th_of(u) -> dict[str, dict]:
+            th = dict(thetas)
+            for (lab, pname), v in zip(names, u):
+                th[lab] = {pname: float(math.exp(v))}
+            return th
+
+        def f(u) -> float:
+            return self.solve(th_of(u), mask)[1]
+
+        cur = f(x0)
+        r = optimize.minimize(f, np.array(x0), method="Nelder-Mead",
+                              bounds=list(zip(lo, hi)),
+                              options={"xatol": 0.003, "fatol": 1e-6 * cur,
+                                       "maxfev": 150 * len(taus),
+                                       "initial_simplex": _simplex(x0, lo, hi)})
+        if not r.fun < cur * (1.0 - 1e-6):
+            return thetas
+        return th_of(r.x)
 
     def recheck_taus(self, thetas: dict[str, dict], warm: set[str],
                      min_gain: float = 0.1) -> dict[str, dict]:
@@ -229,14 +283,27 @@ class _Fitter:
         T = self.wd.duration_s
         if local and cur is not None:
             a, b = max(lo, cur - 0.5 / T), min(hi, cur + 0.5 / T)
-        else:
-            f0 = self._periodogram_peak(s, thetas, mask, lo, hi)
+            r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
+                                         options={"xatol": 1e-3 / T})
+            return {pname: float(r.x)}
+        # from scratch: the strongest periodogram peaks, each refined, the lowest residual
+        # sum of squares kept. The highest peak alone can be a harmonic: on a training mask
+        # with held-out chunks, and with a channel that shares the period fitted without the
+        # sinusoid, the peak at 2f or 3f was taken in three of five folds of seed 34064
+        # (training RSS 17–70 against 0.03–0.05 at f; held-out 82x the floor)
+        best = None
+        for f0 in self._periodogram_peaks(s, thetas, mask, lo, hi):
             a, b = max(lo, f0 - 1.0 / T), min(hi, f0 + 1.0 / T)
-        r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
-                                     options={"xatol": 1e-3 / T})
-        return {pname: float(r.x)}
+            r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
+                                         options={"xatol": 1e-3 / T})
+            if best is None or r.fun < best.fun:
+                best = r
+        return {pname: float(best.x)}
 
-    def _periodogram_peak(self, s: TermSpec, thetas, mask, lo: float, hi: float) -> float:
+    def _periodogram_peaks(self, s: TermSpec, thetas, mask, lo: float, hi: float,
+                           k: int = PEAKS) -> list[float]:
+        """Frequencies of the ``k`` highest local maxima of the periodogram of the residual
+        without ``s`` (on the blocks of ``mask``, gaps zero), in [lo, hi]."""
         others = [x for x in self.specs if x.label != s.label]
         X = self.d.matrix(others, thetas)
         y = self.wd.y
@@ -258,8 +325,15 @@ class _Fitter:
         fr = np.fft.rfftfreq(nfft, tb)
         ok = (fr >= lo) & (fr <= hi)
         if not ok.any():
-            return 0.5 * (lo + hi)
-        return float(fr[ok][np.argmax(P[ok])])
+            return [0.5 * (lo + hi)]
+        Pk, fk = P[ok], fr[ok]
+        if len(Pk) < 3:
+            return [float(fk[np.argmax(Pk)])]
+        inner = (Pk[1:-1] >= Pk[:-2]) & (Pk[1:-1] >= Pk[2:])
+        peak = np.concatenate([[Pk[0] >= Pk[1]], inner, [Pk[-1] >= Pk[-2]]])
+        idx = np.flatnonzero(peak)
+        idx = idx[np.argsort(Pk[idx])[::-1][:k]]
+        return [float(fk[i]) for i in idx] or [float(fk[np.argmax(Pk)])]
 
     def jacobian(self, thetas: dict[str, dict], beta: np.ndarray) -> tuple[np.ndarray, list]:
         """Columns ∂ŷ/∂θ for every nonlinear parameter (block level)."""

@@ -26,6 +26,7 @@ from .rules import (
     FAR_Z,
     HIDDEN_TOP,
     HYST_PAIR_Z,
+    HYST_STRONG_CV_T,
     LOOKAHEAD_MORE,
     LOOKAHEAD_TOP,
     PAIR_EXEMPT_SPECTRAL_Z,
@@ -100,12 +101,12 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
                       start=start.get(frozenset((id(a), id(b)))))
         if r is None:
             continue
-        if frozenset((id(a), id(b))) in joint and not _joint_z_ok(r, a, b, wd):
+        impr, _, t_cv = held_out_gain(base, r, folds)
+        if frozenset((id(a), id(b))) in joint and not _joint_z_ok(r, a, b, wd, t_cv):
             continue
         if not r.rms_holdout <= min(PAIR_MARGIN * min(a.rms_holdout, b.rms_holdout),
                                     below):
             continue
-        impr, _, t_cv = held_out_gain(base, r, folds)
         # a free frequency or width in the pair: the flexible-term thresholds
         nuisance = a.klass == "nuisance" or b.klass == "nuisance"
         if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
@@ -132,7 +133,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
                                         for c in (a, b)):
             # neither member's coefficient stood out alone, where the other effect inflated
             # its error: both must stand out in the pair's own fit
-            if not _joint_z_ok(r, a, b, wd):
+            if not _joint_z_ok(r, a, b, wd, t_cv):
                 continue
             joint.add(key)
         best = (a, b, r, t_cv)
@@ -421,7 +422,10 @@ def _polynomial_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]
 
 
 def _hyst_level_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]:
-    """(hysteresis, level) candidate pairs of one temperature channel: hyst(c) with T(c).
+    """(hysteresis, level) candidate pairs of one temperature channel: hyst(c) with T(c),
+    and with T2(c) (seed 35077: a hysteresis and a T² of tc1 both missing, with T(tc1) in
+    the model; hyst alone −77 %, T² alone nothing, together −92 %, to 1.2 × the true
+    model).
 
     A hysteresis branch is a heating/cooling offset *on top of* the linear sensitivity of
     the same sensor; when both are missing, each alone fits the other's part with the
@@ -435,10 +439,8 @@ def _hyst_level_pairs(out: list[Candidate]) -> list[tuple[Candidate, Candidate]]
     for h in ok:
         if h.spec.key != "hyst":
             continue
-        t = next((o for o in ok if o.spec.key == "T" and o.spec.channels == h.spec.channels),
-                 None)
-        if t is not None:
-            pairs.append((h, t))
+        pairs += [(h, o) for o in ok if o.spec.key in ("T", "T2")
+                  and o.spec.channels == h.spec.channels]
     return pairs
 
 
@@ -591,15 +593,21 @@ def _plain_level(wd: WorkData, base_specs, out: list[Candidate], h: Candidate,
     return lv, r2
 
 
-def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData) -> bool:
+def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
+                t_cv: float = math.nan) -> bool:
     """Both members' coefficients stand out in the pair's own fit: HAC z of each at least
     :data:`HYST_PAIR_Z` (the test of :func:`gyrotest.envmodel.candidate.significance`).
 
-    A warm-up is one transient at the start of the record: its regressor has about one
-    effective degree of freedom, and the t reference turns any HAC t into a z near 2.7
-    (seed 35075: a −322 deg/h warm-up with a missing temperature term, HAC t 83 in the
-    pair's fit, z 2.7). A warm-up member passes on the test single warm-ups take far above
-    the floor instead: spectral z ≥ :data:`WARMUP_SPECTRAL_Z` in the pair's fit."""
+    The HAC z is taken against a t reference with the regressor's effective degrees of
+    freedom, and some regressors have almost none whatever their size:
+    - a warm-up is one transient at the start of the record (seed 35075: a −322 deg/h
+      warm-up beside a missing temperature term, HAC t 83 in the pair's fit, z 2.7). It
+      passes on the test single warm-ups take far above the floor: spectral z ≥
+      :data:`WARMUP_SPECTRAL_Z` in the pair's fit;
+    - a hysteresis branch in a chamber run of few heating/cooling cycles (seed 35077: with
+      the missing T² of the same sensor, HAC t 153, z 3.1). At a pair fold consistency
+      ``t_cv`` ≥ :data:`HYST_STRONG_CV_T`, where no wander fit was seen, a member passes at
+      spectral z ≥ :data:`SPECTRAL_Z` instead (the red-residual floor as for singles)."""
     for c in (a, b):
         try:
             z, _ = significance(r, c.spec, None, wd)
@@ -609,6 +617,9 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData) -> bool:
             continue
         if c.spec.key in TIME_TERMS and spectral_z(r, [c.term], wd, red=False) \
                 >= WARMUP_SPECTRAL_Z:
+            continue
+        if t_cv >= HYST_STRONG_CV_T and spectral_z(
+                r, [c.term], wd, red=red_floor_for([c.spec.key], z)) >= SPECTRAL_Z:
             continue
         return False
     return True

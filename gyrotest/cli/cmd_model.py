@@ -271,7 +271,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "% at ≥ 5, then z ≥ 6; none when a member failed the test alone); far "
               "above the floor a red residual's lowest bins are floored at the power law "
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
-              "needs fold consistency ≥ 4 (≥ 10 off the strict test); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
+              "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; ties go to channel-based "
               "terms and to the channels the model already uses")
@@ -469,11 +469,13 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     wander is not named. Far above the floor the lowest bins of a red residual's spectrum
     are raised to the power law of the band above (not for a warm-up, nor for a coefficient
     at HAC |z| >= 3.5). A hysteresis branch also needs fold consistency >= 4 (>= 10 with
-    p x trials < 0.01 off the strict test) and is paired only with the level of its own
-    temperature, hyst(c) with T(c), each coefficient at HAC z >= 4 in the pair's fit; the
-    same joint test (and a gain >= 40 % at fold consistency >= 5) admits a hysteresis or a
-    term set aside by the spectral test beside another candidate (a warm-up hidden by a
-    missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
+    p x trials < 0.01 off the strict test, or >= 100 with p x trials < 0.05) and is paired
+    only with the level or square of its own temperature, hyst(c) with T(c) or T2(c), each
+    coefficient at HAC z >= 4 in the pair's fit (a warm-up, one transient with about one
+    degree of freedom, at spectral z >= 8 instead; any member at spectral z >= 8 when the
+    pair's fold consistency is >= 100); the same joint test (and a gain >= 40 % at fold
+    consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
+    another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel.
     A product of two channels gives way to the level terms of its factors when those do

@@ -93,12 +93,15 @@ that the model under judgment cannot move:
    z -- but that pair must then pass the spectral test itself, exempt gain or not. Fitted to the slow
    wander of a real gyro far above the short-τ floor, single terms reached 41-51 % at 5-9.
    A hysteresis branch (a near-step regressor with a searched width) takes the clear-gain
-   and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01, and is not in
-   the pair pool: fitted to a gyro's slow wander it reaches 2-10 there (20 at most), true
-   hysteresis 10-1000. It is paired only with the level of its own temperature (hyst(c) with
-   T(c): a heating/cooling offset on top of the linear sensitivity, each alone fitting the
-   other's part), and that pair also needs a HAC z ≥ 4 for each coefficient in the pair's own
-   fit (:func:`gyrotest.envmodel.pairs._hyst_level_pairs`). The same joint test admits
+   and far routes only at gain/(scatter/√folds) ≥ 10 with p × trials < 0.01 (≥ 100 with
+   p × trials < 0.05: few heating/cooling cycles leave the branch few degrees of freedom),
+   and is not in the pair pool: fitted to a gyro's slow wander it reaches 2-10 there (20 at
+   most), true hysteresis 10-1000. It is paired only with the level or square of its own
+   temperature (hyst(c) with T(c) or T2(c): a heating/cooling offset on top of the
+   sensitivity, each alone fitting the other's part), and that pair also needs a HAC z ≥ 4
+   for each coefficient in the pair's own fit (:func:`gyrotest.envmodel.pairs._joint_z_ok`:
+   a warm-up member, one transient, at spectral z ≥ 8 instead; any member at spectral z ≥ 8
+   when the pair's fold consistency is ≥ 100). The same joint test admits
    *hidden* pairs: the two best hysteresis branches or terms set aside by the spectral test
    (whose "slow noise" may be the other missing effect) with a member of the pool, when
    the pair also cuts the held-out RMS by ≥ 40 % at gain/(scatter/√folds) ≥ 5

@@ -4,7 +4,9 @@ optimiser of its nonlinear parameters (:class:`_Fitter`), used by
 
 Linear coefficients are solved exactly at every step; each time constant is searched on a
 log grid and refined by bounded Brent minimisation of the residual sum of squares, a
-frequency from the residual periodogram (the estimation section of :mod:`.fit`).
+frequency from the highest peaks of the residual periodogram, and two or more time
+constants are polished jointly (:meth:`_Fitter.polish_joint`; the estimation section of
+:mod:`.fit`).
 """
 
 from __future__ import annotations

@@ -138,7 +138,7 @@ class _Fitter:
 
     def polish_joint(self, thetas: dict[str, dict], mask: np.ndarray | None = None
                      ) -> dict[str, dict]:
-        """Two or more time constants (or widths) that trade off against each other lie in a
+        """Two or more time constants that trade off against each other lie in a
         narrow curved valley of the residual sum of squares, along which the one-parameter
         moves of :meth:`optimise` creep and stop: a joint Nelder–Mead search over their
         logarithms from ``thetas`` (bounded by their search ranges; frequencies held), kept
@@ -307,8 +307,9 @@ class _Fitter:
 
     def _periodogram_peaks(self, s: TermSpec, thetas, mask, lo: float, hi: float,
                            k: int = PEAKS) -> list[float]:
-        """Frequencies of the ``k`` highest local maxima of the periodogram of the residual
-        without ``s`` (on the blocks of ``mask``, gaps zero), in [lo, hi]."""
+        """Frequencies of the ``k`` highest local maxima, at least 1/duration apart, of the
+        periodogram of the residual without ``s`` (on the blocks of ``mask``, gaps zero), in
+        [lo, hi]."""
         others = [x for x in self.specs if x.label != s.label]
         X = self.d.matrix(others, thetas)
         y = self.wd.y
@@ -337,8 +338,16 @@ class _Fitter:
         inner = (Pk[1:-1] >= Pk[:-2]) & (Pk[1:-1] >= Pk[2:])
         peak = np.concatenate([[Pk[0] >= Pk[1]], inner, [Pk[-1] >= Pk[-2]]])
         idx = np.flatnonzero(peak)
-        idx = idx[np.argsort(Pk[idx])[::-1][:k]]
-        return [float(fk[i]) for i in idx] or [float(fk[np.argmax(Pk)])]
+        # strongest first, each at least 1/T from a stronger one kept (the 4x zero padding
+        # puts the side lobes of one peak within 1/T of it)
+        sep = 1.0 / max(self.wd.duration_s, tb)
+        out: list[float] = []
+        for i in idx[np.argsort(Pk[idx])[::-1]]:
+            if all(abs(fk[i] - f) > sep for f in out):
+                out.append(float(fk[i]))
+                if len(out) >= k:
+                    break
+        return out or [float(fk[np.argmax(Pk)])]
 
     def jacobian(self, thetas: dict[str, dict], beta: np.ndarray) -> tuple[np.ndarray, list]:
         """Columns ∂ŷ/∂θ for every nonlinear parameter (block level)."""

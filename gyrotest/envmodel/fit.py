@@ -10,7 +10,8 @@ Linear terms by least squares; terms with a time constant or frequency by variab
 residual periodogram and refined by bounded Brent minimisation of the residual sum of
 squares, the linear coefficients solved exactly at each step; two or more time constants
 are then polished jointly by a Nelder–Mead search over their logarithms, since one-parameter
-moves stop in the curved valley where two of them trade off). Uncertainties: HAC (see :mod:`.stats`) on the Gauss–Newton Jacobian
+moves stop in the curved valley where two of them trade off). Uncertainties: HAC (see
+:mod:`.stats`) on the Gauss–Newton Jacobian
 (linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty propagates. Held-out
 validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
 max(6·W, duration/500) (at least 2·folds chunks); chunk c belongs to fold c mod folds; each

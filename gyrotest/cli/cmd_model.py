@@ -472,7 +472,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     p x trials < 0.01 off the strict test, or >= 100 with p x trials < 0.05) and is paired
     only with the level or square of its own temperature, hyst(c) with T(c) or T2(c), each
     coefficient at HAC z >= 4 in the pair's fit (a warm-up, one transient with about one
-    degree of freedom, at spectral z >= 8 instead; any member at spectral z >= 8 when the
+    degree of freedom, at spectral z >= 8 instead; a hysteresis at spectral z >= 8 when the
     pair's fold consistency is >= 100); the same joint test (and a gain >= 40 % at fold
     consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
     another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step

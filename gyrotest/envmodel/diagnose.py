@@ -100,8 +100,8 @@ that the model under judgment cannot move:
    temperature (hyst(c) with T(c) or T2(c): a heating/cooling offset on top of the
    sensitivity, each alone fitting the other's part), and that pair also needs a HAC z ≥ 4
    for each coefficient in the pair's own fit (:func:`gyrotest.envmodel.pairs._joint_z_ok`:
-   a warm-up member, one transient, at spectral z ≥ 8 instead; any member at spectral z ≥ 8
-   when the pair's fold consistency is ≥ 100). The same joint test admits
+   a warm-up member, one transient, at spectral z ≥ 8 instead; a hysteresis member at
+   spectral z ≥ 8 when the pair's fold consistency is ≥ 100). The same joint test admits
    *hidden* pairs: the two best hysteresis branches or terms set aside by the spectral test
    (whose "slow noise" may be the other missing effect) with a member of the pool, when
    the pair also cuts the held-out RMS by ≥ 40 % at gain/(scatter/√folds) ≥ 5

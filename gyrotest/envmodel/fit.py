@@ -269,7 +269,6 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     if thetas0:
         thetas = fitter.recheck_taus(thetas, set(thetas0))
         thetas = fitter.rescan(thetas, set(thetas0))
-        thetas = fitter.polish_joint(thetas)
     elif len(fitter.nl) > 1:
         alt = fitter.incremental()
         if fitter.solve(alt, None)[1] < fitter.solve(thetas, None)[1]:

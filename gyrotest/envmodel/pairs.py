@@ -606,8 +606,10 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
       :data:`WARMUP_SPECTRAL_Z` in the pair's fit;
     - a hysteresis branch in a chamber run of few heating/cooling cycles (seed 35077: with
       the missing T² of the same sensor, HAC t 153, z 3.1). At a pair fold consistency
-      ``t_cv`` ≥ :data:`HYST_STRONG_CV_T`, where no wander fit was seen, a member passes at
-      spectral z ≥ :data:`SPECTRAL_Z` instead (the red-residual floor as for singles)."""
+      ``t_cv`` ≥ :data:`HYST_STRONG_CV_T`, where no wander fit was seen, a hysteresis member
+      passes at spectral z ≥ :data:`SPECTRAL_Z` instead (the red-residual floor as for
+      singles). Not any member: a channel lag's rate at HAC z 0.2 took that route beside
+      the rate of a lagged node (seed 21091) and displaced the true temperature term."""
     for c in (a, b):
         try:
             z, _ = significance(r, c.spec, None, wd)
@@ -618,7 +620,7 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
         if c.spec.key in TIME_TERMS and spectral_z(r, [c.term], wd, red=False) \
                 >= WARMUP_SPECTRAL_Z:
             continue
-        if t_cv >= HYST_STRONG_CV_T and spectral_z(
+        if c.spec.key == "hyst" and t_cv >= HYST_STRONG_CV_T and spectral_z(
                 r, [c.term], wd, red=red_floor_for([c.spec.key], z)) >= SPECTRAL_Z:
             continue
         return False

@@ -221,6 +221,9 @@ from .rules import (
     SPECTRAL_REJECT,
     SPECTRAL_Z,
     STRONG_P,
+    SWAP_FIT_GAIN,
+    SWAP_SKIP,
+    SWAP_TOP,
     TIE,
     UNLAGGED,
     WARMUP_SPECTRAL_Z,
@@ -427,6 +430,13 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     if not sig:
         sig = [c for c in out if c.significant]
     chosen = None
+    if not sig and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio > ABOVE_FLOOR:
+        swap = _swap_step(wd, base, base_specs, out, thetas0, n_c, base_ratio, alpha,
+                          min_improvement, folds)
+        if swap is not None:
+            out = [swap] + out
+            return out, swap
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
@@ -455,6 +465,44 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if chosen is not None:
             out = [chosen] + [c for c in out if c.term != chosen.term]
     return out, chosen
+
+
+def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ratio, alpha,
+               min_improvement, folds) -> Candidate | None:
+    """A model term that stands in for the missing effect (:data:`SWAP_FIT_GAIN`): when no
+    candidate qualifies added, each of the :data:`SWAP_TOP` candidates with the largest
+    in-sample gain is judged in place of each term of the model (the routes of
+    :func:`_judge`, the trials counted over every swap tried). A swap qualifies when it is
+    significant, fits the record at least as well as the model it changes, and holds out
+    better than the candidate added beside the term; the best by held-out RMS is returned
+    (its ``replaces`` names the term to take out), or None."""
+    fit0 = base.rms_fit
+    if not base_specs or not (math.isfinite(fit0) and fit0 > 0):
+        return None
+    pool = [c for c in out if c.spec is not None and c.replaces is None and c.pair is None
+            and c.spec.key not in SWAP_SKIP and math.isfinite(c.rms_fit)
+            and c.rms_fit <= (1.0 - SWAP_FIT_GAIN) * fit0]
+    pool = sorted(pool, key=lambda c: c.rms_fit)[:SWAP_TOP]
+    n_sw = n_c + len(pool) * len(base_specs)
+    best = None
+    for c in pool:
+        for b in base_specs:
+            if b.label == c.term:
+                continue
+            s = _judge(wd, base, base_specs, c.spec, thetas0, n_sw, base_ratio, alpha,
+                       min_improvement, folds, replaces_labels=[b.label])
+            if not (s.significant and s.rms_fit <= fit0
+                    and s.rms_holdout < c.rms_holdout * (1.0 - TIE)):
+                continue
+            if best is None or s.rms_holdout < best.rms_holdout:
+                s.note = (f"added beside {b.label} it holds out only {c.rms_holdout:.4g} "
+                          f"deg/h: {b.label} stands in for it in the model (in-sample RMS "
+                          f"{fit0:.4g} → {s.rms_fit:.4g} deg/h with {b.label} taken out); "
+                          f"replace {b.label} with {c.term}")
+                best = s
+    if best is not None:
+        best.route = f"{best.route}, in place of {best.replaces}"
+    return best
 
 
 def _new_channels(c: Candidate, used: set[str]) -> int:

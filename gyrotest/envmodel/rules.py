@@ -196,6 +196,18 @@ PAIR_POOL = 8
 #: 60 %; a rate term of the wrong sensor took −79 % and left the model 14x the floor while
 #: the true pair (the lagging sensor's rate and a humidity level) reached 3x (seed 24162)
 REDIRECT_RATIO = 0.5
+#: a term the user's model holds can stand in for the missing effect (a case temperature
+#: that drifts with the ageing ramp of a static run): added beside it, the missing term
+#: cuts the in-sample RMS but hardly the held-out one, because the two regressors are
+#: collinear over the record and the held-out blocks extrapolate them (seed 36096: ramp
+#: beside T(Tcase) -24.7 % in sample, -3.4 % held out; in place of it -28.5 % held out, the
+#: true model's RMS). When no candidate qualifies, the SWAP_TOP candidates that cut the
+#: in-sample RMS by at least SWAP_FIT_GAIN are judged in place of each model term
+#: (:func:`gyrotest.envmodel.diagnose._swap_step`); lags of a channel the model has
+#: (which already replace its plain term) are left out
+SWAP_FIT_GAIN = 0.2
+SWAP_TOP = 3
+SWAP_SKIP = ("Tlag",)
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02
 #: ... far above the floor, at most this many tied candidates are told apart by the step

@@ -273,7 +273,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
-              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; ties go to channel-based "
+              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; then (above 1.2x the floor) "
+              "the largest in-sample gains (≥ 20 %) in place of each model term; ties go to "
+              "channel-based "
               "terms and to the channels the model already uses")
     if b.excursions:
         out.print("  where the base model fails:")
@@ -486,7 +488,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
     >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1 (a gyro
     mounted a few degrees off the coils); with all but one field axis in the model, that
-    axis's term (Hx, Hy or Hz) is named instead.
+    axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
+    floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in
+    place of each model term: a term of your model that stood in for the missing effect
+    (collinear with it over the record) is named for replacement ("replaces X").
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

@@ -159,6 +159,16 @@ that the model under judgment cannot move:
    ``Hvec`` in place of all but one moving component is named as that component's term
    (the model "completes its field vector" with Hx, Hy or Hz).
 
+   **A model term in the missing effect's place** (:func:`_swap_step`): a term of the
+   user's model can stand in for the missing effect (a case temperature that drifts with
+   the ageing ramp of a static run). Added beside it, the missing term cuts the in-sample
+   RMS but hardly the held-out one: the two regressors are collinear over the record and
+   the held-out blocks extrapolate them. When no candidate qualifies added and the model
+   is above 1.2 × the floor, the three candidates that cut the in-sample RMS by ≥ 20 % are
+   judged in place of each model term (the same routes and gates, the trials counted over
+   every swap); a swap that qualifies, fits the record at least as well as the model and
+   holds out better than the candidate added beside the term is named "(replaces X)".
+
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
    ≥ 5 % (gain/(fold scatter/√folds) ≥ 1) is named for removal ("the model does better
@@ -430,13 +440,6 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
     if not sig:
         sig = [c for c in out if c.significant]
     chosen = None
-    if not sig and candidates is None and math.isfinite(base_ratio) \
-            and base_ratio > ABOVE_FLOOR:
-        swap = _swap_step(wd, base, base_specs, out, thetas0, n_c, base_ratio, alpha,
-                          min_improvement, folds)
-        if swap is not None:
-            out = [swap] + out
-            return out, swap
     if sig:
         best = sig[0]
         tied = [c for c in sig if c.rms_holdout <= best.rms_holdout * (1 + TIE)]
@@ -464,6 +467,13 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         _, chosen = axes_step(wd, base, base_specs, thetas0, folds)
         if chosen is not None:
             out = [chosen] + [c for c in out if c.term != chosen.term]
+    if chosen is None and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio > ABOVE_FLOOR:
+        # nor a field block: a model term that stands in for the missing effect
+        chosen = _swap_step(wd, base, base_specs, out, thetas0, n_c, base_ratio, alpha,
+                            min_improvement, folds)
+        if chosen is not None:
+            out = [chosen] + out
     return out, chosen
 
 

@@ -237,7 +237,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
                       ("evidence", "left"), ("missing?", "left")):
         t.add_column(col, justify=just)
     for i, c in enumerate(diag.candidates[:top], 1):
-        eff = c.effect.split(" [")[0] + (f" (replaces {c.replaces})" if c.replaces else "")
+        eff = c.effect.split(" [")[0]
+        if c.replaces:
+            eff = eff.replace(f" (replaces {c.replaces})", "") + f" (replaces {c.replaces})"
         ev = (c.error or (f"z {c.z:.1f}, p·trials {c.p_trials:.1g}, p_adj {c.p_adj:.1g}"
                           if math.isfinite(c.z) else "—"))
         if c.rejected:

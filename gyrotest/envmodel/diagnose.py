@@ -507,8 +507,7 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
             if best is None or s.rms_holdout < best.rms_holdout:
                 s.note = (f"added beside {b.label} it holds out only {c.rms_holdout:.4g} "
                           f"deg/h: {b.label} stands in for it in the model (in-sample RMS "
-                          f"{fit0:.4g} → {s.rms_fit:.4g} deg/h with {b.label} taken out); "
-                          f"replace {b.label} with {c.term}")
+                          f"{fit0:.4g} → {s.rms_fit:.4g} deg/h with {b.label} taken out)")
                 best = s
     if best is not None:
         best.route = f"{best.route}, in place of {best.replaces}"
@@ -760,7 +759,8 @@ def _verdict(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
         if top.klass == "channel" and math.isfinite(top.r_residual):
             ch = ", ".join(top.spec.channels) if top.spec else ""
             v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"
-        v += f"; add it with {top.add_hint}"
+        v += f"; add it with {top.add_hint}" + (f" in place of {top.replaces}"
+                                                 if top.replaces else "")
         if top.equivalents:
             v += ("; indistinguishable in this log from " + ", ".join(top.equivalents[:3])
                   + " (same fitted contribution)")

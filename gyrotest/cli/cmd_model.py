@@ -493,7 +493,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
     floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in
     place of each model term: a term of your model that stood in for the missing effect
-    (collinear with it over the record) is named for replacement ("replaces X").
+    (collinear with it over the record) is named for replacement ("replaces X") when the
+    swap qualifies, fits the record no worse, holds out better than the candidate beside
+    the term at fold consistency >= 2.13, and the candidate's p x trials beside the term
+    is < 0.01.
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

@@ -166,8 +166,10 @@ that the model under judgment cannot move:
    the held-out blocks extrapolate them. When no candidate qualifies added and the model
    is above 1.2 × the floor, the three candidates that cut the in-sample RMS by ≥ 20 % are
    judged in place of each model term (the same routes and gates, the trials counted over
-   every swap); a swap that qualifies, fits the record at least as well as the model and
-   holds out better than the candidate added beside the term is named "(replaces X)".
+   every swap); a swap that qualifies, fits the record at least as well as the model, holds
+   out better than the candidate added beside the term, consistently across the folds
+   (fold consistency ≥ 2.13), and whose candidate's coefficient also stands beside the term
+   (p × trials < 0.01 added) is named "(replaces X)".
 
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
@@ -483,9 +485,14 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
     candidate qualifies added, each of the :data:`SWAP_TOP` candidates with the largest
     in-sample gain is judged in place of each term of the model (the routes of
     :func:`_judge`, the trials counted over every swap tried). A swap qualifies when it is
-    significant, fits the record at least as well as the model it changes, and holds out
-    better than the candidate added beside the term; the best by held-out RMS is returned
-    (its ``replaces`` names the term to take out), or None."""
+    significant, fits the record at least as well as the model it changes, holds out better
+    than the candidate added beside the term, consistently across the folds
+    (gain/(scatter/√folds) ≥ :data:`FAR_T`), and the candidate's coefficient stands beside
+    the term as well (p × trials < :data:`CLEAR_P` added): the swap's own z also carries
+    what the replaced term explained (null 36616n, real noise: the rate of a lagged node
+    with a free τ in place of the user's own fixed-τ form of it, z 4.5 in its place, 1.5
+    beside it, consistency 1.6). The best by held-out RMS is returned (its ``replaces``
+    names the term to take out), or None."""
     fit0 = base.rms_fit
     if not base_specs or not (math.isfinite(fit0) and fit0 > 0):
         return None
@@ -501,8 +508,13 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
                 continue
             s = _judge(wd, base, base_specs, c.spec, thetas0, n_sw, base_ratio, alpha,
                        min_improvement, folds, replaces_labels=[b.label])
+            # the swap's own z also carries what the replaced term explained: the
+            # candidate's coefficient must stand beside that term too (p × trials of the
+            # candidate added), and the held-out gain be consistent across the folds
             if not (s.significant and s.rms_fit <= fit0
-                    and s.rms_holdout < c.rms_holdout * (1.0 - TIE)):
+                    and s.rms_holdout < c.rms_holdout * (1.0 - TIE)
+                    and math.isfinite(c.p_trials) and c.p_trials < CLEAR_P
+                    and s.cv_t >= FAR_T):
                 continue
             if best is None or s.rms_holdout < best.rms_holdout:
                 s.note = (f"added beside {b.label} it holds out only {c.rms_holdout:.4g} "

@@ -203,8 +203,10 @@ REDIRECT_RATIO = 0.5
 #: beside T(Tcase) -24.7 % in sample, -3.4 % held out; in place of it -28.5 % held out, the
 #: true model's RMS). When no candidate qualifies, the SWAP_TOP candidates that cut the
 #: in-sample RMS by at least SWAP_FIT_GAIN are judged in place of each model term
-#: (:func:`gyrotest.envmodel.diagnose._swap_step`); lags of a channel the model has
-#: (which already replace its plain term) are left out
+#: (:func:`gyrotest.envmodel.diagnose._swap_step`, which also asks the swap's held-out gain
+#: to be consistent across the folds, ≥ FAR_T, and the candidate's coefficient to stand
+#: beside the term, p × trials < CLEAR_P added); lags of a channel the model has (which
+#: already replace its plain term) are left out
 SWAP_FIT_GAIN = 0.2
 SWAP_TOP = 3
 SWAP_SKIP = ("Tlag",)

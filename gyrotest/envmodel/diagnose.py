@@ -502,18 +502,18 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
     pool = sorted(pool, key=lambda c: c.rms_fit)[:SWAP_TOP]
     n_sw = n_c + len(pool) * len(base_specs)
     best = None
-    for c in pool:
+    # the candidate's coefficient must stand beside the term it replaces (below): a
+    # candidate whose p × trials added is not below CLEAR_P cannot qualify, so it is not fitted
+    for c in [c for c in pool if math.isfinite(c.p_trials) and c.p_trials < CLEAR_P]:
         for b in base_specs:
             if b.label == c.term:
                 continue
             s = _judge(wd, base, base_specs, c.spec, thetas0, n_sw, base_ratio, alpha,
                        min_improvement, folds, replaces_labels=[b.label])
-            # the swap's own z also carries what the replaced term explained: the
-            # candidate's coefficient must stand beside that term too (p × trials of the
-            # candidate added), and the held-out gain be consistent across the folds
+            # the swap's own z also carries what the replaced term explained: hence the
+            # filter of the candidates above, and a held-out gain consistent across folds
             if not (s.significant and s.rms_fit <= fit0
                     and s.rms_holdout < c.rms_holdout * (1.0 - TIE)
-                    and math.isfinite(c.p_trials) and c.p_trials < CLEAR_P
                     and s.cv_t >= FAR_T):
                 continue
             if best is None or s.rms_holdout < best.rms_holdout:

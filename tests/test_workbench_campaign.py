@@ -478,3 +478,12 @@ def test_a_free_form_of_the_users_own_term_fitted_to_real_wander_is_not_a_swap()
     consistency 1.6). Beside the user's term its coefficient has z 1.5: a swap's own z also
     carries what the replaced term explained, so the candidate must stand beside it too."""
     _assert_real_null_quiet(36616)
+
+
+def test_a_sinusoid_fitted_to_real_wander_does_not_take_a_true_terms_place():
+    """Null case on real ADIS16405 noise, 11x the short-τ floor (seed 38603): a free
+    sinusoid took the place of the user's true vibration-squared term on the strict route
+    (z 5.5 in its place), fitting the wander; beside the term its p x trials was 0.006, above
+    the clear-gain guard of a nuisance term (0.001). A swap's candidate must pass that guard
+    of its class beside the term."""
+    _assert_real_null_quiet(38603)

@@ -496,7 +496,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     (collinear with it over the record) is named for replacement ("replaces X") when the
     swap qualifies, fits the record no worse, holds out better than the candidate beside
     the term at fold consistency >= 2.13, and the candidate's p x trials beside the term
-    is < 0.01.
+    is < 0.01 (< 0.001 for a ramp, warm-up, sinusoid or hysteresis).
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

@@ -169,7 +169,8 @@ that the model under judgment cannot move:
    every swap); a swap that qualifies, fits the record at least as well as the model, holds
    out better than the candidate added beside the term, consistently across the folds
    (fold consistency ≥ 2.13), and whose candidate's coefficient also stands beside the term
-   (p × trials < 0.01 added) is named "(replaces X)".
+   (p × trials added < 0.01; 0.001 for ramp, warm-up, sinusoid, hysteresis) is named
+   "(replaces X)".
 
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
@@ -488,7 +489,8 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
     significant, fits the record at least as well as the model it changes, holds out better
     than the candidate added beside the term, consistently across the folds
     (gain/(scatter/√folds) ≥ :data:`FAR_T`), and the candidate's coefficient stands beside
-    the term as well (p × trials < :data:`CLEAR_P` added): the swap's own z also carries
+    the term as well (p × trials added below :data:`CLEAR_P`, :data:`CLEAR_P_NUISANCE` for a
+    nuisance term): the swap's own z also carries
     what the replaced term explained (null 36616n, real noise: the rate of a lagged node
     with a free τ in place of the user's own fixed-τ form of it, z 4.5 in its place, 1.5
     beside it, consistency 1.6). The best by held-out RMS is returned (its ``replaces``
@@ -502,9 +504,12 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
     pool = sorted(pool, key=lambda c: c.rms_fit)[:SWAP_TOP]
     n_sw = n_c + len(pool) * len(base_specs)
     best = None
-    # the candidate's coefficient must stand beside the term it replaces (below): a
-    # candidate whose p × trials added is not below CLEAR_P cannot qualify, so it is not fitted
-    for c in [c for c in pool if math.isfinite(c.p_trials) and c.p_trials < CLEAR_P]:
+    # the candidate's coefficient must stand beside the term it replaces: p × trials added
+    # below the clear-gain guard of its class (CLEAR_P; CLEAR_P_NUISANCE for a ramp, warm-up,
+    # sinusoid or hysteresis -- null 38603n, real noise: a sinusoid at 0.006 beside a
+    # vibration term took its place on the strict route)
+    for c in [c for c in pool if math.isfinite(c.p_trials) and c.p_trials < (
+            CLEAR_P_NUISANCE if c.klass == "nuisance" else CLEAR_P)]:
         for b in base_specs:
             if b.label == c.term:
                 continue

@@ -487,3 +487,20 @@ def test_a_sinusoid_fitted_to_real_wander_does_not_take_a_true_terms_place():
     the clear-gain guard of a nuisance term (0.001). A swap's candidate must pass that guard
     of its class beside the term."""
     _assert_real_null_quiet(38603)
+
+
+def test_a_pair_whose_lead_alone_worsens_the_model_needs_a_next_step():
+    """Null case on real ADIS16405 noise, 22x the short-τ floor (seed 38688): a humidity
+    rate and a lagged pressure fitted together to the wander held out 0.31 deg/h, so the
+    rate was named first -- but alone it took the held-out RMS from 0.74 to 9.3 deg/h, the
+    next step found nothing to add (the pressure lag had spectral z 5.7 beside it), the
+    backward check removed the rate, and the user loop cycled, ending at 15x the true model.
+    A pair whose lead alone makes the model worse needs a next step that names an effect."""
+    bw, ws = _bench()
+    if not ws.real_noise_available():
+        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
+    row = bw.run_case(ws.make_case(38688, null=True))
+    labels = [a["label"] for a in row["added"]]
+    assert len(labels) == len(set(labels)), labels
+    assert "dchan(humidity)" not in labels
+    assert row["final_over_true"] < 1.1, row["final_over_true"]

@@ -270,7 +270,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "spectral z ≥ 8); off the strict test, spectral (Whittle) z ≥ 8 against the "
               "residual's own spectrum (≥ 4 while the model is within 2x the floor) unless "
               "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
-              "% at ≥ 5, then z ≥ 6; none when a member failed the test alone); far "
+              "% at ≥ 5, then z ≥ 6; none when a member failed the test alone; a pair's "
+              "first member that alone makes the model worse only when the next step then "
+              "names an effect); far "
               "above the floor a red residual's lowest bins are floored at the power law "
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
@@ -460,7 +462,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     term qualifies (or a pair of two others halves the held-out RMS of the one that does),
     the best candidates, further channels and the largest in-sample gains are also tried
     in pairs, and so are the level and square of each channel and a ramp beside each of
-    them (two effects that hide each other are named one after the other); last of all, a term whose |z| < 1 only
+    them (two effects that hide each other are named one after the other; a pair whose
+    first member alone makes the model worse only when the next step then names an
+    effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the
     residual's spectrum (spectral z >= 8). A
     sinusoid on the period of a logged stimulus is rejected when a term of that channel

@@ -50,12 +50,16 @@ from .terms import TermSpec
 
 
 def pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
-               folds: int) -> Candidate | None:
+              folds: int, follows=None) -> Candidate | None:
     """Two effects that each hide the other (see :data:`PAIR_TOP`): the best qualifying
     pair's more useful member (the better one alone), marked significant with the route
-    "together with OTHER"; None when no pair qualifies."""
+    "together with OTHER"; None when no pair qualifies. ``follows(lead, other)``, when
+    given, must accept the pair (the next step takes the other member: see
+    :func:`gyrotest.envmodel.diagnose._partner_follows`)."""
     found = _find_pair(wd, base, base_specs, out, thetas0, folds)
-    return _mark_pair(found) if found is not None else None
+    if found is None or (follows is not None and not follows(found[0], found[1])):
+        return None
+    return _mark_pair(found)
 
 
 def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
@@ -189,7 +193,8 @@ def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
 
 
 def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
-              chosen: Candidate, thetas0, folds: int, fl: float) -> Candidate | None:
+             chosen: Candidate, thetas0, folds: int, fl: float,
+             follows=None) -> Candidate | None:
     """Far above the floor, a single term that leaves the model there may have been chosen
     because two larger effects hide each other (see :data:`REDIRECT_RATIO`): the qualifying
     pair of two *other* effects -- neither the chosen term nor one this log cannot tell
@@ -212,6 +217,8 @@ def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
             continue
         if r.rms_holdout * PAIR_MARGIN <= found[2]:
             return None
+    if follows is not None and not follows(found[0], found[1]):
+        return None
     pair = _mark_pair(found)
     pair.displaced = (chosen.term, chosen.rms_holdout)
     return pair

@@ -14,6 +14,15 @@ MIN_IMPROVEMENT = 0.01
 CLEAR_GAIN = 0.05
 CLEAR_P = 0.01
 CLEAR_P_NUISANCE = 0.001
+
+
+def clear_p(klass: str) -> float:
+    """The clear-gain guard on p × trials of a term of class ``klass``: :data:`CLEAR_P`,
+    or :data:`CLEAR_P_NUISANCE` for a ramp, warm-up, sinusoid or hysteresis (a free
+    frequency or width fits noise more easily)."""
+    return CLEAR_P_NUISANCE if klass == "nuisance" else CLEAR_P
+
+
 ABOVE_FLOOR = 1.2
 #: a held-out gain this large shows the model was not at the floor, whatever its estimate
 BIG_GAIN = 0.2

@@ -267,7 +267,6 @@ def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> li
                     "cv_t": c.cv_t, "p_trials": c.p_trials, "z": c.z, "p_adj": c.p_adj,
                     "n_params": c.n_params, "significant": c.significant,
                     "route": c.route, "spectral_z": c.spectral_z,
-                    "spectral_z_strict": getattr(c, "diag_szs", None),
                     "rejected": c.rejected,
                     "truth_reduction_floor": (u0 - u1) if (u0 is not None and u1 is not None)
                     else None})

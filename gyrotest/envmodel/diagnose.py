@@ -190,7 +190,6 @@ otherwise the verdict is "possible missing effect".
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -699,11 +698,6 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
             rejected = (f"{SPECTRAL_REJECT} "
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "
                         "the gyro's own drift")
-    diag_szs = math.nan
-    if strict and os.environ.get("GYROTEST_DIAG_SZS") and math.isfinite(base_ratio) \
-            and base_ratio >= FAR_RATIO:
-        diag_szs = spectral_z(r, [c.label], wd, keep=kept_terms(c, replaces),
-                              red=red_floor_for([c.key], z))
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
     match = None
     if c.key == "sin" and (strict or clear or far):
@@ -733,7 +727,6 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     cand.r_residual = residual_corr(base, r, c)
     cand.cv_t = t_cv
     cand.spectral_z = zw
-    cand.diag_szs = diag_szs  # type: ignore[attr-defined]
     cand.hac_waived = bool(waived and sig)
     cand._fit = r
     cand.period_match = match

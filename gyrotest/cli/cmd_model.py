@@ -275,7 +275,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "names an effect); far "
               "above the floor a red residual's lowest bins are floored at the power law "
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
-              "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
+              "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
+              "a lag with τ ≥ 95 % of the record only on the strict test; "
+              "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; then (above 1.2x the floor) "
               "the largest in-sample gains (≥ 20 %) in place of each model term; ties go to "
@@ -485,7 +487,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
     another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
     after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
-    plain form when that does >= 10 % better beside a missing rate term of another channel.
+    plain form when that does >= 10 % better beside a missing rate term of another channel;
+    a lag whose time constant reaches the record length is named only on the strict test
+    (lagged that long, a channel is a slow trend that fits the gyro's own drift).
     A product of two channels gives way to the level terms of its factors when those do
     >= 10 % better together (no interaction without its main effects). A model within 1.1x
     the floor takes a new term only at a gain >= 20 %, or >= 10 % on the strict test with

@@ -146,8 +146,11 @@ that the model under judgment cannot move:
    stimuli, each with its own level effect, make a product that fits much of both;
    :func:`gyrotest.envmodel.pairs.marginal`). A lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
-   gives way to the plain term, and candidates whose fitted contributions correlate at
-   |r| ≥ 0.995 with the chosen one are named as indistinguishable in this log. Candidates the
+   gives way to the plain term; one at the top of its range (≥ 95 % of the record length) is
+   not a missing effect off the strict test: lagged that long, a channel is a slow trend
+   that fits the gyro's own drift (:data:`gyrotest.envmodel.rules.LAG_TOP`). Candidates
+   whose fitted contributions correlate at |r| ≥ 0.995 with the chosen one are named as
+   indistinguishable in this log. Candidates the
    model already spans (R² > 1 − 10⁻⁶ on its columns) are not tried.
 6. **Forward path**: the chosen term is added and the procedure repeats (at most
    ``path_steps`` times) until no candidate is a missing effect or the held-out RMS is at
@@ -232,6 +235,7 @@ from .rules import (
     HYST_CV_T,
     HYST_STRONG_CV_T,
     HYST_WEAK_CV_T,
+    LAG_TOP,
     MIN_IMPROVEMENT,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
@@ -699,6 +703,14 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "
                         "the gyro's own drift")
     theta = r._thetas.get(c.label, {})  # type: ignore[attr-defined]
+    if rejected is None and (clear or far) and not strict and c.key in UNLAGGED:
+        tau = theta.get("tau_s")
+        hi = nonlinear_bounds(c, wd.duration_s, wd.resolution_s,
+                              wd.refs).get("tau_s", (0.0, math.inf))[1]
+        if tau is not None and tau >= LAG_TOP * hi:
+            rejected = (f"its time constant ({tau:.0f} s) is at the top of its range (the "
+                        "record length): the log does not resolve the lag, and a channel "
+                        "lagged that long is a slow trend that can fit the gyro's own drift")
     match = None
     if c.key == "sin" and (strict or clear or far):
         # judged in _step against the matched channel's own candidates

@@ -214,7 +214,8 @@ REDIRECT_RATIO = 0.5
 #: in-sample RMS by at least SWAP_FIT_GAIN are judged in place of each model term
 #: (:func:`gyrotest.envmodel.diagnose._swap_step`, which also asks the swap's held-out gain
 #: to be consistent across the folds, ≥ FAR_T, and the candidate's coefficient to stand
-#: beside the term, p × trials added below the clear-gain guard of its class); lags of a channel the model has (which
+#: beside the term, p × trials added below the clear-gain guard of its class); lags of a
+#: channel the model has (which
 #: already replace its plain term) are left out
 SWAP_FIT_GAIN = 0.2
 SWAP_TOP = 3
@@ -235,10 +236,10 @@ UNLAGGED = {"Tlag": "T", "dTlagdt": "dTdt", "chanlag": "chan", "dchanlag": "dcha
 #: a lag whose fitted time constant reaches LAG_TOP × the top of its range (the record
 #: length) is not resolved by the log either: lagged that long, a channel is a slow trend (its
 #: rate, its level) that fits the gyro's own drift. Off the strict test it is not a missing
-#: effect (real ADIS16405 noise far above the floor: a supply lag, null 36190 of the mixed
-#: set, and a humidity lag, null 38688n, both at τ = 9709 s in a 9720 s record, HAC z 0.0
-#: and 0.7, spectral z 9.3 and 8.5; no true lag of seeds 36000-38699 was chosen above half
-#: the record length)
+#: effect (real ADIS16405 noise far above the floor: a supply lag in case 36190, whose true
+#: missing effect the user's model absorbs, and a humidity lag in null 38688n, both at
+#: τ = 9709 s in a 9720 s record, HAC z 0.0 and 0.7, spectral z 9.3 and 8.5; no lag chosen
+#: in the stored tuning runs of seeds 36000-38699 had τ above half the record length)
 LAG_TOP = 0.95
 
 #: when no new effect qualifies, the field block of an order the model already has (Hvec for

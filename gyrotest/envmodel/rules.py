@@ -215,8 +215,7 @@ REDIRECT_RATIO = 0.5
 #: (:func:`gyrotest.envmodel.diagnose._swap_step`, which also asks the swap's held-out gain
 #: to be consistent across the folds, ≥ FAR_T, and the candidate's coefficient to stand
 #: beside the term, p × trials added below the clear-gain guard of its class); lags of a
-#: channel the model has (which
-#: already replace its plain term) are left out
+#: channel the model has (which already replace its plain term) are left out
 SWAP_FIT_GAIN = 0.2
 SWAP_TOP = 3
 SWAP_SKIP = ("Tlag",)

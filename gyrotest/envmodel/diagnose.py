@@ -245,6 +245,7 @@ from .rules import (
     SWAP_TOP,
     TIE,
     UNLAGGED,
+    WARMUP_CLEAR_P,
     WARMUP_SPECTRAL_Z,
     WEAK_P,
     clear_p,
@@ -669,6 +670,9 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
                  and (p_tr < guard
                       or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
+                      # a warm-up lives in the first chunks (:data:`WARMUP_CLEAR_P`)
+                      or (c.key == "warmup" and impr >= BIG_GAIN and t_cv >= FAR_T
+                          and p_tr < WARMUP_CLEAR_P)
                       or (impr >= BIG_GAIN and t_cv >= CV_STRONG * cv_min / CV_T
                           and p_tr < STRONG_P))
                  and hyst_weak)

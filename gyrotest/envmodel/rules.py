@@ -91,6 +91,16 @@ FAR_Z = 1.0
 #: gain ≥ BIG_GAIN at consistency ≥ FAR_T qualifies when its coefficient stands out of the
 #: residual's slow noise at spectral z ≥ WARMUP_SPECTRAL_Z
 WARMUP_SPECTRAL_Z = 8.0
+#: ... and for the same reason the clear-gain route (the model above ABOVE_FLOOR × the floor)
+#: takes a warm-up with gain ≥ BIG_GAIN at consistency ≥ FAR_T (not CV_T_NUISANCE) when its
+#: HAC test gives p × trials < WARMUP_CLEAR_P, the clear-gain guard of a channel term (the
+#: searched time constant is counted in the trials). Measured on the stored tuning runs
+#: (seeds 30000-39699) at 1.2-2 × the floor, where the far route does not apply: the true
+#: warm-ups at ≥ 20 % and ≥ 2.13 had p × trials 0.0014-0.028 (four below 0.01, each a case
+#: that ended ≥ 1.3 × the true model: 39181, 37023, 33170, 30016), the warm-ups fitted on
+#: nulls or beside another missing effect 0.014-1 (eleven; spectral z did not separate
+#: them: 4.3-11.8 true, 0.2-7.0 false)
+WARMUP_CLEAR_P = 0.01
 # ... or, when other missing effects inflate that error (several at once, far above the
 # floor, leave the HAC test of a warm-up of 100 × the floor at z 0.7), the coefficient stands
 # out of the candidate model's residual spectrum at SPECTRAL_Z without the exemption below;

@@ -471,7 +471,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             chosen = lookahead(wd, base, base_specs, out, tied, chosen, thetas0, folds)
             chosen = lag_or_plain(wd, base, base_specs, out, chosen, thetas0, folds)
         if candidates is None and chosen.pair is None:
-            chosen = marginal(wd, base, base_specs, out, chosen, thetas0, folds)
+            chosen = marginal(wd, base, base_specs, out, chosen, thetas0, folds, fl)
         chosen = _unresolved_lag(chosen, sig, wd)
         chosen.equivalents = equivalents(chosen, out, base)
         if (candidates is None and math.isfinite(base_ratio) and base_ratio >= FAR_RATIO

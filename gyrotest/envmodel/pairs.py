@@ -15,7 +15,14 @@ import math
 import numpy as np
 
 from ..errors import AnalysisError, InputError
-from .candidate import Candidate, equivalents, held_out_gain, significance, spectral_z
+from .candidate import (
+    Candidate,
+    contribution,
+    equivalents,
+    held_out_gain,
+    significance,
+    spectral_z,
+)
 from .fit import FitResult, WorkData, fit_model
 from .rules import (
     BIG_GAIN,
@@ -36,6 +43,7 @@ from .rules import (
     PAIR_MORE,
     PAIR_POOL,
     PAIR_TOP,
+    PRODUCT_LEVEL_R,
     REDIRECT_RATIO,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
@@ -331,7 +339,7 @@ PRODUCTS = {"chanprod": ("chan",), "gprod": ("g",), "Hprod": ("Hx", "Hy", "Hz")}
 
 
 def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
-             chosen: Candidate, thetas0, folds: int) -> Candidate:
+             chosen: Candidate, thetas0, folds: int, fl: float = math.nan) -> Candidate:
     """A product of two channels chosen while the first-order terms of its factors are not
     in the model: the product of two stepped stimuli fits much of their two separate level
     effects (it is nonzero only where both are on), so it can win alone where the two
@@ -347,6 +355,9 @@ def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     mains_of = PRODUCTS.get(chosen.spec.key if chosen.spec else "")
     if not mains_of or chosen._fit is None or not math.isfinite(chosen.rms_holdout):
         return chosen
+    level = _product_level(chosen, out, mains_of, fl)
+    if level is not None:
+        return level
     have = {(s.key, s.channels) for s in base_specs}
     mains = []
     for ch in chosen.spec.channels:
@@ -383,6 +394,48 @@ def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     lead.displaced = (chosen.term, chosen.rms_holdout)
     lead.note = "a product without its main effects"
     return lead
+
+def _product_level(chosen: Candidate, out: list[Candidate], mains_of,
+                   fl: float) -> Candidate | None:
+    """The level of a factor of the product ``chosen`` that is a missing effect itself and
+    that the product only imitates over this log (fitted contributions alike to |r| ≥
+    :data:`PRODUCT_LEVEL_R`: the other factor is nearly constant wherever this one varies),
+    marked to lead; None when there is none. The hierarchy principle -- no interaction
+    without its main effect -- where the log cannot tell the two apart: the next step tests
+    the product beside the level, so the level must leave the model at least
+    :data:`FAR_RATIO` × the floor ``fl`` (seed 34109: Hx·Hz, r 0.990 with Hx, took the model
+    below the floor, Hx alone to 1.05 × it, where the next step stopped)."""
+    if not (math.isfinite(fl) and fl > 0):
+        return None
+    try:
+        xp = contribution(chosen._fit, chosen.term)
+    except (StopIteration, KeyError, ValueError):
+        return None
+    best, best_r = None, 0.0
+    for m in out:
+        if (m.spec is None or m.spec.key not in mains_of or len(m.spec.channels) != 1
+                or m.spec.channels[0] not in chosen.spec.channels or m.replaces
+                or not m.significant or m._fit is None
+                or not m.rms_holdout >= FAR_RATIO * fl):
+            continue
+        try:
+            xm = contribution(m._fit, m.term)
+        except (StopIteration, KeyError, ValueError):
+            continue
+        if np.std(xp) == 0 or np.std(xm) == 0:
+            continue
+        r = abs(float(np.corrcoef(xp, xm)[0, 1]))
+        if r >= PRODUCT_LEVEL_R and r > best_r:
+            best, best_r = m, r
+    if best is None:
+        return None
+    best.note = (f"{chosen.term} holds out {chosen.rms_holdout:.4g} deg/h, {best.term} "
+                 f"{best.rms_holdout:.4g}; over this log the product is the level to "
+                 f"r = {best_r:.3f} (its other factor is nearly constant wherever "
+                 f"{best.spec.channels[0]} varies): the level leads, and the next step tests "
+                 "the product beside it")
+    return best
+
 
 #: rate forms :func:`lag_or_plain` tries beside a lag and its plain form
 RATE_FORMS = ("dTdt", "dTlagdt", "dGdt", "dchan", "dchanlag")

@@ -121,8 +121,11 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
             continue
         # a free frequency or width in the pair: the flexible-term thresholds
         nuisance = a.klass == "nuisance" or b.klass == "nuisance"
-        if not (impr >= BIG_GAIN and t_cv >= FAR_T_NUISANCE if nuisance
-                else impr >= FAR_GAIN and t_cv >= FAR_T):
+        # a warm-up lives in the first chunks: fold consistency understates it, and the
+        # spectral test (no exemption below FAR_T_NUISANCE) stands in (WARMUP_SPECTRAL_Z)
+        warm = "warmup" in (a.spec.key, b.spec.key)
+        if not (impr >= BIG_GAIN and t_cv >= (FAR_T if warm else FAR_T_NUISANCE)
+                if nuisance else impr >= FAR_GAIN and t_cv >= FAR_T):
             continue
         # a member that failed a test alone: the gain that needs no spectral test
         if frozenset((id(a), id(b))) in hidden and not spectral_exempt(impr, t_cv):
@@ -134,6 +137,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         spec_rej = _spectral_rejected(a) or _spectral_rejected(b)
         bar = (PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) and not spec_rej
                else SPECTRAL_Z)
+        if warm and nuisance and t_cv < FAR_T_NUISANCE:
+            bar = max(bar, WARMUP_SPECTRAL_Z)
         red = red_floor_for([a.spec.key, b.spec.key])
         if not spectral_z(r, [a.term, b.term], wd, red=red) >= bar:
             continue

@@ -262,7 +262,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
                       f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
     out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
               f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
-              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis) while the model is "
+              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis; a warm-up ≥ 20 % "
+              "at fold consistency ≥ 2.13 with 0.01) while the model is "
               "above 1.2x the noise floor, or (model ≥ 2x the floor) down by ≥ 10 % "
               "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1, "
               "or as a last resort spectral z ≥ 8 when other effects inflate the HAC error; "
@@ -270,13 +271,15 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "spectral z ≥ 8); off the strict test, spectral (Whittle) z ≥ 8 against the "
               "residual's own spectrum (≥ 4 while the model is within 2x the floor) unless "
               "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
-              "% at ≥ 5, then z ≥ 6; none when a member failed the test alone; a pair's "
+              "% at ≥ 5, then z ≥ 6; none when a member failed the test alone; a pair with "
+              "a warm-up at fold consistency ≥ 2.13 with z ≥ 8; a pair's "
               "first member that alone makes the model worse only when the next step then "
               "names an effect); far "
               "above the floor a red residual's lowest bins are floored at the power law "
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
-              "a lag with τ ≥ 95 % of the record only on the strict test; "
+              "a lag with τ ≥ 95 % of the record only on the strict test; a product that is "
+              "its factor's level to |r| ≥ 0.98 gives way to that level (≥ 2x the floor); "
               "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5; then (above 1.2x the floor) "
@@ -456,7 +459,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     and scored by its held-out residual RMS (blocked cross-validation), with a HAC test of
     its coefficient in the augmented model. A missing effect either passes the strict test
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
-    while the model is above 1.2x the noise floor, p x trials < 0.01), or, when the model is
+    while the model is above 1.2x the noise floor, p x trials < 0.01; a warm-up, which most
+    folds cannot see, also >= 20 % at fold consistency >= 2.13), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
     folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1; ramp, warm-up, sinusoid
     and hysteresis >= 20 % at >= 3.75, a warm-up, which most folds cannot see, at >= 2.13
@@ -464,7 +468,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     term qualifies (or a pair of two others halves the held-out RMS of the one that does),
     the best candidates, further channels and the largest in-sample gains are also tried
     in pairs, and so are the level and square of each channel and a ramp beside each of
-    them (two effects that hide each other are named one after the other; a pair whose
+    them (two effects that hide each other are named one after the other; a pair with a
+    warm-up at fold consistency >= 2.13 when its spectral z is >= 8; a pair whose
     first member alone makes the model worse only when the next step then names an
     effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the
@@ -491,7 +496,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     a lag whose time constant reaches the record length is named only on the strict test
     (lagged that long, a channel is a slow trend that fits the gyro's own drift).
     A product of two channels gives way to the level terms of its factors when those do
-    >= 10 % better together (no interaction without its main effects). A model within 1.1x
+    >= 10 % better together (no interaction without its main effects), and to the level of
+    a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly
+    constant: a tilt table's vertical gravity component) and the level qualifies, leaving the
+    model >= 2x the floor; the next step tests the product beside it. A model within 1.1x
     the floor takes a new term only at a gain >= 20 %, or >= 10 % on the strict test with
     fold consistency >= 4. When no new effect qualifies, the model's own field terms of an
     order are tried in the gyro's axes: the block over every moving field axis (Hvec for

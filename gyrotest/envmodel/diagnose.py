@@ -27,7 +27,9 @@ that the model under judgment cannot move:
      cuts it by ≥ 20 %, which a model at the floor cannot give), the candidate cuts it by
      ≥ 5 %, and either the HAC test gives p × trials < 0.01 (0.001 for nuisance terms) or
      the gain is ≥ 20 % and consistent across the folds -- gain / (fold scatter/√folds) ≥ 4
-     (6 for nuisance terms) -- with p × trials < 0.05, or ≥ 10 (15) with p × trials < 0.5.
+     (6 for nuisance terms) -- with p × trials < 0.05, or ≥ 10 (15) with p × trials < 0.5;
+     a warm-up, which only the first folds see, also at ≥ 20 % with consistency ≥ 2.13 when
+     p × trials < 0.01 (:data:`gyrotest.envmodel.rules.WARMUP_CLEAR_P`).
      Another missing effect inflates the HAC error of every candidate, and a short log
      leaves the test few degrees of freedom, so strong cross-validated evidence may carry a
      weaker test. An effect the base model lacks inflates the HAC error of
@@ -61,7 +63,8 @@ that the model under judgment cannot move:
    square of each channel are tried together (over a one-sided range g·a and g²·a² can
    nearly cancel, so neither predicts anything alone); a pair that cuts the
    held-out RMS ≥ 10 % below either member alone, consistently across the folds (the
-   nuisance thresholds, ≥ 20 % and 3.75, when either member is a nuisance term), names
+   nuisance thresholds, ≥ 20 % and 3.75, when either member is a nuisance term; with a
+   warm-up member 2.13, the pair's spectral z then ≥ 8 without exemption), names
    its more useful member first, and the next step tests the other. A trend (``ramp``) is
    also paired with every member of the pool, whatever its own gain (beside a missing
    lagged coil an ageing ramp gains nothing alone, not even in sample), under the joint
@@ -144,7 +147,11 @@ that the model under judgment cannot move:
    model gives way to those terms when, fitted together, they do ≥ 10 % better and pass
    the far-route consistency: no interaction without its main effects (two stepped
    stimuli, each with its own level effect, make a product that fits much of both;
-   :func:`gyrotest.envmodel.pairs.marginal`). A lag whose
+   :func:`gyrotest.envmodel.pairs.marginal`). Nor does a product whose fitted contribution
+   is that of one factor's level to |r| ≥ 0.98 (the other factor nearly constant wherever
+   this one varies: the vertical gravity component of a tilt table) stand: that level leads
+   when it qualifies itself and leaves the model ≥ 2 × the floor, and the next step tests
+   the product beside it (:data:`gyrotest.envmodel.rules.PRODUCT_LEVEL_R`). A lag whose
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term; one at the top of its range (≥ 95 % of the record length) is
    not a missing effect off the strict test: lagged that long, a channel is a slow trend

@@ -237,8 +237,11 @@ SWAP_SKIP = ("Tlag",)
 #: noise): tilt_y·tilt_z (r 0.991 with tilt_y) held out 12 % better than tilt_y alone, but
 #: the truth was tilt_y with tilt_x² and tilt_x·tilt_y, and from the product the loop stalled
 #: at 13 × the true model; seed 37009: an anisoelastic ay·az (r 0.992) for the level of ay.
-#: The 60 product choices of the tuning runs (seeds 30000-39199) with a qualifying main
-#: effect had |r| 0.02-0.98 otherwise; the true cross terms among them 0.02-0.94
+#: Of the 66 product choices of the stored tuning runs (seeds 30000-39199) made while a main
+#: effect of a factor also qualified, six had a factor whose channel correlates with the
+#: product at ≥ 0.98: these two (the level the truth), 34109 and 35188 (the product took the
+#: model to the floor, the level not: kept, below), 34057 and 37001 (that level already in
+#: the model; a pair choice). The others reached 0.977 at most
 PRODUCT_LEVEL_R = 0.98
 #: candidates within this fraction of the best held-out RMS count as equal evidence
 TIE = 0.02

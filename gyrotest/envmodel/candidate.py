@@ -154,14 +154,28 @@ def residual_corr(base: FitResult, r: FitResult, c: TermSpec) -> float:
     return float(np.corrcoef(x, e)[0, 1])
 
 
+def own_contribution(c: Candidate) -> np.ndarray | None:
+    """The candidate's fitted contribution in its own fit (block means, deg/h), or None."""
+    if c._fit is None:
+        return None
+    try:
+        return contribution(c._fit, c.term)
+    except (StopIteration, KeyError, ValueError):
+        return None
+
+
+def abs_corr(x: np.ndarray | None, y: np.ndarray | None) -> float:
+    """|r| of two contributions; NaN when either is missing or constant."""
+    if x is None or y is None or not (np.std(x) > 0 and np.std(y) > 0):
+        return math.nan
+    return abs(float(np.corrcoef(x, y)[0, 1]))
+
+
 def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> list[str]:
     """Candidates with (nearly) the same held-out RMS whose fitted contribution is the
     chosen one's to |r| ≥ 0.995: explanations this log cannot tell apart."""
-    if chosen._fit is None:
-        return []
-    try:
-        x0 = contribution(chosen._fit, chosen.term)
-    except (StopIteration, KeyError, ValueError):
+    x0 = own_contribution(chosen)
+    if x0 is None:
         return []
     out = []
     for c in cands:
@@ -169,11 +183,7 @@ def equivalents(chosen: Candidate, cands: list[Candidate], base: FitResult) -> l
             continue
         if not chosen.rms_holdout / 1.05 <= c.rms_holdout <= chosen.rms_holdout * 1.05:
             continue
-        try:
-            x = contribution(c._fit, c.term)
-        except (StopIteration, KeyError, ValueError):
-            continue
-        if np.std(x) > 0 and np.std(x0) > 0 and abs(np.corrcoef(x, x0)[0, 1]) >= EQUIVALENT_R:
+        if abs_corr(own_contribution(c), x0) >= EQUIVALENT_R:
             out.append(c.term)
     return out
 

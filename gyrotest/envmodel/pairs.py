@@ -17,9 +17,10 @@ import numpy as np
 from ..errors import AnalysisError, InputError
 from .candidate import (
     Candidate,
-    contribution,
+    abs_corr,
     equivalents,
     held_out_gain,
+    own_contribution,
     significance,
     spectral_z,
 )
@@ -412,9 +413,8 @@ def _product_level(chosen: Candidate, out: list[Candidate], mains_of,
     below the floor, Hx alone to 1.05 × it, where the next step stopped)."""
     if not (math.isfinite(fl) and fl > 0):
         return None
-    try:
-        xp = contribution(chosen._fit, chosen.term)
-    except (StopIteration, KeyError, ValueError):
+    xp = own_contribution(chosen)
+    if xp is None:
         return None
     best, best_r = None, 0.0
     for m in out:
@@ -423,13 +423,7 @@ def _product_level(chosen: Candidate, out: list[Candidate], mains_of,
                 or not m.significant or m._fit is None
                 or not m.rms_holdout >= FAR_RATIO * fl):
             continue
-        try:
-            xm = contribution(m._fit, m.term)
-        except (StopIteration, KeyError, ValueError):
-            continue
-        if np.std(xp) == 0 or np.std(xm) == 0:
-            continue
-        r = abs(float(np.corrcoef(xp, xm)[0, 1]))
+        r = abs_corr(xp, own_contribution(m))
         if r >= PRODUCT_LEVEL_R and r > best_r:
             best, best_r = m, r
     if best is None:

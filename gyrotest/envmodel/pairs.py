@@ -123,7 +123,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         # a free frequency or width in the pair: the flexible-term thresholds
         nuisance = a.klass == "nuisance" or b.klass == "nuisance"
         # a warm-up lives in the first chunks: fold consistency understates it, and the
-        # spectral test (no exemption below FAR_T_NUISANCE) stands in (WARMUP_SPECTRAL_Z)
+        # spectral test stands in (below FAR_T_NUISANCE no gain is exempt from it, so the
+        # bar is SPECTRAL_Z, the WARMUP_SPECTRAL_Z of single warm-ups)
         warm = "warmup" in (a.spec.key, b.spec.key)
         if not (impr >= BIG_GAIN and t_cv >= (FAR_T if warm else FAR_T_NUISANCE)
                 if nuisance else impr >= FAR_GAIN and t_cv >= FAR_T):
@@ -138,8 +139,6 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         spec_rej = _spectral_rejected(a) or _spectral_rejected(b)
         bar = (PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) and not spec_rej
                else SPECTRAL_Z)
-        if warm and nuisance and t_cv < FAR_T_NUISANCE:
-            bar = max(bar, WARMUP_SPECTRAL_Z)
         red = red_floor_for([a.spec.key, b.spec.key])
         if not spectral_z(r, [a.term, b.term], wd, red=red) >= bar:
             continue

@@ -209,6 +209,7 @@ from . import stats as st
 from .axes import axes_step
 from .candidate import (
     Candidate,
+    abs_corr,
     equivalents,
     held_out_gain,
     kept_terms,
@@ -217,6 +218,7 @@ from .candidate import (
     spectral_z,
 )
 from .channel_terms import custom_text
+from .effects import thermal_branch
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .pairs import lag_or_plain, lookahead, marginal, pair_step, redirect
@@ -227,6 +229,7 @@ from .rules import (
     ALPHA,
     AT_FLOOR,
     AT_FLOOR_GAIN,
+    AXES_FIRST,
     BIG_GAIN,
     CLEAR_GAIN,
     CLEAR_P,
@@ -240,6 +243,7 @@ from .rules import (
     FAR_T_NUISANCE,
     FAR_Z,
     HYST_CV_T,
+    HYST_LEVEL_R,
     HYST_STRONG_CV_T,
     HYST_WEAK_CV_T,
     LAG_TOP,
@@ -488,10 +492,14 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             if pair is not None:
                 chosen = pair
                 chosen.equivalents = equivalents(chosen, out, base)
-    if chosen is None and candidates is None:
-        # no new effect: the field effects the model has, in the gyro's own axes
-        _, chosen = axes_step(wd, base, base_specs, thetas0, folds)
-        if chosen is not None:
+    if candidates is None:
+        # the field effects the model has, in the gyro's own axes: when no new effect
+        # qualifies, or when the block holds out clearly better than the new effect
+        # (:data:`AXES_FIRST`)
+        _, block = axes_step(wd, base, base_specs, thetas0, folds)
+        if block is not None and (chosen is None or block.rms_holdout
+                                  < (1 - AXES_FIRST) * chosen.rms_holdout):
+            chosen = block
             out = [chosen] + [c for c in out if c.term != chosen.term]
     if chosen is None and candidates is None and math.isfinite(base_ratio) \
             and base_ratio > ABOVE_FLOOR:
@@ -638,6 +646,17 @@ def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
     return out
 
 
+def hyst_level_corr(wd, c: TermSpec, theta: dict) -> float:
+    """|r| between a fitted hysteresis branch state and its temperature's level (NaN when
+    either is constant): near 1 the branch never switches (:data:`HYST_LEVEL_R`)."""
+    w = theta.get("width_c")
+    T = wd.frame.temperature.get(c.channels[0]) if c.channels else None
+    if w is None or T is None:
+        return math.nan
+    s = thermal_branch(T, float(w), wd.frame.bounds)
+    return abs_corr(s, T)
+
+
 def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
            min_improvement, folds, replaces_labels: list[str] | None = None) -> Candidate:
     replaces = None
@@ -722,6 +741,13 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
             rejected = (f"its time constant ({tau:.0f} s) is at the top of its range (the "
                         "record length): the log does not resolve the lag, and a channel "
                         "lagged that long is a slow trend that can fit the gyro's own drift")
+    if rejected is None and (strict or clear or far) and c.key == "hyst":
+        r_lvl = hyst_level_corr(wd, c, theta)
+        if r_lvl >= HYST_LEVEL_R:
+            ch = c.channels[0]
+            rejected = (f"its branch follows the level of {ch} (r = {r_lvl:.3f}): a half-width "
+                        f"of {theta['width_c']:.2g} degC hardly switches on this temperature "
+                        f"program, and the level T({ch}) is the simpler explanation")
     match = None
     if c.key == "sin" and (strict or clear or far):
         # judged in _step against the matched channel's own candidates

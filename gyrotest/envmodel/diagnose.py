@@ -155,7 +155,10 @@ that the model under judgment cannot move:
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term; one at the top of its range (≥ 95 % of the record length) is
    not a missing effect off the strict test: lagged that long, a channel is a slow trend
-   that fits the gyro's own drift (:data:`gyrotest.envmodel.rules.LAG_TOP`). Candidates
+   that fits the gyro's own drift (:data:`gyrotest.envmodel.rules.LAG_TOP`). A hysteresis
+   branch whose state follows its temperature's level to |r| ≥ 0.98 (a half-width as wide
+   as the excursion never switches) is that level, and gives way to T(c)
+   (:data:`gyrotest.envmodel.rules.HYST_LEVEL_R`). Candidates
    whose fitted contributions correlate at |r| ≥ 0.995 with the chosen one are named as
    indistinguishable in this log. Candidates the
    model already spans (R² > 1 − 10⁻⁶ on its columns) are not tried.
@@ -164,6 +167,9 @@ that the model under judgment cannot move:
    the floor; the verdict names the first effect and the path that follows.
 
    **The gyro's own axes** (:mod:`gyrotest.envmodel.axes`): when no new effect qualifies,
+   or when the block holds out ≥ 10 % better than the new effect chosen
+   (:data:`gyrotest.envmodel.rules.AXES_FIRST`: the cross-axis parts of a large field
+   effect each qualify as new effects and would take the loop's steps one by one),
    the model's field terms of an order (Hx/Hy/Hz; Hsq/Hprod/Hmag2) are replaced by the
    block over every field axis the run moves (``Hvec``; ``Hquad``): a gyro mounted a few
    degrees off the coils sees each sensitivity as a mix of every coil axis, and the small

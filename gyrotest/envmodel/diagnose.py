@@ -417,6 +417,11 @@ def _path_entry(c: Candidate, before: FitResult, floor: float) -> dict:
             "evidence": c.evidence, "route": c.route}
 
 
+#: the field terms of the order of each axes block: a new effect of that order beside the
+#: model's own ones may be a cross-axis part of them (:data:`AXES_FIRST`)
+BLOCK_ORDER = {"Hvec": ("Hx", "Hy", "Hz"), "Hquad": ("Hsq", "Hprod", "Hmag2")}
+
+
 def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha: float,
           min_improvement: float, folds: int, progress,
           nested: bool = False) -> tuple[list[Candidate], Candidate | None]:
@@ -503,8 +508,9 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # qualifies, or when the block holds out clearly better than the new effect
         # (:data:`AXES_FIRST`)
         _, block = axes_step(wd, base, base_specs, thetas0, folds)
-        if block is not None and (chosen is None or block.rms_holdout
-                                  < (1 - AXES_FIRST) * chosen.rms_holdout):
+        if block is not None and (chosen is None or (
+                chosen.spec is not None and chosen.spec.key in BLOCK_ORDER.get(block.spec.key, ())
+                and block.rms_holdout < (1 - AXES_FIRST) * chosen.rms_holdout)):
             chosen = block
             out = [chosen] + [c for c in out if c.term != chosen.term]
     if chosen is None and candidates is None and math.isfinite(base_ratio) \

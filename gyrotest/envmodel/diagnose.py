@@ -167,9 +167,10 @@ that the model under judgment cannot move:
    the floor; the verdict names the first effect and the path that follows.
 
    **The gyro's own axes** (:mod:`gyrotest.envmodel.axes`): when no new effect qualifies,
-   or when the block holds out ≥ 10 % better than the new effect chosen
-   (:data:`gyrotest.envmodel.rules.AXES_FIRST`: the cross-axis parts of a large field
-   effect each qualify as new effects and would take the loop's steps one by one),
+   or when the block holds out ≥ 10 % better than the new effect chosen and that effect
+   is a field term of the block's order (:data:`gyrotest.envmodel.rules.AXES_FIRST`: the
+   cross-axis parts of a large field effect each qualify as new effects and would take the
+   loop's steps one by one),
    the model's field terms of an order (Hx/Hy/Hz; Hsq/Hprod/Hmag2) are replaced by the
    block over every field axis the run moves (``Hvec``; ``Hquad``): a gyro mounted a few
    degrees off the coils sees each sensitivity as a mix of every coil axis, and the small

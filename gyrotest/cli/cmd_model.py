@@ -284,8 +284,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "to T; "
               "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
-              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (before a new field term "
-              "of the block's order that it beats by ≥ 10 %); then (above 1.2x the floor) "
+              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (Hquad also before a new "
+              "second-order field term it beats by ≥ 10 %); then (above 1.2x the floor) "
               "the largest in-sample gains (≥ 20 %) in place of each model term; ties go to "
               "channel-based "
               "terms and to the channels the model already uses")
@@ -510,10 +510,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     order are tried in the gyro's axes: the block over every moving field axis (Hvec for
     Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
     >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1 (a gyro
-    mounted a few degrees off the coils); such a block is also chosen before a new field
-    term of its order (Hx/Hy/Hz for Hvec, Hsq/Hprod/Hmag2 for Hquad) when it holds out
-    >= 10 % better than that term (the cross-axis parts of a large field effect would each
-    qualify and take the steps one by one); with all but one field
+    mounted a few degrees off the coils); the quadratic block is also chosen before a new
+    second-order field term (Hsq, Hprod, Hmag2) when it holds out >= 10 % better than that
+    term (the cross-axis parts of a large second-order effect would each qualify and take
+    the steps one by one); with all but one field
     axis in the model, that
     axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
     floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in

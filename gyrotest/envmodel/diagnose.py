@@ -167,10 +167,10 @@ that the model under judgment cannot move:
    the floor; the verdict names the first effect and the path that follows.
 
    **The gyro's own axes** (:mod:`gyrotest.envmodel.axes`): when no new effect qualifies,
-   or when the block holds out ≥ 10 % better than the new effect chosen and that effect
-   is a field term of the block's order (:data:`gyrotest.envmodel.rules.AXES_FIRST`: the
-   cross-axis parts of a large field effect each qualify as new effects and would take the
-   loop's steps one by one),
+   or when the quadratic block holds out ≥ 10 % better than the new effect chosen and that
+   effect is itself a second-order field term (:data:`gyrotest.envmodel.rules.AXES_FIRST`:
+   the cross-axis parts of a large second-order field effect each qualify as new effects
+   and would take the loop's steps one by one),
    the model's field terms of an order (Hx/Hy/Hz; Hsq/Hprod/Hmag2) are replaced by the
    block over every field axis the run moves (``Hvec``; ``Hquad``): a gyro mounted a few
    degrees off the coils sees each sensitivity as a mix of every coil axis, and the small
@@ -418,9 +418,11 @@ def _path_entry(c: Candidate, before: FitResult, floor: float) -> dict:
             "evidence": c.evidence, "route": c.route}
 
 
-#: the field terms of the order of each axes block: a new effect of that order beside the
-#: model's own ones may be a cross-axis part of them (:data:`AXES_FIRST`)
-BLOCK_ORDER = {"Hvec": ("Hx", "Hy", "Hz"), "Hquad": ("Hsq", "Hprod", "Hmag2")}
+#: the field terms of the order of the quadratic block: a new effect of that order beside
+#: the model's own ones may be a cross-axis part of them (:data:`AXES_FIRST`). Not the linear
+#: block: three components take at most two more steps one by one, and Hx, Hy, Hz are
+#: IEEE 952's w_x, w_y, w_z of an aligned gyro (the bundled Helmholtz run: Hy, then Hz)
+BLOCK_ORDER = {"Hquad": ("Hsq", "Hprod", "Hmag2")}
 
 
 def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha: float,

@@ -280,8 +280,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
               "a lag with τ ≥ 95 % of the record only on the strict test; a product that is "
               "its factor's level to |r| ≥ 0.98 gives way to that level (≥ 2x the floor), "
-              "and a hysteresis branch that is its temperature's level to |r| ≥ 0.98 "
-              "to T; "
+              "and a hysteresis branch that is its temperature's level (|r| ≥ 0.98) "
+              "gives way to T; "
               "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (Hquad also before a new "
@@ -513,9 +513,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     mounted a few degrees off the coils); the quadratic block is also chosen before a new
     second-order field term (Hsq, Hprod, Hmag2) when it holds out >= 10 % better than that
     term (the cross-axis parts of a large second-order effect would each qualify and take
-    the steps one by one); with all but one field
-    axis in the model, that
-    axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
+    the steps one by one); with all but one field axis in the model, that axis's term (Hx,
+    Hy or Hz) is named instead. When still none qualifies above 1.2x the
     floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in
     place of each model term: a term of your model that stood in for the missing effect
     (collinear with it over the record) is named for replacement ("replaces X") when the

@@ -506,13 +506,15 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
             if pair is not None:
                 chosen = pair
                 chosen.equivalents = equivalents(chosen, out, base)
-    if candidates is None:
+    first = {k for keys in BLOCK_ORDER.values() for k in keys}
+    if candidates is None and (chosen is None or (chosen.spec is not None
+                                                  and chosen.spec.key in first)):
         # the field effects the model has, in the gyro's own axes: when no new effect
-        # qualifies, or when the block holds out clearly better than the new effect
-        # (:data:`AXES_FIRST`)
+        # qualifies, or when the block holds out clearly better than a new field effect of
+        # its own order (:data:`AXES_FIRST`)
         _, block = axes_step(wd, base, base_specs, thetas0, folds)
         if block is not None and (chosen is None or (
-                chosen.spec is not None and chosen.spec.key in BLOCK_ORDER.get(block.spec.key, ())
+                chosen.spec.key in BLOCK_ORDER.get(block.spec.key, ())
                 and block.rms_holdout < (1 - AXES_FIRST) * chosen.rms_holdout)):
             chosen = block
             out = [chosen] + [c for c in out if c.term != chosen.term]

@@ -100,25 +100,6 @@ def test_thermal_branch_play_operator():
     assert s[15000] == pytest.approx(-1)  # steady after cooling: keeps the branch
 
 
-def test_a_branch_wider_than_the_excursion_is_the_level():
-    """A half-width wider than the temperature's excursion from its start never switches: the
-    branch is (T - T_start)/w, the level (rules.HYST_LEVEL_R); a narrow one is not."""
-    from types import SimpleNamespace
-
-    from gyrotest.envmodel.diagnose import hyst_level_corr
-    from gyrotest.envmodel.rules import HYST_LEVEL_R
-    from gyrotest.envmodel.terms import TermSpec
-
-    t = np.arange(0, 20000.0)
-    T = np.interp(t, [0, 3000, 8000, 12000, 20000], [20, 20, 21.2, 20.4, 20.9])
-    wd = SimpleNamespace(frame=SimpleNamespace(temperature={"Tc": T}, bounds=None))
-    spec = TermSpec("hyst", ("Tc",))
-    wide = tm.thermal_branch(T, 1.9)
-    assert np.allclose(wide, (T - T[0]) / 1.9)  # never switches
-    assert hyst_level_corr(wd, spec, {"width_c": 1.9}) == pytest.approx(1.0)
-    assert hyst_level_corr(wd, spec, {"width_c": 0.1}) < HYST_LEVEL_R
-
-
 # ----------------------------------------------------------------------------- parsing
 def test_split_terms_respects_parentheses():
     assert split_terms("T,T2(T_coil),dGdt(T_a,T_b), Hx") == ["T", "T2(T_coil)", "dGdt(T_a,T_b)",

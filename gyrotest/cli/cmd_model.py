@@ -279,9 +279,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
               "a lag with τ ≥ 95 % of the record only on the strict test; a product that is "
-              "its factor's level to |r| ≥ 0.98 gives way to that level (≥ 2x the floor), "
-              "and a hysteresis branch that is its temperature's level (|r| ≥ 0.98) "
-              "gives way to T; "
+              "its factor's level to |r| ≥ 0.98 gives way to that level (≥ 2x the floor); "
               "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (Hquad also before a new "
@@ -502,9 +500,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     >= 10 % better together (no interaction without its main effects), and to the level of
     a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly
     constant: a tilt table's vertical gravity component) and the level qualifies, leaving the
-    model >= 2x the floor; the next step tests the product beside it. A hysteresis branch
-    whose state follows its temperature's level to |r| >= 0.98 (a half-width as wide as the
-    excursion never switches) is that level and gives way to T. A model within 1.1x
+    model >= 2x the floor; the next step tests the product beside it. A model within 1.1x
     the floor takes a new term only at a gain >= 20 %, or >= 10 % on the strict test with
     fold consistency >= 4. When no new effect qualifies, the model's own field terms of an
     order are tried in the gyro's axes: the block over every moving field axis (Hvec for

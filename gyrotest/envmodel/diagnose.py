@@ -155,10 +155,7 @@ that the model under judgment cannot move:
    time constant is not resolved (at the bottom of its range or below the smoother window)
    gives way to the plain term; one at the top of its range (≥ 95 % of the record length) is
    not a missing effect off the strict test: lagged that long, a channel is a slow trend
-   that fits the gyro's own drift (:data:`gyrotest.envmodel.rules.LAG_TOP`). A hysteresis
-   branch whose state follows its temperature's level to |r| ≥ 0.98 (a half-width as wide
-   as the excursion never switches) is that level, and gives way to T(c)
-   (:data:`gyrotest.envmodel.rules.HYST_LEVEL_R`). Candidates
+   that fits the gyro's own drift (:data:`gyrotest.envmodel.rules.LAG_TOP`). Candidates
    whose fitted contributions correlate at |r| ≥ 0.995 with the chosen one are named as
    indistinguishable in this log. Candidates the
    model already spans (R² > 1 − 10⁻⁶ on its columns) are not tried.
@@ -216,7 +213,6 @@ from . import stats as st
 from .axes import axes_step
 from .candidate import (
     Candidate,
-    abs_corr,
     equivalents,
     held_out_gain,
     kept_terms,
@@ -225,7 +221,6 @@ from .candidate import (
     spectral_z,
 )
 from .channel_terms import custom_text
-from .effects import thermal_branch
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .pairs import lag_or_plain, lookahead, marginal, pair_step, redirect
@@ -250,7 +245,6 @@ from .rules import (
     FAR_T_NUISANCE,
     FAR_Z,
     HYST_CV_T,
-    HYST_LEVEL_R,
     HYST_STRONG_CV_T,
     HYST_WEAK_CV_T,
     LAG_TOP,
@@ -663,17 +657,6 @@ def _not_in_model(base: FitResult, cands: list[TermSpec]) -> list[TermSpec]:
     return out
 
 
-def hyst_level_corr(wd, c: TermSpec, theta: dict) -> float:
-    """|r| between a fitted hysteresis branch state and its temperature's level (NaN when
-    either is constant): near 1 the branch never switches (:data:`HYST_LEVEL_R`)."""
-    w = theta.get("width_c")
-    T = wd.frame.temperature.get(c.channels[0]) if c.channels else None
-    if w is None or T is None:
-        return math.nan
-    s = thermal_branch(T, float(w), wd.frame.bounds)
-    return abs_corr(s, T)
-
-
 def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
            min_improvement, folds, replaces_labels: list[str] | None = None) -> Candidate:
     replaces = None
@@ -758,13 +741,6 @@ def _judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
             rejected = (f"its time constant ({tau:.0f} s) is at the top of its range (the "
                         "record length): the log does not resolve the lag, and a channel "
                         "lagged that long is a slow trend that can fit the gyro's own drift")
-    if rejected is None and (strict or clear or far) and c.key == "hyst":
-        r_lvl = hyst_level_corr(wd, c, theta)
-        if r_lvl >= HYST_LEVEL_R:
-            ch = c.channels[0]
-            rejected = (f"its branch follows the level of {ch} (r = {r_lvl:.3f}): a half-width "
-                        f"of {theta['width_c']:.2g} degC hardly switches on this temperature "
-                        f"program, and the level T({ch}) is the simpler explanation")
     match = None
     if c.key == "sin" and (strict or clear or far):
         # judged in _step against the matched channel's own candidates

@@ -264,13 +264,6 @@ UNLAGGED = {"Tlag": "T", "dTlagdt": "dTdt", "chanlag": "chan", "dchanlag": "dcha
 #: τ = 9709 s in a 9720 s record, HAC z 0.0 and 0.7, spectral z 9.3 and 8.5; no lag chosen
 #: in the stored tuning runs of seeds 36000-38699 had τ above half the record length)
 LAG_TOP = 0.95
-#: a hysteresis branch whose state follows its temperature's level to |r| ≥ HYST_LEVEL_R is
-#: that level: a half-width as wide as the temperature's excursion from its start never (or
-#: hardly) switches, and the play operator is then (T − T_start)/w. Off the strict test and on
-#: it, the level T(c) is the simpler explanation and the branch gives way (seed 21091, a tilt
-#: table: a half-width of 1.91 degC against 1.08 degC of excursion beat the true T by 0.4 %
-#: of held-out RMS and was named; the level has the same contribution)
-HYST_LEVEL_R = 0.98
 
 #: when no new effect qualifies, the field block of an order the model already has (Hvec for
 #: Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces those terms -- the same effect in the

@@ -277,8 +277,9 @@ AXES_GAIN = 0.08
 AXES_T = 2.5
 AXES_Z = 1.0
 #: ... and a qualifying quadratic block (Hquad) is chosen before a new second-order field
-#: effect (Hsq, Hprod, Hmag2) whose held-out RMS it beats by more than AXES_FIRST: a gyro a few degrees off the coils with a large second-order field
-#: effect leaves cross-axis parts of it (4 % of a product 92 × the floor in seed 39015) that
+#: effect (Hsq, Hprod, Hmag2) whose held-out RMS it beats by more than AXES_FIRST: a gyro
+#: a few degrees off the coils with a large second-order field effect leaves cross-axis
+#: parts of it (4 % of a product 92 × the floor in seed 39015) that
 #: each qualify as a new effect, and the loop spent its steps naming them one by one
 #: (39015: Hprod(Bx,By), Hsq(Bz), Hsq(By) after the true Hprod(By,Bz), ending 1.5 × the true
 #: model; the quadratic block in place of Hprod(By,Bz) held out 2.70 → 0.25 deg/h against

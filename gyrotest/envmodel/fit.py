@@ -10,7 +10,12 @@ Linear terms by least squares; terms with a time constant or frequency by variab
 residual periodogram and refined by bounded Brent minimisation of the residual sum of
 squares, the linear coefficients solved exactly at each step; two or more time constants
 are then polished jointly by a Nelder–Mead search over their logarithms, since one-parameter
-moves stop in the curved valley where two of them trade off). Uncertainties: HAC (see
+moves stop in the curved valley where two of them trade off). A model fitted from the
+nonlinear parameters of a smaller one (``thetas0``: every candidate the diagnosis judges)
+re-checks them beside the new terms: each warm time constant on its global grid, a warm
+frequency from scratch, every time constant from scratch when a new nonlinear term joins, and
+jointly those of a new term's channels; each move is kept only when it lowers the residual sum
+of squares by more than 10 % (:mod:`.varpro`). Uncertainties: HAC (see
 :mod:`.stats`) on the Gauss–Newton Jacobian
 (linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty propagates. Held-out
 validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
@@ -244,13 +249,17 @@ def cv_layout(wd: WorkData, folds: int = 5) -> tuple[int, int, str]:
 
 def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bool = True,
               folds: int = 5, thetas0: dict | None = None,
-              light: bool = False, k_sigma: float = 4.0) -> FitResult:
+              light: bool = False, k_sigma: float = 4.0,
+              new_terms: list[TermSpec] | None = None) -> FitResult:
     """Fit ``terms`` (plus a bias) to prepared data; see the module docstring.
 
     Returns a :class:`FitResult` with coefficients in physical units ± HAC 1σ, residual RMS
     (deg/h) on the fit and on held-out blocks, AIC/BIC, collinearity diagnostics, the residual
     Allan deviation and noise floor, excursions (|residual| > k·σ) and the portable
     :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
+    ``new_terms``: the terms added to a model whose nonlinear parameters ``thetas0`` holds
+    (a candidate judged by the diagnosis); warm time constants of their channels are then
+    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`).
     """
     specs = parse_terms(terms)  # texts and TermSpecs, mixed freely
     specs = [s for s in specs if s.key != "bias"]
@@ -269,6 +278,8 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     if thetas0:
         thetas = fitter.recheck_taus(thetas, set(thetas0))
         thetas = fitter.rescan(thetas, set(thetas0))
+        if new_terms:
+            thetas = fitter.repolish(thetas, set(thetas0), new_terms)
     elif len(fitter.nl) > 1:
         alt = fitter.incremental()
         if fitter.solve(alt, None)[1] < fitter.solve(thetas, None)[1]:

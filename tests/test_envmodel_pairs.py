@@ -1,0 +1,68 @@
+"""The pair search's decision rule (:func:`gyrotest.envmodel.pairs._find_pair`), with the
+fits replaced by fixed numbers: the pair with the lowest held-out RMS decides; when it
+fails the joint HAC test, only a qualifying pair naming the same member first stands in."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import pytest
+
+from gyrotest.envmodel import pairs
+from gyrotest.envmodel.candidate import Candidate
+from gyrotest.envmodel.terms import TermSpec
+
+
+def _cand(label: str, rms: float) -> Candidate:
+    c = Candidate(label, label, None, rms, rms, 10.0, 0.5, 0.6, 1.0, 1, False,
+                  spec=TermSpec("T", (label,)), klass="library")
+    c._fit = SimpleNamespace(_thetas={})
+    return c
+
+
+@pytest.fixture
+def rigged(monkeypatch):
+    """Pairs from a fixed list with fixed held-out RMS; ``fail`` names the pairs whose
+    joint HAC test fails."""
+    def rig(cands, table, fail):
+        monkeypatch.setattr(pairs, "_pair_pool", lambda base, out: [])
+        monkeypatch.setattr(pairs, "_polynomial_pairs",
+                            lambda out: [(cands[a], cands[b]) for a, b in table])
+        for name in ("_hyst_level_pairs", "_hidden_pairs", "_trend_pairs", "_partner_pairs"):
+            monkeypatch.setattr(pairs, name, lambda *a, **k: [])
+        monkeypatch.setattr(pairs, "_channel_pairs", lambda *a, **k: [])
+
+        def fit(wd, base_specs, a, b, thetas0, folds, start=None):
+            return SimpleNamespace(rms_holdout=table[(a.term, b.term)])
+
+        monkeypatch.setattr(pairs, "_fit_pair", fit)
+        monkeypatch.setattr(pairs, "held_out_gain", lambda base, r, folds: (0.9, 0.01, 50.0))
+        monkeypatch.setattr(pairs, "spectral_z", lambda *a, **k: 100.0)
+        monkeypatch.setattr(pairs, "_joint_z_ok",
+                            lambda r, a, b, wd, t: (a.term, b.term) not in fail)
+        return pairs._find_pair(None, SimpleNamespace(rms_holdout=10.0), [], list(cands.values()),
+                                {}, 5)
+    return rig
+
+
+def test_lowest_qualifying_pair_decides(rigged):
+    c = {n: _cand(n, r) for n, r in [("X", 5.0), ("Y", 6.0), ("P", 9.0), ("Q", 9.5)]}
+    found = rigged(c, {("X", "P"): 0.5, ("Y", "Q"): 0.4}, fail=set())
+    assert found[0].term == "Y" and found[1].term == "Q" and math.isclose(found[2], 0.4)
+
+
+def test_failed_lowest_pair_blocks_a_pair_naming_another_member(rigged):
+    c = {n: _cand(n, r) for n, r in [("X", 5.0), ("Y", 6.0), ("P", 9.0), ("Q", 9.5)]}
+    found = rigged(c, {("X", "P"): 0.5, ("Y", "Q"): 0.4}, fail={("Y", "Q")})
+    assert found is None
+
+
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_failed_lowest_pair_hands_over_to_a_pair_naming_the_same_member(rigged, order):
+    # L = (X, P) fails; G1 = (Y, Q) passes but names Y; G2 = (X, Q) passes and names X
+    c = {n: _cand(n, r) for n, r in [("X", 5.0), ("Y", 6.0), ("P", 9.0), ("Q", 9.5)]}
+    rows = [(("X", "P"), 0.05), (("Y", "Q"), 0.10), (("X", "Q"), 0.12)]
+    rows = rows[order:] + rows[:order]
+    found = rigged(c, dict(rows), fail={("X", "P")})
+    assert found is not None and found[0].term == "X" and found[1].term == "Q", found

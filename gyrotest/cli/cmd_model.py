@@ -461,7 +461,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     its coefficient in the augmented model. A missing effect either passes the strict test
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
     while the model is above 1.2x the noise floor, p x trials < 0.01; a warm-up, which most
-    folds cannot see, also >= 20 % at fold consistency >= 2.13), or, when the model is
+    folds cannot see, also >= 10 % at fold consistency >= 2.13), or, when the model is
     at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
     folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1; ramp, warm-up, sinusoid
     and hysteresis >= 20 % at >= 3.75, a warm-up, which most folds cannot see, at >= 2.13
@@ -470,7 +470,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     the best candidates, further channels and the largest in-sample gains are also tried
     in pairs, and so are the level and square of each channel and a ramp beside each of
     them (two effects that hide each other are named one after the other; a pair with a
-    warm-up at fold consistency >= 2.13 when its spectral z is >= 8; a pair whose
+    warm-up at fold consistency >= 2.13 when its spectral z is >= 8; when the best pair
+    fails the joint HAC test (both members |z| < 1 alone), a qualifying pair naming the
+    same member first stands in; a pair whose
     first member alone makes the model worse only when the next step then names an
     effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the
@@ -491,8 +493,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     degree of freedom, at spectral z >= 8 instead; a hysteresis at spectral z >= 8 when the
     pair's fold consistency is >= 100); the same joint test (and a gain >= 40 % at fold
     consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
-    another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates are told apart by the step
-    after them (each fitted with the pair pool), and a lag (Tlag, chanlag) gives way to its
+    another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates (within 2 %, or
+    a gain over them with fold consistency < 2.13) are told apart by the step after them
+    (each fitted with the pair pool, second-order forms and channel cross terms), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel;
     a lag whose time constant reaches the record length is named only on the strict test
     (lagged that long, a channel is a slow trend that fits the gyro's own drift).

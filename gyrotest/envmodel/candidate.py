@@ -55,6 +55,9 @@ class Candidate:
     cv_t: float = math.nan  # gain / (fold scatter / √folds)
     spectral_z: float = math.nan  # Whittle z of its coefficients (weak routes only)
     hac_waived: bool = False  # qualified far above the floor on its spectral z, not HAC z
+    #: its best partner in the step after it, when a lookahead fitted them: (held-out RMS
+    #: deg/h, the partner's term)
+    lookahead: tuple[float, str] | None = None
     _fit: FitResult | None = None
 
     @property

@@ -92,14 +92,17 @@ FAR_Z = 1.0
 #: residual's slow noise at spectral z ≥ WARMUP_SPECTRAL_Z
 WARMUP_SPECTRAL_Z = 8.0
 #: ... and for the same reason the clear-gain route (the model above ABOVE_FLOOR × the floor)
-#: takes a warm-up with gain ≥ BIG_GAIN at consistency ≥ FAR_T (not CV_T_NUISANCE) when its
+#: takes a warm-up with gain ≥ FAR_GAIN at consistency ≥ FAR_T (not CV_T_NUISANCE) when its
 #: HAC test gives p × trials < WARMUP_CLEAR_P, the clear-gain guard of a channel term (the
 #: searched time constant is counted in the trials). Measured on the stored tuning runs
 #: (seeds 30000-39699) at 1.2-2 × the floor, where the far route does not apply: the true
 #: warm-ups at ≥ 20 % and ≥ 2.13 had p × trials 0.0014-0.028 (four below 0.01, each a case
 #: that ended ≥ 1.3 × the true model: 39181, 37023, 33170, 30016), the warm-ups fitted on
 #: nulls or beside another missing effect 0.014-1 (eleven; spectral z did not separate
-#: them: 4.3-11.8 true, 0.2-7.0 false)
+#: them: 4.3-11.8 true, 0.2-7.0 false). The gain bar was BIG_GAIN until seed 41166 (a warm-up
+#: beside a ramp, −17.5 % at consistency 2.15 and p × trials 0.0063, left the loop at 1.2 × the
+#: true model); the warm-ups of the null runs of seeds 41500-41699 with gains of 10-28 % had
+#: p × trials 0.034-1
 WARMUP_CLEAR_P = 0.01
 # ... or, when other missing effects inflate that error (several at once, far above the
 # floor, leave the HAC test of a warm-up of 100 × the floor at z 0.7), the coefficient stands
@@ -251,6 +254,10 @@ LOOKAHEAD_TOP = 3
 #: ... each with the pair pool and at most this many second-order forms of the channels the
 #: model uses
 LOOKAHEAD_MORE = 6
+#: ... and so are candidates the held-out evidence cannot tell from the chosen one: its
+#: gain over them has fold consistency gain/(scatter/√folds) below LOOKAHEAD_T (the
+#: far-route bar: a difference that would not count as a gain does not rank them either)
+LOOKAHEAD_T = FAR_T
 #: a sinusoid on a stimulus period is that channel's effect when a term of the channel gets
 #: at least this share of the sinusoid's held-out gain
 PERIOD_SHARE = 0.5

@@ -9,6 +9,7 @@ catch a regression of the verdict rules.
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -601,9 +602,120 @@ def test_the_quadratic_block_does_not_go_before_a_missing_linear_field_term():
     """Seed 39199: Hsq(Hy) named, then a linear Hz 38x the floor still missing. The quadratic
     block in place of Hsq(Hy) absorbs most of it over the stepped sequences (-96 % against
     Hz's -93 %), but it is not the same effect in rotated axes: the block goes first only
-    before a new field term of its own order, and Hz is named (rules.AXES_FIRST)."""
+    before a new field term of its own order, and Hz is named (rules.AXES_FIRST). Since the
+    lookahead also takes candidates the held-out evidence cannot tell apart (LOOKAHEAD_T),
+    Hz comes first here (with its partner Hprod 1.76 deg/h against 2.21 for Hsq), and the
+    loop goes on to the rotated field's Hy and Hx and the warm-up."""
     bw, ws = _bench()
     row = bw.run_case(ws.make_case(39199))
     labels = [a["label"] for a in row["added"]]
-    assert labels[:2] == ["Hsq(Hy_uT)", "Hz(Hz_uT)"], labels
+    assert set(labels[:2]) == {"Hsq(Hy_uT)", "Hz(Hz_uT)"}, labels
+    assert not any(lb.startswith("Hquad") for lb in labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_a_users_free_sinusoid_is_searched_again_beside_a_new_warm_up():
+    """Seed 41032: the user's model holds a free sinusoid (an HVAC cycle of 2852 s) and a
+    warm-up of 305 s is missing. Fitted without the warm-up, the sinusoid locks onto the
+    transient; when the warm-up was tried, the frequency was searched only near that value
+    and stayed there: the warm-up held out 0.35 instead of 0.09 deg/h at HAC z 1.0, and the
+    loop ended 13x the true model. The warm frequency is now searched from scratch beside a
+    new term (varpro recheck_taus)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(41032))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:1] == ["warmup"], labels
+    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_a_pair_with_the_same_lead_stands_in_for_a_best_pair_that_fails_its_joint_test():
+    """Real ADIS16405 noise (seed 41065): a warm-up and the rate term of a sensor lagging its
+    node are missing, and each hides the other. The best pair, the warm-up with a lag of the
+    chamber air, failed the joint HAC test, and that blocked the next pair, the warm-up with
+    dT/dt of the lagging sensor, which passes it: nothing was named and the loop ended 15x
+    the true model. A pair with the same leading member is now accepted."""
+    bw, ws = _bench()
+    if not ws.real_noise_available():
+        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
+    row = bw.run_case(ws.make_case(41065))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:2] == ["warmup", "dTdt(T_gyro)"], labels
+    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_candidates_the_held_out_evidence_cannot_tell_apart_go_to_the_lookahead():
+    """Seed 41060 (tilt table): after the warm-up, T of a drifting case temperature held out
+    9 % better than the true ageing ramp, but ± 30 % from fold to fold (consistency 0.7).
+    Beside T the missing anisoelastic g cross term stays hidden (0.111 deg/h); beside the
+    ramp it comes out at −57 % (0.054). Only candidates within 2 % went to the lookahead, and
+    the loop ended 1.4x the true model (rules.LOOKAHEAD_T)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(41060))
+    labels = [a["label"] for a in row["added"]]
+    assert labels == ["warmup", "ramp", "gprod(acc_ax,acc_ay)"], labels
+    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_a_term_the_lookahead_chose_with_its_partner_is_not_redirected():
+    """Seed 41127: far above the floor the rate of a lagged node, T and a hysteresis tie;
+    the lookahead picks the rate, whose partner T² takes the model to the floor. The
+    redirect then gave way to a pair of two other candidates (the hysteresis with T²,
+    0.23 deg/h against 0.099) because it compared only partners from the pool: the loop
+    ended 2.3x the true model."""
+    from gyrotest.envmodel import diagnose, prepare
+    from gyrotest.envmodel.terms import parse_terms, resolve_terms
+    from gyrotest.ingest import read_log
+
+    bw, ws = _bench()
+    case = ws.make_case(41127)
+    with tempfile.TemporaryDirectory() as td:
+        log = read_log(ws.write_case(case, td), overrides=case.profile)
+    wd = prepare(log)
+    d = diagnose(wd, resolve_terms(parse_terms(case.base_terms), wd.frame))
+    assert d.found[0].term == "dTlagdt(T_case_C)", d.verdict
+    assert d.path[-1]["ratio_to_floor_after"] < 1.3, d.path
+
+
+def test_a_warm_up_near_the_floor_takes_the_clear_route_from_a_ten_percent_gain():
+    """Seed 41166: beside the ramp the user added, a warm-up (τ 3427 s) cuts the held-out RMS
+    by 17.5 % at fold consistency 2.15, p x trials 0.0063 (rules.WARMUP_CLEAR_P), with the
+    model 1.25x the floor; the route needed a 20 % gain and the loop ended 1.2x the true
+    model."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(41166))
+    labels = [a["label"] for a in row["added"]]
+    assert labels == ["ramp", "warmup"], labels
+    assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
+
+
+def test_warm_time_constants_of_a_new_terms_sensor_are_searched_jointly():
+    """Seed 40110: the loop has added a warm-up and the rate of a lagged node of T_gyro
+    (τ 3689 s and 2041 s, fitted without the node's level). Beside T(T_gyro) they belong at
+    2749 s and 909 s; neither reaches its value alone, so warm-started T(T_gyro) held out
+    +0.1 % and the loop ended 1.28x the true model. Searched jointly (varpro repolish), T
+    holds out -22 % at HAC z 6.3, at the true model's held-out RMS."""
+    from gyrotest.envmodel import diagnose, fit_model, prepare
+    from gyrotest.envmodel.terms import parse_terms, resolve_terms
+    from gyrotest.ingest import read_log
+
+    _, ws = _bench()
+    case = ws.make_case(40110)
+    with tempfile.TemporaryDirectory() as td:
+        log = read_log(ws.write_case(case, td), overrides=case.profile)
+    wd = prepare(log)
+    d = diagnose(wd, resolve_terms(parse_terms(["warmup", "dTlagdt(T_gyro)"]), wd.frame))
+    assert d.found and d.found[0].term in ("T(T_gyro)", "Tlag(T_gyro)"), d.verdict
+    true = fit_model(wd, case.true_terms)
+    assert d.found[0].rms_holdout <= 1.05 * true.rms_holdout, (d.found[0].rms_holdout,
+                                                                true.rms_holdout)
+
+
+def test_a_warm_up_and_a_free_sinusoid_of_the_users_model_are_searched_jointly():
+    """Null seed 40685: the user's model holds a warm-up (true τ 1645 s) and a free HVAC
+    sinusoid (period 4486 s) in a record of about two cycles; the transient and the first
+    half-cycle trade off. Searched one at a time from scratch the fit stopped at τ 970 s,
+    period 4388 s (RSS 45x the joint optimum) and the residual alarmed as a missing effect;
+    the free frequency now joins the joint time-constant search (varpro polish_joint)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(40685, null=True))
+    assert not row["alarm"], row["added"]

@@ -262,7 +262,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
                       f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
     out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
               f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
-              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis; a warm-up ≥ 20 % "
+              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis; a warm-up ≥ 10 % "
               "at fold consistency ≥ 2.13 with 0.01) while the model is "
               "above 1.2x the noise floor, or (model ≥ 2x the floor) down by ≥ 10 % "
               "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1, "

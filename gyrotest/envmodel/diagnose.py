@@ -231,6 +231,7 @@ from .candidate import (
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
+from .groups import group_step
 from .pairs import lag_or_plain, lookahead, marginal, pair_step, redirect
 from .prepare import prepare_log
 from .prune import Unneeded, unneeded_term
@@ -249,6 +250,7 @@ from .rules import (
     CV_T_NUISANCE,
     FAR_GAIN,
     FAR_RATIO,
+    GROUP_RATIO,
     FAR_T,
     FAR_T_NUISANCE,
     FAR_Z,
@@ -535,6 +537,13 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                             min_improvement, folds)
         if chosen is not None:
             out = [chosen] + out
+    if chosen is None and candidates is None and math.isfinite(base_ratio) \
+            and base_ratio >= GROUP_RATIO:
+        # nor a swap: three or more effects that hide one another (:mod:`.groups`)
+        chosen = group_step(wd, base, base_specs, out, thetas0, folds)
+        if chosen is not None:
+            chosen.equivalents = equivalents(chosen, out, base)
+            out = [chosen] + [c for c in out if c is not chosen]
     return out, chosen
 
 

@@ -232,6 +232,23 @@ REDIRECT_RATIO = 0.5
 SWAP_FIT_GAIN = 0.2
 SWAP_TOP = 3
 SWAP_SKIP = ("Tlag",)
+#: three or more missing effects that each make the model worse alone and hide one another
+#: in pairs (:mod:`gyrotest.envmodel.groups`; seed 44140: a tilt table with g, the
+#: anisoelastic g·g and T all missing at 100-200x the floor held out worse with any one and
+#: at best -58 % with any two, -98 % with all three). When nothing else qualifies and the
+#: model is at least GROUP_RATIO x the floor, the GROUP_POOL channel-driven candidates with
+#: the largest in-sample gain are fitted together and eliminated backward: a member goes
+#: while leaving it out raises the group's held-out RMS by less than GROUP_DROP, or while its
+#: HAC |z| in the group's fit is below GROUP_Z. At least three must remain, cut the held-out
+#: RMS by GROUP_GAIN at fold consistency GROUP_T, hold out below (1 - GROUP_GAIN) x the best
+#: member alone and stand out of the residual spectrum (SPECTRAL_Z). The ratio is high
+#: because real-gyro nulls sit up to 33x the short-tau floor with nothing to find
+GROUP_RATIO = 20.0
+GROUP_POOL = 10
+GROUP_DROP = 0.02
+GROUP_Z = 4.0
+GROUP_GAIN = 0.5
+GROUP_T = 5.0
 #: a product a·b chosen while the level of its factor a is a missing effect too, and over
 #: this log the product's fitted contribution is the level's to |r| ≥ PRODUCT_LEVEL_R (b is
 #: nearly constant wherever a varies: the gravity component along a tilt table's vertical,

@@ -95,11 +95,14 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
             disp = top.displaced
             why = (f"{disp[0]} alone would leave {disp[1]:.4g} deg/h, while" if disp
                    else "no single term explains it:")
+            many = ", " in pair[0]  # a group (:mod:`.groups`): three or more members
             v += (f"; the model is {ratio:.1f}x the noise floor and {why} "
-                  f"{top.term} and {pair[0]} together bring the held-out RMS to "
-                  f"{pair[1]:.4g} deg/h, consistently across the folds (gain/(fold "
-                  f"scatter/sqrt(folds)) = {pair[2]:.1f}); each hides the other, so the next "
-                  f"step tests {pair[0]}")
+                  f"{top.term}{', ' if many else ' and '}{pair[0]} together bring the "
+                  f"held-out RMS to {pair[1]:.4g} deg/h, consistently across the folds "
+                  f"(gain/(fold scatter/sqrt(folds)) = {pair[2]:.1f}); "
+                  + (f"each alone or in pairs holds out far worse: they hide one another, so "
+                     f"the next steps test {pair[0]}" if many else
+                     f"each hides the other, so the next step tests {pair[0]}"))
         if top.note:
             v += f"; {top.note}"
         if top.klass == "channel" and math.isfinite(top.r_residual):

@@ -284,7 +284,11 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
               "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (Hquad also before a new "
               "second-order field term it beats by ≥ 10 %); then (above 1.2x the floor) "
-              "the largest in-sample gains (≥ 20 %) in place of each model term; ties go to "
+              "the largest in-sample gains (≥ 20 %) in place of each model term; then "
+              "(≥ 20x the floor) three or more effects that hide one another: the 10 "
+              "channel-driven candidates of largest in-sample gain fitted together and "
+              "eliminated backward (a member goes at < 2 % held-out cost or HAC |z| < 4), "
+              "≥ 3 left, ≥ 50 % at fold consistency ≥ 5, spectral z ≥ 8; ties go to "
               "channel-based "
               "terms and to the channels the model already uses")
     if b.excursions:
@@ -519,7 +523,16 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     (collinear with it over the record) is named for replacement ("replaces X") when the
     swap qualifies, fits the record no worse, holds out better than the candidate beside
     the term at fold consistency >= 2.13, and the candidate's p x trials beside the term
-    is < 0.01 (< 0.001 for a ramp, warm-up, sinusoid or hysteresis).
+    is < 0.01 (< 0.001 for a ramp, warm-up, sinusoid or hysteresis). When still none
+    qualifies and the model is >= 20x the floor, three or more effects may hide one
+    another (each alone and in pairs holds out worse than all together): the ten
+    channel-driven candidates with the largest in-sample gains (no ramp, warm-up,
+    sinusoid or hysteresis) are fitted together and eliminated backward (a member goes
+    while leaving it out costs < 2 % held-out RMS, or while its HAC |z| in the group's fit
+    is < 4); at least three must remain, cut the held-out RMS by >= 50 % at fold
+    consistency >= 5, hold out at most half of the best member alone and stand out of the
+    residual's spectrum (z >= 8). The member best alone is named first, "together with"
+    the others, which the next steps test.
     When no missing effect is found, each term of the model is left out once: one whose
     removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
     ("the model does better without X: remove it"). The noise floor is

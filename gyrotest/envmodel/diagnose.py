@@ -198,6 +198,15 @@ that the model under judgment cannot move:
    (p × trials added < 0.01; 0.001 for ramp, warm-up, sinusoid, hysteresis) is named
    "(replaces X)".
 
+   **Three or more effects that hide one another** (:mod:`gyrotest.envmodel.groups`):
+   when nothing above qualifies and the model is ≥ 20 × the floor, the ten channel-driven
+   candidates with the largest in-sample gains are fitted together and eliminated
+   backward (a member goes while leaving it out costs < 2 % held-out RMS, or while its
+   HAC |z| in the group's fit is < 4). At least three must remain, cut the held-out RMS
+   by ≥ 50 % at fold consistency ≥ 5, hold out at most half of the best member alone and
+   stand out of the residual spectrum (z ≥ 8); the member best alone is named first,
+   "together with" the others.
+
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
    ≥ 5 % (gain/(fold scatter/√folds) ≥ 1) is named for removal ("the model does better

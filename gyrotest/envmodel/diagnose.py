@@ -522,7 +522,7 @@ def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ra
     """A model term that stands in for the missing effect (:data:`SWAP_FIT_GAIN`): when no
     candidate qualifies added, each of the :data:`SWAP_TOP` candidates with the largest
     in-sample gain is judged in place of each term of the model (the routes of
-    :func:`_judge`, the trials counted over every swap tried). A swap qualifies when it is
+    :func:`gyrotest.envmodel.judge.judge`, the trials counted over every swap tried). A swap qualifies when it is
     significant, fits the record at least as well as the model it changes, holds out better
     than the candidate added beside the term, consistently across the folds
     (gain/(scatter/√folds) ≥ :data:`FAR_T`), and the candidate's coefficient stands beside
@@ -575,7 +575,7 @@ def _partner_follows(wd, base, lead: Candidate, other: Candidate, n_c,
     removes the term again, and the loop cycles (null 38688n, real noise: the rate of a
     humidity channel alone took the held-out RMS from 0.74 to 9.3 deg/h, with a lagged
     pressure 0.31; beside it the pressure lag had spectral z 5.7 and HAC z 0.2). The other
-    member is judged first the way the next step judges it (:func:`_judge`, on the model
+    member is judged first the way the next step judges it (:func:`gyrotest.envmodel.judge.judge`, on the model
     with the leading member added); when it does not qualify there, the whole next step is
     run (it may name another effect: seed 27119). True when the next step names an effect,
     or when the leading member alone does not hold out worse than the model."""

@@ -63,7 +63,7 @@ HYST_PAIR_Z = 4.0
 #: 27119, tuned on seeds 27000-27199) and the best pool members' partners outside the pool
 #: (:func:`gyrotest.envmodel.pairs._partner_pairs`; seed 28086, tuned on seeds 28000-29199)
 HIDDEN_TOP = 2
-#: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.diagnose._judge`)
+#: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.judge.judge`)
 SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"
 #: a model is at the floor when its held-out RMS is within this factor of it
 AT_FLOOR = 1.1

@@ -260,7 +260,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
                       f"{fmt_num(p['rms_holdout_before_dph'])} → "
                       f"{fmt_num(p['rms_holdout_after_dph'])} deg/h (held-out/floor "
                       f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
-    out.print(f"  rule: missing effect = held-out RMS down by ≥ {diag.min_improvement_pct:g} % "
+    out.print(f"  rule: missing effect = held-out RMS down (fold consistency ≥ 1) by "
+              f"≥ {diag.min_improvement_pct:g} % "
               f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
               "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis; a warm-up ≥ 10 % "
               "at fold consistency ≥ 2.13 with 0.01) while the model is "
@@ -462,7 +463,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     of every logged channel (level, square, |x|, rate of change, first-order lag with a fitted
     time constant, rate of that lag; H_i², H_i·H_j, |H|², g_i·g_j). Each is added in turn
     and scored by its held-out residual RMS (blocked cross-validation), with a HAC test of
-    its coefficient in the augmented model. A missing effect either passes the strict test
+    its coefficient in the augmented model. A missing effect needs its held-out gain more
+    often a gain than not across the folds (gain / (fold scatter / sqrt(folds)) >= 1) and
+    either passes the strict test
     (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
     while the model is above 1.2x the noise floor, p x trials < 0.01; a warm-up, which most
     folds cannot see, also >= 10 % at fold consistency >= 2.13), or, when the model is

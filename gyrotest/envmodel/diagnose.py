@@ -18,7 +18,9 @@ that the model under judgment cannot move:
    of freedom; p × trials (the effective number of values a searched nonlinear parameter
    can take: ln(τ_max/τ_min) for a time constant, (f_max − f_min)·T for a frequency) and
    p_adj = p × trials × candidates.
-4. **A candidate is a missing effect** when either
+4. **A candidate is a missing effect** when its held-out gain is more often a gain than not
+   across the folds (gain/(fold scatter/√folds) ≥ 1, :data:`gyrotest.envmodel.rules.MIN_CV_T`,
+   on every route) and either
    * *strict*: p_adj < α (0.001) and the held-out RMS falls by ≥ 1 % (5 % for the nuisance
      terms ramp, warm-up, sinusoid and hysteresis, whose flexibility a HAC test undercounts;
      hysteresis must also help consistently across the folds, gain/(scatter/√folds) ≥ 4);

@@ -41,6 +41,7 @@ from .rules import (
     HYST_STRONG_CV_T,
     HYST_WEAK_CV_T,
     LAG_TOP,
+    MIN_CV_T,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
     STRONG_P,
@@ -110,10 +111,11 @@ def judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     strict = bool(math.isfinite(p_adj) and p_adj < alpha
                   and impr >= (max(min_improvement, CLEAR_GAIN) if klass == "nuisance"
                                else min_improvement)
+                  and t_cv >= MIN_CV_T
                   and (c.key != "hyst" or t_cv >= HYST_CV_T))
     above = base_ratio > ABOVE_FLOOR or impr >= BIG_GAIN
     cv_min = CV_T_NUISANCE if klass == "nuisance" else CV_T
-    clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN
+    clear = bool(math.isfinite(p_tr) and above and impr >= CLEAR_GAIN and t_cv >= MIN_CV_T
                  and (p_tr < guard
                       or (impr >= BIG_GAIN and t_cv >= cv_min and p_tr < WEAK_P)
                       # a warm-up lives in the first chunks (:data:`WARMUP_CLEAR_P`)

@@ -38,6 +38,21 @@ def _assert_real_null_quiet(seed: int) -> None:
     assert not row["alarm"], row["added"]
 
 
+def _diagnose_base(seed: int):
+    """Seed ``seed`` of the simulator read through ingest and prepared, and the diagnosis of
+    its base model: (case, work data, diagnosis)."""
+    from gyrotest.envmodel import diagnose, prepare
+    from gyrotest.envmodel.terms import parse_terms, resolve_terms
+    from gyrotest.ingest import read_log
+
+    _, ws = _bench()
+    case = ws.make_case(seed)
+    with tempfile.TemporaryDirectory() as td:
+        log = read_log(ws.write_case(case, td), overrides=case.profile)
+    wd = prepare(log)
+    return case, wd, diagnose(wd, resolve_terms(parse_terms(case.base_terms), wd.frame))
+
+
 @pytest.fixture(scope="module")
 def quick():
     bw, _ = _bench()
@@ -662,16 +677,7 @@ def test_a_term_the_lookahead_chose_with_its_partner_is_not_redirected():
     redirect then gave way to a pair of two other candidates (the hysteresis with T²,
     0.23 deg/h against 0.099) because it compared only partners from the pool: the loop
     ended 2.3x the true model."""
-    from gyrotest.envmodel import diagnose, prepare
-    from gyrotest.envmodel.terms import parse_terms, resolve_terms
-    from gyrotest.ingest import read_log
-
-    bw, ws = _bench()
-    case = ws.make_case(41127)
-    with tempfile.TemporaryDirectory() as td:
-        log = read_log(ws.write_case(case, td), overrides=case.profile)
-    wd = prepare(log)
-    d = diagnose(wd, resolve_terms(parse_terms(case.base_terms), wd.frame))
+    _, _, d = _diagnose_base(41127)
     assert d.found[0].term == "dTlagdt(T_case_C)", d.verdict
     assert d.path[-1]["ratio_to_floor_after"] < 1.3, d.path
 
@@ -728,16 +734,9 @@ def test_three_effects_that_hide_one_another_are_found_as_a_group():
     neither a single nor a pair qualified: "no missing effect", 64x the true model. All three
     together hold out +98 %; backward elimination from the saturated model (envmodel.groups)
     names the best of them alone first, and the forward path reaches the true model."""
-    from gyrotest.envmodel import diagnose, fit_model, prepare
-    from gyrotest.envmodel.terms import parse_terms, resolve_terms
-    from gyrotest.ingest import read_log
+    from gyrotest.envmodel import fit_model
 
-    _, ws = _bench()
-    case = ws.make_case(44140)
-    with tempfile.TemporaryDirectory() as td:
-        log = read_log(ws.write_case(case, td), overrides=case.profile)
-    wd = prepare(log)
-    d = diagnose(wd, resolve_terms(parse_terms(case.base_terms), wd.frame))
+    case, wd, d = _diagnose_base(44140)
     assert d.found, d.verdict
     top = d.found[0]
     assert top.route.startswith("together with"), top.route

@@ -105,27 +105,22 @@ def group_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     if not (impr >= GROUP_GAIN and t_cv >= GROUP_T):
         return None  # not even all of them together
     while len(members) > 2:
-        # the cheapest member to leave out
-        best = None
-        for c in members:
-            rest = [m for m in members if m is not c]
-            rr = _fit(wd, base_specs, rest, thetas0, folds)
-            if rr is not None and (best is None or rr.rms_holdout < best[1].rms_holdout):
-                best = (c, rr)
-        if best is not None and best[1].rms_holdout <= (1.0 + GROUP_DROP) * r.rms_holdout:
-            members = [m for m in members if m is not best[0]]
-            r = best[1]
-            continue
-        weak = _weakest(r, members, wd)
-        if weak is None:
-            break
-        rest = [m for m in members if m is not weak]
-        rr = _fit(wd, base_specs, rest, thetas0, folds)
-        if rr is None:
-            return None
-        members, r = rest, rr
+        # each member left out once: the cheapest goes while it costs < GROUP_DROP, then
+        # the one whose coefficient stands out least while it is below GROUP_Z
+        drops = {id(c): _fit(wd, base_specs, [m for m in members if m is not c], thetas0,
+                             folds) for c in members}
+        fits = [(c, drops[id(c)]) for c in members if drops[id(c)] is not None]
+        c, rr = min(fits, key=lambda f: f[1].rms_holdout, default=(None, None))
+        if rr is None or rr.rms_holdout > (1.0 + GROUP_DROP) * r.rms_holdout:
+            c = _weakest(r, members, wd)
+            if c is None:
+                break  # every member is needed and stands out
+            rr = drops[id(c)]
+            if rr is None:
+                return None
+        members, r = [m for m in members if m is not c], rr
     # two members are the pair search's business; a single is the single's
-    if len(members) < 3 or _weakest(r, members, wd) is not None:
+    if len(members) < 3:
         return None
     impr, _, t_cv = held_out_gain(base, r, folds)
     if not (impr >= GROUP_GAIN and t_cv >= GROUP_T):

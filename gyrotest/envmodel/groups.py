@@ -37,19 +37,16 @@ from .rules import (
     GROUP_T,
     GROUP_Z,
     SPECTRAL_Z,
-    TIME_TERMS,
     red_floor_for,
 )
 
-#: never in a group: terms with a free frequency or width, and time terms (which fit the
-#: gyro's own drift), and the hysteresis branch
-GROUP_SKIP = {"sin", "hyst", "warmup", "ramp"} | set(TIME_TERMS)
-
 
 def _pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
-    """The :data:`GROUP_POOL` channel-driven candidates with the largest in-sample gain."""
+    """The :data:`GROUP_POOL` channel-driven candidates with the largest in-sample gain: no
+    nuisance term (:data:`gyrotest.envmodel.screen.NUISANCE`: a ramp or warm-up fits the
+    gyro's own drift, a sinusoid or hysteresis has a free frequency or width)."""
     ok = [c for c in out if c.spec is not None and not c.replaces and c.pair is None
-          and c.klass != "nuisance" and c.spec.key not in GROUP_SKIP
+          and c.klass != "nuisance"
           and c._fit is not None and math.isfinite(c.rms_fit)
           and math.isfinite(c.rms_holdout) and c.rms_fit < base.rms_fit]
     ok.sort(key=lambda c: c.rms_fit)
@@ -140,4 +137,4 @@ def group_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     return first
 
 
-__all__ = ["GROUP_SKIP", "group_step"]
+__all__ = ["group_step"]

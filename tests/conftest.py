@@ -1,0 +1,36 @@
+"""Suite-wide settings that must be in place before numpy is imported.
+
+The suite runs on two pytest-xdist workers (the README's ``pytest -n 2``). Each worker does
+its linear algebra on one BLAS thread: two workers on a two-core machine already use both
+cores, and a BLAS pool per worker sized from the host's CPU count (which inside a container
+may be far larger than the cores it may use) only oversubscribes them. Subprocesses started
+by tests inherit the same settings. A value the caller set is kept.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+
+# A test that hangs must not hold the whole run until CI's time limit. pytest-timeout
+# (pyproject.toml: ``timeout``, signal method) fails it with its traceback after 15 min; if
+# the hang is in C code that the signal cannot interrupt, this watchdog ends the worker
+# process five minutes later, every thread's stack on stderr, and pytest-xdist replaces it.
+import faulthandler  # noqa: E402
+import sys  # noqa: E402
+
+import pytest  # noqa: E402
+
+HARD_TIMEOUT_S = 1200
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    faulthandler.dump_traceback_later(HARD_TIMEOUT_S, exit=True, file=sys.__stderr__)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()

@@ -942,7 +942,10 @@ def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = N
         lead.missing = missing
         m = loguniform(rng, *MAG_RANGE) if missing else loguniform(rng, 1.0, MAG_RANGE[1])
         r = block_rms(lead.signal)
-        if not r > 0:
+        # a regressor that does not vary beyond rounding (e.g. T² of a temperature held
+        # constant) is not observable: scaling it to the drawn magnitude would give an
+        # absurd coefficient (1e19 deg/h/degC² in seed 46076) that no fit can check
+        if not r > 1e-9 * float(np.max(np.abs(lead.signal), initial=0.0)):
             case.notes.append(f"effect {lead.name} is not observable in this run; dropped")
             continue
         coef = float(rng.choice([-1, 1])) * m * floor / r

@@ -15,7 +15,8 @@ the originals, so the terms the model already has keep their own channels.
     python benchmarks/probe_shift_surrogates.py rows.json [nulls.json ...] [--k 8]
 
 Prints one line per added term: seed, noise, term, the aligned gain, the largest and the
-median surrogate gain, and whether the case is a null (every added term there is spurious).
+median surrogate gain, whether the case is a null (every added term there is spurious) and
+how much of the truth the term explained in the campaign (floor units).
 It also prints the term's gain over the model plus a smooth drift of the gyro itself (a
 cubic in time: ``ramp`` and two custom terms), the other way to ask whether the term only
 stands in for slow noise.
@@ -109,7 +110,8 @@ def main() -> None:
                 s = np.array(s)
                 print(f"{r['seed']} {'null' if r.get('null') else 'case'} {r['noise']['type']} "
                       f"{ad['label']} aligned {al:.3f} surrogate max {np.nanmax(s):.3f} "
-                      f"median {np.nanmedian(s):.3f} over cubic drift {od:.3f}", flush=True)
+                      f"median {np.nanmedian(s):.3f} over cubic drift {od:.3f} explains "
+                      f"{ad.get('truth_reduction_floor')} floor of the truth", flush=True)
 
 
 if __name__ == "__main__":

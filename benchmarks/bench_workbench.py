@@ -595,6 +595,14 @@ def summarise(rows: list[dict]) -> dict:
                 sum(r["noise"].get("type") == "real" for r in nulls)),
             "false_alarms_spurious": _frac(sum(r.get("alarm_spurious", False) for r in nulls),
                                            len(nulls)),
+            "false_alarms_spurious_synthetic": _frac(
+                sum(r.get("alarm_spurious", False) for r in nulls
+                    if r["noise"].get("type") != "real"),
+                sum(r["noise"].get("type") != "real" for r in nulls)),
+            "false_alarms_spurious_real": _frac(
+                sum(r.get("alarm_spurious", False) for r in nulls
+                    if r["noise"].get("type") == "real"),
+                sum(r["noise"].get("type") == "real" for r in nulls)),
             # nulls whose true model, written on the logged channels, reaches the floor (the
             # others leave something the starting model cannot express: a lagging or noisy
             # sensor's dT/dt, so a refinement of a present term is not a false alarm there)
@@ -704,6 +712,9 @@ def markdown(s: dict, *, title: str = "") -> str:
         f"{_pct(o['false_alarms_synthetic'])} / {_pct(o['false_alarms_real'])} |",
         f"| ... whose added term explains < {SPURIOUS:g} floor of the truth (spurious) | "
         f"{_pct(o['false_alarms_spurious'])} |",
+        f"| ... spurious, synthetic noise / real ADIS16405 noise | "
+        f"{_pct(o.get('false_alarms_spurious_synthetic', _frac(0, 0)))} / "
+        f"{_pct(o.get('false_alarms_spurious_real', _frac(0, 0)))} |",
         f"| ... nulls whose true model reaches the floor (true held-out <= {TRUE_AT_FLOOR:g}x "
         f"the injected floor) | {_pct(o.get('false_alarms_true_at_floor', _frac(0, 0)))} |",
         f"| final held-out / true held-out <= {FINAL_OK:g} | {_pct(o['final_ok'])} |",
@@ -865,7 +876,17 @@ def main(argv: list[str] | None = None) -> int:
                     help="null cases only (nothing missing): a larger sample of false alarms")
     ap.add_argument("--validate", action="store_true",
                     help="harness check only: fit the true model, no diagnosis loop")
+    ap.add_argument("--summarise", nargs="+", metavar="JSON", default=None,
+                    help="no run: the tables of the rows stored by earlier --json runs, "
+                         "pooled (e.g. several fresh report sets)")
     a = ap.parse_args(argv)
+    if a.summarise:
+        rows = []
+        for path in a.summarise:
+            with open(path) as fh:
+                rows.extend(json.load(fh)["rows"])
+        print(markdown(summarise(rows), title=f"Pooled rows of {', '.join(a.summarise)}"))
+        return 0
     kinds = [k.strip() for k in a.kinds.split(",") if k.strip()] if a.kinds else None
     for k in kinds or []:
         if k not in ws.KINDS:

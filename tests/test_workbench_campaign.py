@@ -75,6 +75,31 @@ def test_quick_campaign_verdicts(quick):
     assert s["floor_ok"]["frac"] >= 0.7, s["floor_ok"]
 
 
+def test_stored_rows_are_pooled_by_summarise(quick, tmp_path, capsys):
+    """``--summarise`` re-reads the rows of earlier ``--json`` runs and pools them: two copies
+    of the quick campaign count every case twice, with the same fractions, and the spurious
+    alarms are split by noise type."""
+    import json
+
+    bw, _ = _bench()
+    rows, s = quick
+    paths = []
+    for k in range(2):
+        p = tmp_path / f"run{k}.json"
+        p.write_text(json.dumps({"rows": rows}, default=bw._json_default))
+        paths.append(str(p))
+    assert bw.main(["--summarise", *paths]) == 0
+    out = capsys.readouterr().out
+    n = s["recall_strong"]["n"]
+    k = s["recall_strong"]["k"]
+    assert f"({2 * k}/{2 * n})" in out
+    assert "spurious, synthetic noise / real ADIS16405 noise" in out
+    pooled = bw.summarise(json.loads(json.dumps(rows + rows, default=bw._json_default)))
+    assert pooled["overall"]["false_alarms_spurious_synthetic"]["n"] \
+        + pooled["overall"]["false_alarms_spurious_real"]["n"] \
+        == pooled["overall"]["false_alarms_spurious"]["n"]
+
+
 @pytest.mark.parametrize("seed", [10588, 10655])
 def test_real_gyro_wander_is_not_named_as_a_channel(seed):
     """Null cases on real ADIS16405 noise: its slow wander (≈ 6-20x the short-τ floor) had

@@ -75,29 +75,33 @@ def test_quick_campaign_verdicts(quick):
     assert s["floor_ok"]["frac"] >= 0.7, s["floor_ok"]
 
 
-def test_stored_rows_are_pooled_by_summarise(quick, tmp_path, capsys):
+def test_stored_rows_are_pooled_by_summarise(tmp_path, capsys):
     """``--summarise`` re-reads the rows of earlier ``--json`` runs and pools them: two copies
-    of the quick campaign count every case twice, with the same fractions, and the spurious
-    alarms are split by noise type."""
+    of a small run count every case twice, with the same fractions, and the spurious alarms
+    are split by noise type."""
     import json
 
     bw, _ = _bench()
-    rows, s = quick
+    start = bw.QUICK_SEEDS.start
+    rows = (bw.run_campaign([start, start + 1], kinds=["helmholtz"], max_hours=1.0)
+            + bw.run_campaign([start + 2], kinds=["helmholtz"], max_hours=1.0, nulls=True))
+    rows = json.loads(json.dumps(rows, default=bw._json_default))
+    s = bw.summarise(rows)["overall"]
     paths = []
     for k in range(2):
         p = tmp_path / f"run{k}.json"
-        p.write_text(json.dumps({"rows": rows}, default=bw._json_default))
+        p.write_text(json.dumps({"rows": rows}))
         paths.append(str(p))
     assert bw.main(["--summarise", *paths]) == 0
     out = capsys.readouterr().out
-    n = s["recall_strong"]["n"]
-    k = s["recall_strong"]["k"]
-    assert f"({2 * k}/{2 * n})" in out
+    assert "| 6 (6 / 0 / 0) |" in out
+    assert f"({2 * s['recall']['k']}/{2 * s['recall']['n']})" in out
     assert "spurious, synthetic noise / real ADIS16405 noise" in out
-    pooled = bw.summarise(json.loads(json.dumps(rows + rows, default=bw._json_default)))
-    assert pooled["overall"]["false_alarms_spurious_synthetic"]["n"] \
-        + pooled["overall"]["false_alarms_spurious_real"]["n"] \
-        == pooled["overall"]["false_alarms_spurious"]["n"]
+    pooled = bw.summarise(rows + rows)["overall"]
+    assert pooled["false_alarms_spurious"]["n"] == 2 * s["false_alarms_spurious"]["n"] >= 2
+    assert (pooled["false_alarms_spurious_synthetic"]["n"]
+            + pooled["false_alarms_spurious_real"]["n"]
+            == pooled["false_alarms_spurious"]["n"])
 
 
 @pytest.mark.parametrize("seed", [10588, 10655])

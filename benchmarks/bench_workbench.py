@@ -8,6 +8,7 @@ Not part of the test suite (a test may run ``--quick`` or import :func:`run_case
     python benchmarks/bench_workbench.py --quick --jobs 2                # ~20 short cases, < 2 min
     python benchmarks/bench_workbench.py --seeds 1000-1199 --kinds chamber,helmholtz --json r.json
     python benchmarks/bench_workbench.py --validate --seeds 5000-5059    # harness check only
+    python benchmarks/bench_workbench.py --summarise a.json b.json        # pool stored runs
 
 Seed ranges: **1-4999 are for tuning** (developing the verdict rules or this harness; the
 quick set is seeds 100-119); **5000 and up are for reporting**. Numbers quoted in

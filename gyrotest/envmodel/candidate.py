@@ -58,6 +58,9 @@ class Candidate:
     #: its best partner in the step after it, when a lookahead fitted them: (held-out RMS
     #: deg/h, the partner's term)
     lookahead: tuple[float, str] | None = None
+    #: the look-elsewhere surrogate test of a chosen nuisance term
+    #: (:class:`gyrotest.envmodel.chance.ChanceTest`), when it was run
+    chance: object | None = None
     _fit: FitResult | None = None
 
     @property
@@ -71,9 +74,12 @@ class Candidate:
         z = f"z = {self.z:.1f}" if math.isfinite(self.z) else "z = n/a"
         sc = (f" ± {self.gain_scatter_pct:.1f} % fold scatter"
               if math.isfinite(self.gain_scatter_pct) else "")
-        return (f"held-out {-self.improvement_pct:+.1f} %{sc}, {z} (HAC), "
-                f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
-                                               if self.trials > 1 else ""))
+        ev = (f"held-out {-self.improvement_pct:+.1f} %{sc}, {z} (HAC), "
+              f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
+                                             if self.trials > 1 else ""))
+        if self.chance is not None:
+            ev += f", surrogate p = {self.chance.p:.2f}"  # type: ignore[attr-defined]
+        return ev
 
     @property
     def add_hint(self) -> str:
@@ -94,7 +100,8 @@ class Candidate:
                 "spectral_z": self.spectral_z,
                 "z": self.z, "p": self.p,
                 "p_adj": self.p_adj, "trials": self.trials, "significant": self.significant,
-                "route": self.route, "rejected": self.rejected, "note": self.note,
+                "route": self.route, "rejected": self.rejected,
+                "chance": self.chance.to_dict() if self.chance is not None else None, "note": self.note,
                 "equivalents": self.equivalents, "add": self.add_hint,
                 "custom_term": self.custom, "r_residual": self.r_residual,
                 "coefficients": self.coefficients, "n_params": self.n_params,

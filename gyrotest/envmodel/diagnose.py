@@ -233,6 +233,7 @@ from .candidate import (
     equivalents,
     held_out_gain,
 )
+from .chance import chance_test
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .groups import group_step
@@ -245,6 +246,10 @@ from .rules import (
     ALPHA,
     AT_FLOOR,
     AXES_FIRST,
+    CHANCE_GRID,
+    CHANCE_K,
+    CHANCE_P,
+    CHANCE_SEED,
     CLEAR_GAIN,
     CLEAR_P,
     CLEAR_P_NUISANCE,
@@ -516,7 +521,38 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if chosen is not None:
             chosen.equivalents = equivalents(chosen, out, base)
             out = [chosen] + [c for c in out if c is not chosen]
+    if chosen is not None and chosen.klass == "nuisance" and chosen.pair is None:
+        chosen = _chance_gate(wd, base, out, chosen, folds)
     return out, chosen
+
+
+def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
+                 ) -> Candidate | None:
+    """The look-elsewhere surrogate test of a chosen nuisance term (:mod:`.chance`,
+    :data:`CHANCE_P`): the term; or, when the best candidate of the step reaches its held-out
+    gain on noise with the residual's own spectrum, the best other significant candidate
+    that is not a nuisance term (it qualified on its own routes), else None (the nuisance
+    term stays a "possible" effect)."""
+    gain = chosen.improvement_pct / 100.0
+    if not math.isfinite(gain):
+        return chosen
+    test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
+                       seed=CHANCE_SEED)
+    if test is None:
+        return chosen
+    chosen.chance = test
+    if test.p <= CHANCE_P:
+        return chosen
+    chosen.significant = False
+    chosen.route = None
+    chosen.note = test.text()
+    other = [c for c in out if c.significant and not c.hac_waived and c.pair is None
+             and c.klass != "nuisance" and math.isfinite(c.rms_holdout)]
+    if not other:
+        return None
+    nxt = min(other, key=lambda c: c.rms_holdout)
+    nxt.equivalents = equivalents(nxt, out, base)
+    return nxt
 
 
 def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ratio, alpha,

@@ -130,7 +130,8 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
         return (f"possible missing effect: {best.term} — {best.effect}; held-out RMS "
                 f"{base.rms_holdout:.4g} → {best.rms_holdout:.4g} deg/h "
                 f"({-best.improvement_pct:+.1f} %, more than the fold-to-fold scatter "
-                f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}); "
+                f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}"
+                + (f"; {best.note}" if best.chance is not None and best.note else "") + "); "
                 f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log"), best
     rej = [c for c in cands if c.rejected]
     v = ("no missing effect found among the candidates"

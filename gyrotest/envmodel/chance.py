@@ -1,0 +1,150 @@
+"""The look-elsewhere surrogate test of a nuisance term chosen by the workbench diagnosis
+(:mod:`gyrotest.envmodel.diagnose`).
+
+A ramp, warm-up, free-frequency sinusoid or hysteresis branch has a shape free enough to fit
+a gyro's own slow noise (bias instability, rate random walk), and the diagnosis picks the
+best of many candidates, so the chosen term's held-out gain is the *maximum* of many chance
+gains when nothing is missing. The test asks whether that gain is larger than the best gain
+any candidate of the step reaches on noise with the same spectrum as the model's residual:
+
+1. **Surrogate noise** (Theiler et al., "Testing for nonlinearity in time series: the method
+   of surrogate data", Physica D 58, 1992): the base model's residual e (block means, deg/h)
+   is Fourier transformed, its phases are replaced by independent uniform phases and it is
+   transformed back, K times. Each surrogate has e's periodogram -- the slow noise at the
+   lowest frequencies included -- and no alignment with any logged channel or with time.
+2. **The best chance gain** of each surrogate s_k: for every candidate c of the step (its
+   regressor at the fitted nonlinear parameters and on a log-spaced grid over the
+   parameter's range), the held-out gain 1 − RMS_ho([X_b, x_c]; s_k)/RMS_ho(X_b; s_k) over
+   the same blocked folds as the diagnosis (ordinary least squares per fold), maximised over
+   the candidates: M_k. Because the candidate model contains the base model, the gain on
+   y − X_b·β equals the gain on s_k; the base model's own regressors X_b stay in both fits.
+3. **p = (1 + #{M_k ≥ g}) / (K + 1)**, g the chosen term's held-out gain in the diagnosis
+   (Westfall & Young, "Resampling-Based Multiple Testing", Wiley 1993: the max statistic
+   over the candidates controls the family-wise error of the look-elsewhere search). Above
+   :data:`gyrotest.envmodel.rules.CHANCE_P` the term is not named: its gain is one the best
+   of the candidates reaches on the residual's own noise.
+
+A true effect the base model misses is itself part of e, so its surrogates carry its power
+with random phases; the test is conservative there, which is why it is applied to the
+nuisance terms only (the campaign's true slow channel effects of a chamber profile with few
+cycles reach p 0.1-0.25, benchmarks/README.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .fit import cv_layout, holdout_folds
+from .terms import nonlinear_bounds
+
+
+@dataclass
+class ChanceTest:
+    """Result of :func:`chance_test`: the chosen gain (fraction), the surrogates' best chance
+    gains (their 90 % quantile and maximum), how many reached the chosen gain, and p."""
+
+    gain: float
+    k: int
+    exceed: int
+    q90: float
+    max: float
+    p: float
+
+    def text(self) -> str:
+        return (f"its held-out gain ({100 * self.gain:.1f} %) is one the best candidate "
+                f"reaches on noise with the residual's own spectrum ({self.exceed} of "
+                f"{self.k} phase-randomised surrogates of the residual reach it, 90 % of them "
+                f"{100 * self.q90:.1f} %): a fit to the gyro's own slow noise")
+
+    def to_dict(self) -> dict:
+        return {"gain_pct": 100 * self.gain, "surrogates": self.k, "exceed": self.exceed,
+                "q90_pct": 100 * self.q90, "max_pct": 100 * self.max, "p": self.p}
+
+
+def phase_surrogates(e: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
+    """K phase-randomised surrogates of the series ``e`` (columns of an n x K array): the
+    amplitudes of e's discrete Fourier transform with independent uniform phases (zero
+    phase at frequency 0 and, for even n, at the Nyquist frequency), mean removed."""
+    e = np.asarray(e, float)
+    n = len(e)
+    F = np.fft.rfft(e - e.mean())
+    ph = rng.uniform(0.0, 2.0 * np.pi, (k, len(F)))
+    ph[:, 0] = 0.0
+    if n % 2 == 0:
+        ph[:, -1] = 0.0
+    return np.fft.irfft(np.abs(F)[None, :] * np.exp(1j * ph), n=n, axis=1).T
+
+
+def holdout_rms(X: np.ndarray, Y: np.ndarray, fold: np.ndarray, masks: list[np.ndarray]
+                ) -> np.ndarray:
+    """Held-out RMS of each column of ``Y`` under the blocked folds (``fold`` id per block,
+    training ``masks``): ordinary least squares on the training blocks, residual on the
+    held-out ones, pooled over the folds."""
+    H = np.full(Y.shape, np.nan)
+    for f, m in enumerate(masks):
+        held = fold == f
+        if not held.any() or m.sum() <= X.shape[1]:
+            continue
+        B = np.linalg.lstsq(X[m], Y[m], rcond=None)[0]
+        H[held] = Y[held] - X[held] @ B
+    with np.errstate(invalid="ignore"):
+        return np.sqrt(np.nanmean(H ** 2, axis=0))
+
+
+def regressors(design, cand, wd, grid: int) -> list[np.ndarray]:
+    """The block regressors of candidate ``cand`` (a judged
+    :class:`~gyrotest.envmodel.candidate.Candidate`): at its fitted nonlinear parameters and,
+    for a time constant or width, at ``grid`` log-spaced values over its range (a searched
+    frequency only at its fitted value)."""
+    spec = cand.spec
+    if not spec.effect.nonlinear:
+        return [design.block(spec, None)]
+    fit = cand._fit
+    th = dict((getattr(fit, "_thetas", {}) or {}).get(cand.term, {})) if fit else {}
+    out = [design.block(spec, th)] if th else []
+    b = nonlinear_bounds(spec, wd.duration_s, wd.resolution_s, wd.refs)
+    if len(b) == 1 and spec.effect.nonlinear[0].kind != "freq":
+        (name, (lo, hi)), = b.items()
+        if 0 < lo < hi:
+            for v in np.geomspace(lo, hi, grid):
+                out.append(design.block(spec, {**th, name: float(v)}))
+    return out
+
+
+def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
+                seed: int) -> ChanceTest | None:
+    """The look-elsewhere surrogate test (module docstring) of a held-out ``gain`` (fraction)
+    chosen among the judged candidates ``cands`` of a step on the fitted ``base`` model;
+    None when no candidate regressor could be built."""
+    rng = np.random.default_rng(seed)
+    chunk, buf, _ = cv_layout(wd, folds)
+    fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
+    fitter = base._fitter  # type: ignore[attr-defined]
+    Xb = fitter.X(base._thetas)  # type: ignore[attr-defined]
+    S = phase_surrogates(base.resid, k, rng)
+    r0 = holdout_rms(Xb, S, fold, masks)
+    best = np.full(k, -np.inf)
+    for c in cands:
+        if c.spec is None or c.replaces or c.pair is not None or c.error:
+            continue
+        try:
+            blocks = regressors(fitter.d, c, wd, grid)
+        except (ValueError, KeyError, FloatingPointError, np.linalg.LinAlgError):
+            continue
+        for xb in blocks:
+            if not np.all(np.isfinite(xb)):
+                continue
+            g = 1.0 - holdout_rms(np.column_stack([Xb, xb]), S, fold, masks) / r0
+            best = np.fmax(best, g)
+    if not np.isfinite(best).any():
+        return None
+    exceed = int(np.sum(best >= gain))
+    fin = best[np.isfinite(best)]
+    return ChanceTest(gain=gain, k=k, exceed=exceed, q90=float(np.quantile(fin, 0.9)),
+                      max=float(fin.max()), p=(1 + exceed) / (k + 1))
+
+
+__all__ = ["ChanceTest", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]
+

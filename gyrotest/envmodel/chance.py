@@ -9,9 +9,11 @@ any candidate of the step reaches on noise with the same spectrum as the model's
 
 1. **Surrogate noise** (Theiler et al., "Testing for nonlinearity in time series: the method
    of surrogate data", Physica D 58, 1992): the base model's residual e (block means, deg/h)
-   is Fourier transformed, its phases are replaced by independent uniform phases and it is
-   transformed back, K times. Each surrogate has e's periodogram -- the slow noise at the
-   lowest frequencies included -- and no alignment with any logged channel or with time.
+   less the straight line from its first to its last value is Fourier transformed, its
+   phases are replaced by independent uniform phases, it is transformed back and the line is
+   put back, K times (:func:`phase_surrogates`). Each surrogate has the periodogram of e --
+   the slow noise at the lowest frequencies included -- and no alignment with any logged
+   channel or with time beyond that end-to-end line.
 2. **The best chance gain** of each surrogate s_k: for every candidate c of the step (its
    regressor at the fitted nonlinear parameters and on a log-spaced grid over the
    parameter's range), the held-out gain 1 − RMS_ho([X_b, x_c]; s_k)/RMS_ho(X_b; s_k) over
@@ -64,17 +66,26 @@ class ChanceTest:
 
 
 def phase_surrogates(e: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
-    """K phase-randomised surrogates of the series ``e`` (columns of an n x K array): the
-    amplitudes of e's discrete Fourier transform with independent uniform phases (zero
-    phase at frequency 0 and, for even n, at the Nyquist frequency), mean removed."""
+    """K end-matched phase-randomised surrogates of the series ``e`` (columns of an n x K
+    array, mean removed): the straight line from e's first to its last value is taken out,
+    the amplitudes of the discrete Fourier transform of what is left get independent uniform
+    phases (zero at frequency 0 and, for even n, at the Nyquist frequency), and the line is
+    put back. Without the end matching a random walk's jump from its last value back to its
+    first (the transform treats the record as periodic) leaks into every frequency, and on
+    random-walk noise with nothing to find the test gave p ≤ 0.1 in 43 % of records instead
+    of 10 % (8 % with it; Schreiber & Schmitz, "Surrogate time series", Physica D 142,
+    2000, on the end-point mismatch)."""
     e = np.asarray(e, float)
     n = len(e)
-    F = np.fft.rfft(e - e.mean())
+    line = np.linspace(e[0], e[-1], n)
+    d = e - line
+    F = np.fft.rfft(d - d.mean())
     ph = rng.uniform(0.0, 2.0 * np.pi, (k, len(F)))
     ph[:, 0] = 0.0
     if n % 2 == 0:
         ph[:, -1] = 0.0
-    return np.fft.irfft(np.abs(F)[None, :] * np.exp(1j * ph), n=n, axis=1).T
+    S = np.fft.irfft(np.abs(F)[None, :] * np.exp(1j * ph), n=n, axis=1).T
+    return S + (line - line.mean())[:, None]
 
 
 def holdout_rms(X: np.ndarray, Y: np.ndarray, fold: np.ndarray, masks: list[np.ndarray]
@@ -113,31 +124,41 @@ def regressors(design, cand, wd, grid: int) -> list[np.ndarray]:
     return out
 
 
+def best_chance_gains(Xb: np.ndarray, e: np.ndarray, regs: list[np.ndarray],
+                      fold: np.ndarray, masks: list[np.ndarray], k: int,
+                      rng: np.random.Generator) -> np.ndarray:
+    """M_k of the module docstring: for each of ``k`` phase-randomised surrogates of the
+    residual ``e``, the largest held-out gain (fraction) any regressor block of ``regs``
+    gives beside the base design ``Xb`` (-inf where none could be fitted)."""
+    S = phase_surrogates(e, k, rng)
+    r0 = holdout_rms(Xb, S, fold, masks)
+    best = np.full(k, -np.inf)
+    for xb in regs:
+        if not np.all(np.isfinite(xb)):
+            continue
+        g = 1.0 - holdout_rms(np.column_stack([Xb, xb]), S, fold, masks) / r0
+        best = np.fmax(best, g)
+    return best
+
+
 def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
                 seed: int) -> ChanceTest | None:
     """The look-elsewhere surrogate test (module docstring) of a held-out ``gain`` (fraction)
     chosen among the judged candidates ``cands`` of a step on the fitted ``base`` model;
     None when no candidate regressor could be built."""
-    rng = np.random.default_rng(seed)
     chunk, buf, _ = cv_layout(wd, folds)
     fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
     fitter = base._fitter  # type: ignore[attr-defined]
-    Xb = fitter.X(base._thetas)  # type: ignore[attr-defined]
-    S = phase_surrogates(base.resid, k, rng)
-    r0 = holdout_rms(Xb, S, fold, masks)
-    best = np.full(k, -np.inf)
+    regs = []
     for c in cands:
         if c.spec is None or c.replaces or c.pair is not None or c.error:
             continue
         try:
-            blocks = regressors(fitter.d, c, wd, grid)
+            regs += regressors(fitter.d, c, wd, grid)
         except (ValueError, KeyError, FloatingPointError, np.linalg.LinAlgError):
             continue
-        for xb in blocks:
-            if not np.all(np.isfinite(xb)):
-                continue
-            g = 1.0 - holdout_rms(np.column_stack([Xb, xb]), S, fold, masks) / r0
-            best = np.fmax(best, g)
+    best = best_chance_gains(fitter.X(base._thetas), base.resid,  # type: ignore[attr-defined]
+                             regs, fold, masks, k, np.random.default_rng(seed))
     if not np.isfinite(best).any():
         return None
     exceed = int(np.sum(best >= gain))
@@ -146,5 +167,5 @@ def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
                       max=float(fin.max()), p=(1 + exceed) / (k + 1))
 
 
-__all__ = ["ChanceTest", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]
+__all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]
 

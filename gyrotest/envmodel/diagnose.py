@@ -136,6 +136,14 @@ that the model under judgment cannot move:
    channels sharing the period (a hysteresis of a temperature included) gets at least half
    its held-out gain: the stimulus acts through the channel. When none does, the sinusoid
    stands and the verdict says whose period it shares. Hysteresis widths are searched only above what the sensor can resolve.
+   A nuisance term (ramp, warm-up, sinusoid, hysteresis) chosen by any of the above must
+   also beat the **look-elsewhere surrogate test** (:mod:`gyrotest.envmodel.chance`): the
+   best held-out gain any candidate of the step reaches on 39 phase-randomised surrogates
+   of the base model's residual (noise with its periodogram, aligned with nothing) may reach
+   its gain in at most 3 of them (surrogate p ≤ 0.1, :data:`gyrotest.envmodel.rules.CHANCE_P`);
+   otherwise the best other significant candidate that is not a nuisance term is chosen, or
+   none (the term stays a "possible" effect): its shape is free enough to fit the gyro's
+   own slow noise, and it was the best of many.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <

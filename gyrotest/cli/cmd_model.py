@@ -509,7 +509,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     A ramp, warm-up, sinusoid or hysteresis chosen as the missing effect must also beat a
     look-elsewhere surrogate test: the best gain any candidate reaches on 39
     phase-randomised surrogates of the residual may reach its gain in at most 3 of them
-    (surrogate p <= 0.1); otherwise the best other qualifying candidate is named, or none.
+    (surrogate p <= 0.1); otherwise the best other qualifying candidate whose own gain
+    passes that test is named, or none.
     A product of two channels gives way to the level terms of its factors when those do
     >= 10 % better together (no interaction without its main effects), and to the level of
     a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly

@@ -52,6 +52,13 @@ class ChanceTest:
     q90: float
     max: float
     p: float
+    #: the surrogates' best chance gains M_k (fractions)
+    best: np.ndarray | None = None
+
+    def p_of(self, gain: float) -> float:
+        """p of another held-out ``gain`` (fraction) against the same surrogates."""
+        b = self.best if self.best is not None else np.array([])
+        return (1 + int(np.sum(b >= gain))) / (self.k + 1)
 
     def text(self) -> str:
         return (f"its held-out gain ({100 * self.gain:.1f} %) is one the best candidate "
@@ -165,7 +172,7 @@ def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
     exceed = int(np.sum(best >= gain))
     fin = best[np.isfinite(best)]
     return ChanceTest(gain=gain, k=k, exceed=exceed, q90=float(np.quantile(fin, 0.9)),
-                      max=float(fin.max()), p=(1 + exceed) / (k + 1))
+                      max=float(fin.max()), p=(1 + exceed) / (k + 1), best=best)
 
 
 __all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]

@@ -141,8 +141,9 @@ that the model under judgment cannot move:
    best held-out gain any candidate of the step reaches on 39 phase-randomised surrogates
    of the base model's residual (noise with its periodogram, aligned with nothing) may reach
    its gain in at most 3 of them (surrogate p ≤ 0.1, :data:`gyrotest.envmodel.rules.CHANCE_P`);
-   otherwise the best other significant candidate that is not a nuisance term is chosen, or
-   none (the term stays a "possible" effect): its shape is free enough to fit the gyro's
+   otherwise the best other significant candidate that is not a nuisance term and whose
+   own gain the same surrogates do not reach is chosen, or none (the term stays a
+   "possible" effect): its shape is free enough to fit the gyro's
    own slow noise, and it was the best of many.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
@@ -539,8 +540,8 @@ def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
     """The look-elsewhere surrogate test of a chosen nuisance term (:mod:`.chance`,
     :data:`CHANCE_P`): the term; or, when the best candidate of the step reaches its held-out
     gain on noise with the residual's own spectrum, the best other significant candidate
-    that is not a nuisance term (it qualified on its own routes), else None (the nuisance
-    term stays a "possible" effect)."""
+    that is not a nuisance term and whose own gain the surrogates do not reach, else None
+    (the nuisance term stays a "possible" effect)."""
     gain = chosen.improvement_pct / 100.0
     if not math.isfinite(gain):
         return chosen
@@ -554,9 +555,21 @@ def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
     chosen.significant = False
     chosen.route = None
     chosen.note = test.text()
-    other = [c for c in out if c.significant and not c.hac_waived and c.pair is None
-             and c.klass != "nuisance" and math.isfinite(c.rms_holdout)]
+    # the same surrogates judge the others: one whose gain they reach is no better
+    other = []
+    for c in out:
+        if not c.significant:
+            continue
+        if not (math.isfinite(c.improvement_pct)
+                and test.p_of(c.improvement_pct / 100.0) <= CHANCE_P):
+            c.significant = False
+            c.route = None
+        elif (c.pair is None and not c.hac_waived and c.klass != "nuisance"
+              and math.isfinite(c.rms_holdout)):
+            other.append(c)
     if not other:
+        for c in out:
+            c.significant = False
         return None
     nxt = min(other, key=lambda c: c.rms_holdout)
     nxt.equivalents = equivalents(nxt, out, base)

@@ -61,10 +61,11 @@ class ChanceTest:
         return (1 + int(np.sum(b >= gain))) / (self.k + 1)
 
     def text(self) -> str:
-        return (f"its held-out gain ({100 * self.gain:.1f} %) is one the best candidate "
-                f"reaches on noise with the residual's own spectrum ({self.exceed} of "
-                f"{self.k} phase-randomised surrogates of the residual reach it, 90 % of them "
-                f"{100 * self.q90:.1f} %): a fit to the gyro's own slow noise")
+        return (f"its held-out gain ({100 * self.gain:.1f} %) is within what the best "
+                "candidate reaches on noise with the residual's own spectrum: "
+                f"{self.exceed} of {self.k} phase-randomised surrogates of the residual reach "
+                f"it (90th percentile {100 * self.q90:.1f} %), so it may be a fit to the "
+                "gyro's own slow noise")
 
     def to_dict(self) -> dict:
         return {"gain_pct": 100 * self.gain, "surrogates": self.k, "exceed": self.exceed,

@@ -1,7 +1,8 @@
 """The look-elsewhere surrogate test of a nuisance term chosen by the workbench diagnosis
-(:mod:`gyrotest.envmodel.diagnose`).
+(:mod:`gyrotest.envmodel.diagnose`): a ramp, warm-up or hysteresis
+(:data:`gyrotest.envmodel.rules.CHANCE_KEYS`).
 
-A ramp, warm-up, free-frequency sinusoid or hysteresis branch has a shape free enough to fit
+A ramp, warm-up or hysteresis branch has a shape free enough to fit
 a gyro's own slow noise (bias instability, rate random walk), and the diagnosis picks the
 best of many candidates, so the chosen term's held-out gain is the *maximum* of many chance
 gains when nothing is missing. The test asks whether that gain is larger than the best gain
@@ -26,9 +27,10 @@ any candidate of the step reaches on noise with the same spectrum as the model's
    of the candidates reaches on the residual's own noise.
 
 A true effect the base model misses is itself part of e, so its surrogates carry its power
-with random phases; the test is conservative there, which is why it is applied to the
-nuisance terms only (the campaign's true slow channel effects of a chamber profile with few
-cycles reach p 0.1-0.25, benchmarks/README.md).
+with random phases; the test is conservative there, which is why it is applied to these
+three nuisance terms only (the campaign's true slow channel effects of a chamber profile
+with few cycles reach p 0.1-0.25, benchmarks/README.md), and not to a free sinusoid, whose
+own spectral line every surrogate keeps (its sine and cosine coefficients fit any phase).
 """
 
 from __future__ import annotations

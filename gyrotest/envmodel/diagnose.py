@@ -136,7 +136,7 @@ that the model under judgment cannot move:
    channels sharing the period (a hysteresis of a temperature included) gets at least half
    its held-out gain: the stimulus acts through the channel. When none does, the sinusoid
    stands and the verdict says whose period it shares. Hysteresis widths are searched only above what the sensor can resolve.
-   A nuisance term (ramp, warm-up, sinusoid, hysteresis) chosen by any of the above must
+   A ramp, warm-up or hysteresis chosen by any of the above must
    also beat the **look-elsewhere surrogate test** (:mod:`gyrotest.envmodel.chance`): the
    best held-out gain any candidate of the step reaches on 39 phase-randomised surrogates
    of the base model's residual (noise with its periodogram, aligned with nothing) may reach
@@ -257,6 +257,7 @@ from .rules import (
     AXES_FIRST,
     CHANCE_GRID,
     CHANCE_K,
+    CHANCE_KEYS,
     CHANCE_P,
     CHANCE_SEED,
     CLEAR_GAIN,
@@ -530,14 +531,16 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if chosen is not None:
             chosen.equivalents = equivalents(chosen, out, base)
             out = [chosen] + [c for c in out if c is not chosen]
-    if chosen is not None and chosen.klass == "nuisance" and chosen.pair is None:
+    if (chosen is not None and chosen.pair is None and chosen.spec is not None
+            and chosen.spec.key in CHANCE_KEYS):
         chosen = _chance_gate(wd, base, out, chosen, folds)
     return out, chosen
 
 
 def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
                  ) -> Candidate | None:
-    """The look-elsewhere surrogate test of a chosen nuisance term (:mod:`.chance`,
+    """The look-elsewhere surrogate test of a chosen ramp, warm-up or hysteresis
+    (:mod:`.chance`, :data:`CHANCE_KEYS`,
     :data:`CHANCE_P`): the term; or, when the best candidate of the step reaches its held-out
     gain on noise with the residual's own spectrum, the best other significant candidate
     that is not a nuisance term and whose own gain the surrogates do not reach, else None

@@ -506,7 +506,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     plain form when that does >= 10 % better beside a missing rate term of another channel;
     a lag whose time constant reaches the record length is named only on the strict test
     (lagged that long, a channel is a slow trend that fits the gyro's own drift).
-    A ramp, warm-up or hysteresis chosen as the missing effect must also beat a
+    A ramp, warm-up or hysteresis added as the missing effect (not in place of a model
+    term) must also beat a
     look-elsewhere surrogate test: the best gain any candidate reaches on 39
     phase-randomised surrogates of the residual may reach its gain in at most 3 of them
     (surrogate p <= 0.1); otherwise the best other qualifying candidate whose own gain

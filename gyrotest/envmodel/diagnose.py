@@ -136,7 +136,7 @@ that the model under judgment cannot move:
    channels sharing the period (a hysteresis of a temperature included) gets at least half
    its held-out gain: the stimulus acts through the channel. When none does, the sinusoid
    stands and the verdict says whose period it shares. Hysteresis widths are searched only above what the sensor can resolve.
-   A ramp, warm-up or hysteresis chosen by any of the above must
+   A ramp, warm-up or hysteresis added by any of the above (not a swap, below) must
    also beat the **look-elsewhere surrogate test** (:mod:`gyrotest.envmodel.chance`): the
    best held-out gain any candidate of the step reaches on 39 phase-randomised surrogates
    of the base model's residual (noise with its periodogram, aligned with nothing) may reach
@@ -531,8 +531,11 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         if chosen is not None:
             chosen.equivalents = equivalents(chosen, out, base)
             out = [chosen] + [c for c in out if c is not chosen]
-    if (chosen is not None and chosen.pair is None and chosen.spec is not None
-            and chosen.spec.key in CHANCE_KEYS):
+    if (chosen is not None and chosen.pair is None and chosen.replaces is None
+            and chosen.spec is not None and chosen.spec.key in CHANCE_KEYS):
+        # not a swap (:func:`_swap_step`): its gain is also the replaced term's removal,
+        # which no addition on the surrogates represents (seed 36096: a ramp in place of a
+        # case temperature that drifted with it, -28 % held out)
         chosen = _chance_gate(wd, base, out, chosen, folds)
     return out, chosen
 

@@ -131,7 +131,8 @@ WARMUP_CLEAR_P = 0.01
 #: tested: the true slow effects of a chamber profile with few cycles are themselves most of
 #: the residual, and reached p 0.1-0.25 against its surrogates
 CHANCE_K = 39
-#: ... the terms it judges. Not the free sinusoid: its sine and cosine coefficients fit any
+#: ... the terms it judges, added beside the model (not a swap in place of a model term,
+#: whose gain is also the replaced term's removal). Not the free sinusoid: its sine and cosine coefficients fit any
 #: phase, and a phase-randomised surrogate of a residual that holds a sinusoid still holds
 #: it at the same frequency, so a true periodic disturbance fails its own test (seed 49178:
 #: 1.1 x the floor, −32 % held out, left at "possible", 1.5 x the true model at the end)

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import stats as st
+from .chance import ChanceTest
 from .fit import FitResult, WorkData
 from .terms import TermSpec
 
@@ -60,7 +61,7 @@ class Candidate:
     lookahead: tuple[float, str] | None = None
     #: the look-elsewhere surrogate test of a chosen nuisance term
     #: (:class:`gyrotest.envmodel.chance.ChanceTest`), when it was run
-    chance: object | None = None
+    chance: ChanceTest | None = None
     _fit: FitResult | None = None
 
     @property
@@ -78,7 +79,7 @@ class Candidate:
               f"p_adj = {self.p_adj:.2g}" + (f" over {self.trials} trials"
                                              if self.trials > 1 else ""))
         if self.chance is not None:
-            ev += f", surrogate p = {self.chance.p:.2f}"  # type: ignore[attr-defined]
+            ev += f", surrogate p = {self.chance.p:.2f}"
         return ev
 
     @property

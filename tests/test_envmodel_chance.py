@@ -85,3 +85,4 @@ def test_the_test_is_lenient_on_random_walk_noise():
     null, true = _rates(lambda rng, n: np.cumsum(rng.normal(size=n)))
     assert 0.1 < null < 0.7, null
     assert true == 1.0, true
+

@@ -262,3 +262,20 @@ def test_diagnose_magnetic_sample_completes_the_field_vector_with_hx():
     assert r.code == 0, r.err
     wx = next(c for c in json.loads(r.out)["coefficients"] if c["term"] == "Hx(Hx_uT)")
     assert abs(wx["value"] - (-0.037)) <= 2 * wx["stderr"], wx
+
+
+def test_the_candidate_table_names_each_rejection_reason():
+    """The candidate table of `model diagnose` labelled every rejection that was not a
+    stimulus period "model at the noise floor", also the spectral gate's at 591x the floor."""
+    from gyrotest.cli.cmd_model import _rejected_label
+    from gyrotest.envmodel.rules import SPECTRAL_REJECT
+
+    assert _rejected_label(f"{SPECTRAL_REJECT} (spectral z 2.1 < 8): the gain may be a fit") \
+        == "not out of the residual's slow noise"
+    assert _rejected_label("the model is at the noise floor (held-out/floor 1.05) and the gain "
+                           "(4.0 %) is below 20 %") == "model at the noise floor"
+    assert _rejected_label("its period 600 s is that of the logged stimulus Hx and a term of "
+                           "it gets 80 % of its gain") == "period of a logged stimulus"
+    assert _rejected_label("its time constant (9709 s) is at the top of its range (the record "
+                           "length): the log does not resolve the lag") \
+        == "lag as long as the record"

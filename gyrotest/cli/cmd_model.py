@@ -219,6 +219,22 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
         raise InputError(f"--reference: {e}") from None
 
 
+def _rejected_label(reason: str) -> str:
+    """A few words for the candidate table from the full rejection ``reason`` (the verdict
+    line gives the whole sentence)."""
+    from ..envmodel.rules import SPECTRAL_REJECT
+
+    if reason.startswith(SPECTRAL_REJECT):
+        return "not out of the residual's slow noise"
+    if "period" in reason:
+        return "period of a logged stimulus"
+    if "time constant" in reason:
+        return "lag as long as the record"
+    if "noise floor" in reason:
+        return "model at the noise floor"
+    return reason.split(":")[0][:40]
+
+
 def render_diagnosis(diag, top: int = 12) -> None:
     from rich.markup import escape
     from rich.table import Table
@@ -243,8 +259,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
         ev = (c.error or (f"z {c.z:.1f}, p·trials {c.p_trials:.1g}, p_adj {c.p_adj:.1g}"
                           if math.isfinite(c.z) else "—"))
         if c.rejected:
-            ev += ("; rejected: period of a logged stimulus" if "period" in c.rejected
-                   else "; rejected: model at the noise floor")
+            ev += f"; rejected: {_rejected_label(c.rejected)}"
+        if c.chance is not None:
+            ev += f"; surrogate p {c.chance.p:.2f}"
         mark = ("[green]yes[/green]" + (" (chosen)" if c is diag.chosen else "")
                 if c.significant else "no")
         t.add_row(str(i), escape(c.term), escape(eff), fmt_num(c.rms_holdout),

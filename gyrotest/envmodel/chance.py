@@ -45,22 +45,32 @@ from .terms import nonlinear_bounds
 
 @dataclass
 class ChanceTest:
-    """Result of :func:`chance_test`: the chosen gain (fraction), the surrogates' best chance
-    gains (their 90 % quantile and maximum), how many reached the chosen gain, and p."""
+    """Result of :func:`chance_test`: the chosen held-out gain (fraction) and the
+    surrogates' best chance gains M_k (fractions; -inf where none could be fitted), from
+    which p, the count that reached the gain and their 90 % quantile follow."""
 
     gain: float
-    k: int
-    exceed: int
-    q90: float
-    max: float
-    p: float
-    #: the surrogates' best chance gains M_k (fractions)
-    best: np.ndarray | None = None
+    best: np.ndarray
+
+    @property
+    def k(self) -> int:
+        return len(self.best)
 
     def p_of(self, gain: float) -> float:
-        """p of another held-out ``gain`` (fraction) against the same surrogates."""
-        b = self.best if self.best is not None else np.array([])
-        return (1 + int(np.sum(b >= gain))) / (self.k + 1)
+        """p of a held-out ``gain`` (fraction) against these surrogates."""
+        return (1 + int(np.sum(self.best >= gain))) / (self.k + 1)
+
+    @property
+    def p(self) -> float:
+        return self.p_of(self.gain)
+
+    @property
+    def exceed(self) -> int:
+        return int(np.sum(self.best >= self.gain))
+
+    @property
+    def q90(self) -> float:
+        return float(np.quantile(self.best[np.isfinite(self.best)], 0.9))
 
     def text(self) -> str:
         return (f"its held-out gain ({100 * self.gain:.1f} %) is within what the best "
@@ -71,7 +81,8 @@ class ChanceTest:
 
     def to_dict(self) -> dict:
         return {"gain_pct": 100 * self.gain, "surrogates": self.k, "exceed": self.exceed,
-                "q90_pct": 100 * self.q90, "max_pct": 100 * self.max, "p": self.p}
+                "q90_pct": 100 * self.q90,
+                "max_pct": 100 * float(np.max(self.best[np.isfinite(self.best)])), "p": self.p}
 
 
 def phase_surrogates(e: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
@@ -172,10 +183,7 @@ def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
                              regs, fold, masks, k, np.random.default_rng(seed))
     if not np.isfinite(best).any():
         return None
-    exceed = int(np.sum(best >= gain))
-    fin = best[np.isfinite(best)]
-    return ChanceTest(gain=gain, k=k, exceed=exceed, q90=float(np.quantile(fin, 0.9)),
-                      max=float(fin.max()), p=(1 + exceed) / (k + 1), best=best)
+    return ChanceTest(gain=gain, best=best)
 
 
 __all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]

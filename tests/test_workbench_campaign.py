@@ -806,3 +806,17 @@ def test_a_true_warm_up_passes_the_surrogate_test():
     assert "warmup" in labels, labels
     d = row["steps"][0]
     assert d["verdict"].startswith("missing effect: warmup"), d["verdict"]
+
+
+def test_a_short_warm_up_that_brings_the_model_to_the_floor_is_named():
+    """Seed 49097 (synthetic noise, static bench): after the supply term, a warm-up of τ 310 s
+    (2 × the floor) held out −57 % and left the model 0.87 × the floor, but its coefficient's
+    spectral z (6.3) was judged against the far bar of 8 (the base was 2.04 × the floor), so
+    the loop stopped at 2.3 × the true model. A candidate whose own model comes within
+    :data:`gyrotest.envmodel.rules.SPECTRAL_NEAR_POST` × the floor is judged against the
+    near bar: its residual, on which the z is taken, is white/flicker noise."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(49097))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:2] == ["V", "warmup"], labels
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]

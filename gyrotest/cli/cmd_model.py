@@ -287,7 +287,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "or as a last resort spectral z ≥ 8 when other effects inflate the HAC error; "
               "ramp/warm-up/sinusoid/hysteresis ≥ 20 % at ≥ 3.75, a warm-up at ≥ 2.13 with "
               "spectral z ≥ 8); off the strict test, spectral (Whittle) z ≥ 8 against the "
-              "residual's own spectrum (≥ 4 while the model is within 2x the floor) unless "
+              "residual's own spectrum (≥ 4 while the model is within 2x the floor, or when "
+              "the candidate brings it within 1.25x) unless "
               "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
               "% at ≥ 5, then z ≥ 6; none when a member failed the test alone; a pair with "
               "a warm-up at fold consistency ≥ 2.13 with z ≥ 8; a pair's "
@@ -505,7 +506,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     Off the strict test, the added coefficients must also stand out of the candidate
     model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
-    within 2x the floor), unless the held-out gain is >= 55 % with fold consistency >= 5
+    within 2x the floor, or when the candidate brings it within 1.25x), unless the held-out gain is >= 55 % with fold consistency >= 5
     or >= 40 % at >= 10 (a pair: >= 40 % at >= 5, then z >= 6; no exemption for a pair with a
     member that failed the test alone): a smooth channel fitted to the gyro's own slow
     wander is not named. Far above the floor the lowest bins of a red residual's spectrum

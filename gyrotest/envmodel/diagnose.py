@@ -98,7 +98,9 @@ that the model under judgment cannot move:
    channel fitted to it gains 25-45 % held-out; against the residual's spectrum its z stays
    at 2-6, where true effects reach 10-100. While the model is within 2 × the floor the bar
    is 4: the residual is then near white/flicker noise and a smaller follow-up effect
-   reaches only 5-6 (:func:`spectral_bar`). A gain of ≥ 55 % that is consistent across the
+   reaches only 5-6 (:func:`spectral_bar`); so is it when the candidate's own model comes
+   within 1.25 × the floor (a short warm-up of 2 × the floor that completes the model
+   reached z 6.3-6.8). A gain of ≥ 55 % that is consistent across the
    folds (gain/(scatter/√folds) ≥ 5), or ≥ 40 % at ≥ 10, is exempt: a second missing effect
    with the candidate's stimulus pattern lowers its spectral z too (a pair: ≥ 40 % at ≥ 5,
    and then spectral z ≥ 6 all the same: two terms fitted together to a real gyro's wander

@@ -149,7 +149,9 @@ def judge(wd, base, base_specs, c: TermSpec, thetas0, n_c, base_ratio, alpha,
     if waived:
         far = bool(zw >= SPECTRAL_Z)
     elif (clear or far) and not strict:
-        bar = spectral_bar(base_ratio)
+        post = (r.rms_holdout / base.rms_holdout * base_ratio
+                if base.rms_holdout > 0 else math.nan)
+        bar = spectral_bar(base_ratio, post)
         if not spectral_exempt(impr, t_cv, single=True) and not zw >= bar:
             rejected = (f"{SPECTRAL_REJECT} "
                         f"(spectral z {zw:.1f} < {bar:g}): the gain may be a fit to "

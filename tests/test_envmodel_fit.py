@@ -108,6 +108,25 @@ def test_sinusoid_frequency_detected():
     assert math.hypot(a, b) == pytest.approx(0.3, rel=0.1)
 
 
+@pytest.mark.parametrize("cycles", [1.2, 1.9])
+def test_sinusoid_of_fewer_than_two_cycles_is_fitted(cycles):
+    """A 70-minute HVAC cycle in a 2.3 h log is 1.9 cycles: the frequency search reaches one
+    full cycle per record (terms.SIN_MIN_CYCLES); at the former bound of two cycles the fit
+    was held at the bound and left the model 25 x the noise floor (campaign seed 51196)."""
+    rng = np.random.default_rng(5)
+    dur = 8200.0
+    n = int(dur / TAU0)
+    t = np.arange(n) * TAU0
+    per = dur / cycles
+    y = 0.2 + 2.0 * np.sin(2 * np.pi * t / per + 1.0) + 0.3 / math.sqrt(TAU0) * \
+        rng.standard_normal(n)
+    wd = prepare(make_log(y, TAU0, temps={"T": 25 + 0.01 * rng.standard_normal(n)}))
+    res = fit_model(wd, "sin", light=True)
+    assert abs(res.coef("sin.f_Hz").value * per - 1) < 0.01
+    a, b = res.coef("sin.a").value, res.coef("sin.b").value
+    assert math.hypot(a, b) == pytest.approx(2.0, rel=0.05)
+
+
 def test_collinearity_warning_on_monotone_ramp():
     rng = np.random.default_rng(4)
     n = int(3 * 3600 / TAU0)

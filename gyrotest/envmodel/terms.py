@@ -589,6 +589,11 @@ def compiled(expr: str) -> SafeExpression:
     return _COMPILED[expr]
 
 
+#: the longest period a free sinusoid is searched at, in cycles per record (1: one full
+#: cycle over the log; the bound was two cycles until the twenty-eighth pass)
+SIN_MIN_CYCLES = 1.0
+
+
 def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
                      refs: Refs | None = None) -> dict[str, tuple[float, float]]:
     """Search ranges of a term's nonlinear parameters for a record of ``duration_s`` fitted at
@@ -608,7 +613,10 @@ def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
     if spec.key == "warmup":
         return {"tau_w_s": (lo_tau, max(lo_tau * 2, duration_s / 2))}
     if spec.key == "sin":
-        return {"f_Hz": (2.0 / duration_s, 1.0 / (4.0 * resolution_s))}
+        # one full cycle over the record at the longest: an HVAC cycle of 71 min in a 2.3 h
+        # log (1.9 cycles) was held at the former bound of two cycles and the user's own
+        # `sin` term left the model 25 x the floor (campaign seed 51196)
+        return {"f_Hz": (SIN_MIN_CYCLES / duration_s, 1.0 / (4.0 * resolution_s))}
     return {}
 
 

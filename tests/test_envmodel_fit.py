@@ -110,9 +110,10 @@ def test_sinusoid_frequency_detected():
 
 @pytest.mark.parametrize("cycles", [1.2, 1.9])
 def test_sinusoid_of_fewer_than_two_cycles_is_fitted(cycles):
-    """A 70-minute HVAC cycle in a 2.3 h log is 1.9 cycles: the frequency search reaches one
-    full cycle per record (terms.SIN_MIN_CYCLES); at the former bound of two cycles the fit
-    was held at the bound and left the model 25 x the noise floor (campaign seed 51196)."""
+    """A 70-minute HVAC cycle in a 2.3 h log is 1.9 cycles: a model's own sinusoid is also
+    searched down to one cycle per record (terms.SIN_MIN_CYCLES) and kept there when it
+    leaves at most a quarter of the two-cycle search's RSS; at the two-cycle bound the fit
+    was held there and left the model 25 x the noise floor (campaign seed 51196)."""
     rng = np.random.default_rng(5)
     dur = 8200.0
     n = int(dur / TAU0)

@@ -259,7 +259,9 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
     ``new_terms``: the terms added to a model whose nonlinear parameters ``thetas0`` holds
     (a candidate judged by the diagnosis); warm time constants of their channels are then
-    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`).
+    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`), and their
+    nonlinear parameters over the candidate ranges (a sinusoid: at least two cycles,
+    :data:`gyrotest.envmodel.terms.SIN_CANDIDATE_CYCLES`).
     """
     specs = parse_terms(terms)  # texts and TermSpecs, mixed freely
     specs = [s for s in specs if s.key != "bias"]
@@ -273,7 +275,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
                             f"gives only {wd.nb} blocks of {wd.resolution_s:g} s; use a longer "
                             "log, fewer terms or a finer --resolution")
     design = Design(wd)
-    fitter = _Fitter(design, specs)
+    fitter = _Fitter(design, specs, {c.label for c in new_terms or []})
     thetas = fitter.optimise(thetas0, None, local=True)
     if thetas0:
         thetas = fitter.recheck_taus(thetas, set(thetas0))

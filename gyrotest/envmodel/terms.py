@@ -589,16 +589,27 @@ def compiled(expr: str) -> SafeExpression:
     return _COMPILED[expr]
 
 
-#: the longest period a free sinusoid is searched at, in cycles per record (1: one full
-#: cycle over the log; the bound was two cycles until the twenty-eighth pass)
+#: a free sinusoid is searched from two cycles per record up (fewer look like a slow trend);
+#: one the user's model holds (not a candidate the diagnosis proposes) is also searched
+#: down to SIN_MIN_CYCLES, and the longer period is kept when it leaves at most
+#: SIN_EXTEND_RSS of the residual sum of squares of the search from two cycles up
+#: (:meth:`gyrotest.envmodel.varpro._Fitter._opt_one`). Campaign seed 51196: a 71-min HVAC
+#: cycle in a 2.3 h log (1.9 cycles) held at the bound left the user's model 25 x the floor
+#: (RSS ratio 0.0013 below it); searched down to one cycle for every sinusoid, the user's
+#: `sin` of seed 27119 took 1.8 cycles of a slow thermal effect (RSS ratio 0.58, held-out
+#: worse) and a candidate sinusoid partnered the wrong sensor in the pair search (23183)
+SIN_SEARCH_CYCLES = 2.0
 SIN_MIN_CYCLES = 1.0
+SIN_EXTEND_RSS = 0.25
 
 
 def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
                      refs: Refs | None = None) -> dict[str, tuple[float, float]]:
     """Search ranges of a term's nonlinear parameters for a record of ``duration_s`` fitted at
     ``resolution_s``: time constants from max(2·resolution, 10 s) to half the record (lags: up
-    to the record); frequency from 2/duration to 1/(4·resolution); hysteresis half-width from
+    to the record); frequency from :data:`SIN_SEARCH_CYCLES`/duration (a model's own sinusoid
+    is also searched down to :data:`SIN_MIN_CYCLES`) to 1/(4·resolution); hysteresis
+    half-width from
     the larger of 0.02 degC and the sensor's resolvable width (``refs.hyst_min_width_c``: a
     branch narrower than the sensor noise or than the temperature change within the smoother
     window only imitates sign(dT/dt)) to 5 degC."""
@@ -613,10 +624,7 @@ def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
     if spec.key == "warmup":
         return {"tau_w_s": (lo_tau, max(lo_tau * 2, duration_s / 2))}
     if spec.key == "sin":
-        # one full cycle over the record at the longest: an HVAC cycle of 71 min in a 2.3 h
-        # log (1.9 cycles) was held at the former bound of two cycles and the user's own
-        # `sin` term left the model 25 x the floor (campaign seed 51196)
-        return {"f_Hz": (SIN_MIN_CYCLES / duration_s, 1.0 / (4.0 * resolution_s))}
+        return {"f_Hz": (SIN_SEARCH_CYCLES / duration_s, 1.0 / (4.0 * resolution_s))}
     return {}
 
 

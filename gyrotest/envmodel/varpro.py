@@ -18,7 +18,7 @@ import numpy as np
 from scipy import optimize
 
 from . import stats as st
-from .terms import TermSpec, build_term, nonlinear_bounds
+from .terms import SIN_EXTEND_RSS, SIN_MIN_CYCLES, TermSpec, build_term, nonlinear_bounds
 from .workdata import WorkData
 
 
@@ -86,7 +86,8 @@ def _simplex(x0: list[float], lo: list[float], hi: list[float],
 class _Fitter:
     """Variable projection over the nonlinear parameters of a term set."""
 
-    def __init__(self, design: Design, specs: list[TermSpec]):
+    def __init__(self, design: Design, specs: list[TermSpec],
+                 candidates: frozenset[str] | set[str] = frozenset()):
         self.d = design
         self.wd = design.wd
         self.specs = specs
@@ -94,6 +95,9 @@ class _Fitter:
         self.bounds = {s.label: nonlinear_bounds(s, self.wd.duration_s, self.wd.resolution_s,
                                                    self.wd.refs)
                        for s in self.nl}
+        # the terms a diagnosis proposes: a sinusoid among them is not searched below its
+        # bound (terms.SIN_MIN_CYCLES)
+        self.candidates = frozenset(candidates)
 
     def X(self, thetas: dict[str, dict]) -> np.ndarray:
         return self.d.matrix(self.specs, thetas)
@@ -338,8 +342,11 @@ class _Fitter:
             return {pname: float(math.exp(r.x))}
         # frequency
         T = self.wd.duration_s
+        own = s.label not in self.candidates
+        lo_ext = min(lo, SIN_MIN_CYCLES / T) if own else lo
         if local and cur is not None:
-            a, b = max(lo, cur - 0.5 / T), min(hi, cur + 0.5 / T)
+            a = max(lo_ext if cur < lo else lo, cur - 0.5 / T)
+            b = min(hi, cur + 0.5 / T)
             r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
                                          options={"xatol": 1e-3 / T})
             return {pname: float(r.x)}
@@ -354,6 +361,14 @@ class _Fitter:
             r = optimize.minimize_scalar(f, bounds=(a, b), method="bounded",
                                          options={"xatol": 1e-3 / T})
             if best is None or r.fun < best.fun:
+                best = r
+        if lo_ext < lo:
+            # a model's own sinusoid: a period longer than half the record is kept only when
+            # it explains most of what the search from two cycles up leaves
+            # (terms.SIN_EXTEND_RSS)
+            r = optimize.minimize_scalar(f, bounds=(lo_ext, lo), method="bounded",
+                                         options={"xatol": 1e-3 / T})
+            if r.fun <= SIN_EXTEND_RSS * best.fun:
                 best = r
         return {pname: float(best.x)}
 

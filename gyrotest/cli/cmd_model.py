@@ -506,8 +506,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     gets half its gain; otherwise it stands, and the verdict says whose period it shares.
     Off the strict test, the added coefficients must also stand out of the candidate
     model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
-    within 2x the floor, or when the candidate brings it within 1.25x), unless the held-out gain is >= 55 % with fold consistency >= 5
-    or >= 40 % at >= 10 (a pair: >= 40 % at >= 5, then z >= 6; no exemption for a pair with a
+    within 2x the floor, or when the candidate brings it within 1.25x), unless the held-out
+    gain is >= 55 % with fold consistency >= 5 or >= 40 % at >= 10 (a pair: >= 40 % at >= 5, then z >= 6; no exemption for a pair with a
     member that failed the test alone): a smooth channel fitted to the gyro's own slow
     wander is not named. Far above the floor the lowest bins of a red residual's spectrum
     are raised to the power law of the band above (not for a warm-up, nor for a coefficient

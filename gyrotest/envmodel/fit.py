@@ -259,9 +259,9 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
     ``new_terms``: the terms added to a model whose nonlinear parameters ``thetas0`` holds
     (a candidate judged by the diagnosis); warm time constants of their channels are then
-    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`), and their
-    nonlinear parameters over the candidate ranges (a sinusoid: at least two cycles,
-    :data:`gyrotest.envmodel.terms.SIN_CANDIDATE_CYCLES`).
+    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`); a sinusoid
+    among them is not searched below two cycles per record, as a model's own may be
+    (:data:`gyrotest.envmodel.terms.SIN_MIN_CYCLES`).
     """
     specs = parse_terms(terms)  # texts and TermSpecs, mixed freely
     specs = [s for s in specs if s.key != "bias"]

@@ -609,10 +609,9 @@ def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
     ``resolution_s``: time constants from max(2·resolution, 10 s) to half the record (lags: up
     to the record); frequency from :data:`SIN_SEARCH_CYCLES`/duration (a model's own sinusoid
     is also searched down to :data:`SIN_MIN_CYCLES`) to 1/(4·resolution); hysteresis
-    half-width from
-    the larger of 0.02 degC and the sensor's resolvable width (``refs.hyst_min_width_c``: a
-    branch narrower than the sensor noise or than the temperature change within the smoother
-    window only imitates sign(dT/dt)) to 5 degC."""
+    half-width from the larger of 0.02 degC and the sensor's resolvable width
+    (``refs.hyst_min_width_c``: a branch narrower than the sensor noise or than the
+    temperature change within the smoother window only imitates sign(dT/dt)) to 5 degC."""
     lo_tau = max(2.0 * resolution_s, 10.0)
     if spec.key == "hyst":
         lo_w = 0.02

@@ -36,7 +36,7 @@ def rigged(monkeypatch):
         def fit(wd, base_specs, a, b, thetas0, folds, start=None):
             return SimpleNamespace(rms_holdout=table[(a.term, b.term)])
 
-        monkeypatch.setattr(pairs, "_fit_pair", fit)
+        monkeypatch.setattr(pairs, "fit_pair", fit)
         monkeypatch.setattr(pairs, "held_out_gain", lambda base, r, folds: (0.9, 0.01, 50.0))
         monkeypatch.setattr(pairs, "spectral_z", lambda *a, **k: 100.0)
         monkeypatch.setattr(pairs, "_joint_z_ok",

@@ -26,7 +26,8 @@ from . import stats as st
 from .candidate import Candidate, held_out_gain
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
-from .rules import AXES_GAIN, AXES_T, AXES_Z
+from .pairs import fit_pair, mark_pair
+from .rules import AXES_GAIN, AXES_SPARSE_TOP, AXES_T, AXES_Z, FAR_GAIN, FAR_T
 from .screen import block_candidates, term_class
 from .terms import TermSpec, describe
 
@@ -124,4 +125,53 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
     return out, min(ok, key=lambda c: c.rms_holdout, default=None)
 
 
-__all__ = ["axes_step", "axes_test"]
+def sparse_follow(wd: WorkData, base_specs, chosen: Candidate, out: list[Candidate],
+                  block: Candidate, keys, thetas0, folds: int) -> bool:
+    """Whether the new effect ``chosen`` of the block's order, with one more term of that
+    order (``keys``; any of the :data:`AXES_SPARSE_TOP` best alone by held-out RMS: the one
+    that completes it need not help alone), holds out at least as well as the quadratic
+    ``block`` (:data:`gyrotest.envmodel.rules.AXES_SPARSE_TOP`): the sparse path then goes
+    on from ``chosen``."""
+    follow = sorted((c for c in out if c is not chosen and c.spec is not None
+                     and c.spec.key in keys and c.pair is None and not c.error
+                     and not c.replaces and math.isfinite(c.rms_holdout)),
+                    key=lambda c: c.rms_holdout)[:AXES_SPARSE_TOP]
+    for c in follow:
+        try:
+            r = fit_model(wd, list(base_specs) + [chosen.spec, c.spec], folds=folds,
+                          thetas0=thetas0, light=True)
+        except (InputError, AnalysisError, ValueError, np.linalg.LinAlgError):
+            continue
+        if r.rms_holdout <= block.rms_holdout:
+            return True
+    return False
+
+
+def sparse_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
+                block: Candidate, keys, thetas0, folds: int) -> Candidate | None:
+    """Two terms of the block's order (``keys``: Hsq, Hprod, Hmag2) added beside the model
+    (the :data:`AXES_SPARSE_TOP` best alone by held-out RMS, two at a time) that hold out at
+    least as well as the chosen quadratic ``block`` and qualify as a pair (held-out gain
+    ≥ :data:`FAR_GAIN` at fold consistency ≥ :data:`FAR_T`): the better one alone, marked
+    "together with" the other (the next step names it), or None. Two coefficients fitted
+    from the whole sequence extrapolate to held-out field settings where the block's cross
+    products of coil axes do not (:data:`AXES_SPARSE_TOP`)."""
+    pool = sorted((c for c in out if c is not block and c.spec is not None
+                   and c.spec.key in keys and c.pair is None and not c.replaces
+                   and not c.error and math.isfinite(c.rms_holdout)),
+                  key=lambda c: c.rms_holdout)[:AXES_SPARSE_TOP]
+    best = None
+    for i, a in enumerate(pool):
+        for b in pool[i + 1:]:
+            r = fit_pair(wd, base_specs, a, b, thetas0, folds)
+            if r is None or not r.rms_holdout <= block.rms_holdout:
+                continue
+            gain, _, t_cv = held_out_gain(base, r, folds)
+            if (gain >= FAR_GAIN and t_cv >= FAR_T
+                    and (best is None or r.rms_holdout < best[2])):
+                first, other = (a, b) if a.rms_holdout <= b.rms_holdout else (b, a)
+                best = (first, other, r.rms_holdout, t_cv)
+    return mark_pair(best) if best is not None else None
+
+
+__all__ = ["axes_step", "axes_test", "sparse_follow", "sparse_pair"]

@@ -238,7 +238,7 @@ from dataclasses import dataclass, field
 
 from ..errors import InputError
 from . import stats as st
-from .axes import axes_step
+from .axes import axes_step, sparse_follow, sparse_pair
 from .candidate import (
     Candidate,
     equivalents,
@@ -516,9 +516,20 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         _, block = axes_step(wd, base, base_specs, thetas0, folds)
         if block is not None and (chosen is None or (
                 chosen.spec.key in BLOCK_ORDER.get(block.spec.key, ())
-                and block.rms_holdout < (1 - AXES_FIRST) * chosen.rms_holdout)):
+                and block.rms_holdout < (1 - AXES_FIRST) * chosen.rms_holdout
+                and not sparse_follow(wd, base_specs, chosen, out, block,
+                                      BLOCK_ORDER[block.spec.key], thetas0, folds))):
             chosen = block
             out = [chosen] + [c for c in out if c.term != chosen.term]
+    if (candidates is None and chosen is not None and chosen.pair is None
+            and chosen.spec is not None and chosen.spec.key in BLOCK_ORDER):
+        # the quadratic block, or two of its own terms that hold out as well
+        # (:data:`AXES_SPARSE_TOP`)
+        sparse = sparse_pair(wd, base, base_specs, out, chosen, BLOCK_ORDER[chosen.spec.key],
+                             thetas0, folds)
+        if sparse is not None:
+            chosen = sparse
+            chosen.equivalents = equivalents(chosen, out, base)
     if chosen is None and candidates is None and math.isfinite(base_ratio) \
             and base_ratio > ABOVE_FLOOR:
         # nor a field block: a model term that stands in for the missing effect

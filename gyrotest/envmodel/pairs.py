@@ -68,7 +68,7 @@ def pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], t
     found = _find_pair(wd, base, base_specs, out, thetas0, folds)
     if found is None or (follows is not None and not follows(found[0], found[1])):
         return None
-    return _mark_pair(found)
+    return mark_pair(found)
 
 
 def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
@@ -113,7 +113,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     best_by: dict[int, tuple[Candidate, Candidate, FitResult, float]] = {}
     lowest, lowest_named = math.inf, None
     for a, b in pairs:
-        r = _fit_pair(wd, base_specs, a, b, thetas0, folds,
+        r = fit_pair(wd, base_specs, a, b, thetas0, folds,
                       start=start.get(frozenset((id(a), id(b)))))
         if r is None:
             continue
@@ -191,7 +191,7 @@ def _named(a: Candidate, b: Candidate, joint: bool) -> Candidate:
     return other
 
 
-def _fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int,
+def fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int,
               start: dict | None = None) -> FitResult | None:
     """The base model with candidates ``a`` and ``b`` added, started from the base's and both
     candidates' nonlinear parameters (or from ``start``); None when it cannot be fitted."""
@@ -207,7 +207,7 @@ def _fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, fol
         return None
 
 
-def _mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
+def mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
     """The pair's more useful member, marked significant with the route "together with
     OTHER" (see :func:`_find_pair`)."""
     first, other, rms, t_cv = found
@@ -245,14 +245,14 @@ def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                                       if chosen in ab]:
         if m is chosen or m.spec is None or chosen.spec is None:
             continue
-        r = _fit_pair(wd, base_specs, chosen, m, thetas0, folds)
+        r = fit_pair(wd, base_specs, chosen, m, thetas0, folds)
         if r is None:
             continue
         if r.rms_holdout * PAIR_MARGIN <= found[2]:
             return None
     if follows is not None and not follows(found[0], found[1]):
         return None
-    pair = _mark_pair(found)
+    pair = mark_pair(found)
     pair.displaced = (chosen.term, chosen.rms_holdout)
     return pair
 
@@ -319,7 +319,7 @@ def _best_partners(wd: WorkData, base_specs, alts: list[Candidate],
         for m in partners:
             if m.spec is None or m is c:
                 continue
-            r = _fit_pair(wd, base_specs, c, m, thetas0, folds)
+            r = fit_pair(wd, base_specs, c, m, thetas0, folds)
             if r is not None and r.rms_holdout < best.get(id(c), (math.inf, ""))[0]:
                 best[id(c)] = (r.rms_holdout, m.term)
     return best
@@ -410,7 +410,7 @@ def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     if len(mains) == 1:
         r = mains[0]._fit
     else:
-        r = _fit_pair(wd, base_specs, mains[0], mains[1], thetas0, folds)
+        r = fit_pair(wd, base_specs, mains[0], mains[1], thetas0, folds)
     if r is None or not r.rms_holdout <= PAIR_MARGIN * chosen.rms_holdout:
         return chosen
     impr, _, t_cv = held_out_gain(base, r, folds)
@@ -426,7 +426,7 @@ def marginal(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
         first.note = note
         return first
     other = mains[1] if first is mains[0] else mains[0]
-    lead = _mark_pair((first, other, r.rms_holdout, t_cv))
+    lead = mark_pair((first, other, r.rms_holdout, t_cv))
     lead.displaced = (chosen.term, chosen.rms_holdout)
     lead.note = "a product without its main effects"
     return lead
@@ -684,7 +684,7 @@ def _plain_level(wd: WorkData, base_specs, out: list[Candidate], h: Candidate,
                and o._fit is not None and math.isfinite(o.rms_holdout)), None)
     if lv is None:
         return None
-    r2 = _fit_pair(wd, base_specs, lv, m, thetas0, folds)
+    r2 = fit_pair(wd, base_specs, lv, m, thetas0, folds)
     if r2 is None or r2.rms_holdout > (1 + TIE) * r.rms_holdout:
         return None
     return lv, r2

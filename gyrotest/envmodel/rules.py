@@ -355,3 +355,12 @@ AXES_Z = 1.0
 #: quadratic block in place of Hsq(Hy) absorbed most of a missing linear Hz of a stepped
 #: sequence (-96 % against Hz's -93 %), and Hz was never named (1.13 × the true model)
 AXES_FIRST = 0.1
+#: ... unless the new effect with one more second-order field term of the run (any of the
+#: AXES_SPARSE_TOP best alone by held-out RMS) holds out at least as well as the
+#: block: two coefficients where the block has six. The block's cross products of coil axes
+#: that only part of the sequence moves are fitted from the other folds' settings and
+#: extrapolate badly: in seed 53181 (|H|² and a product yz of a gyro 4.8° off the coils) the
+#: block in place of |H|² held out 2.07 × the floor and ended 2.1 × the true model, where
+#: |H|², Hprod(y,z) and Hsq(y) held out 1.73 and the loop went on to Hsq(z), 1.04
+#: (twenty-ninth pass, benchmarks/README.md)
+AXES_SPARSE_TOP = 5

@@ -820,3 +820,20 @@ def test_a_short_warm_up_that_brings_the_model_to_the_floor_is_named():
     labels = [a["label"] for a in row["added"]]
     assert labels[:2] == ["V", "warmup"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
+
+
+def test_a_misaligned_field_product_is_named_without_the_quadratic_block():
+    """Seed 53181 (Helmholtz sequences, gyro 4.8° off the coils): |H|² and a product of the
+    gyro's y and z field components. After Hmag2 the quadratic block (six coefficients) held
+    out 2.07 × the floor against 2.58 for Hprod(field_y, field_z) and was named; its cross
+    products of coil axes, fitted from the other folds' field settings, extrapolated badly and
+    the loop ended 2.1 × the true model. Hprod with one more second-order field term holds out
+    better than the block (:func:`gyrotest.envmodel.axes.sparse_follow`), and the block then
+    gives way to Hsq(field_y) together with Hsq(field_z)
+    (:func:`gyrotest.envmodel.axes.sparse_pair`)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(53181))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:2] == ["Hmag2", "Hprod(field_y,field_z)"], labels
+    assert not any(lab.startswith("Hquad") for lab in labels), labels
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]

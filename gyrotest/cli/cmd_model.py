@@ -543,8 +543,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     mounted a few degrees off the coils); the quadratic block is also chosen before a new
     second-order field term (Hsq, Hprod, Hmag2) when it holds out >= 10 % better than that
     term (the cross-axis parts of a large second-order effect would each qualify and take
-    the steps one by one); with all but one field axis in the model, that axis's term (Hx,
-    Hy or Hz) is named instead. When still none qualifies above 1.2x the
+    the steps one by one), unless that term with one more second-order field term holds
+    out as well as the block; a chosen quadratic block gives way to two second-order field
+    terms added beside the model that hold out as well (>= 10 % gain at fold consistency
+    >= 2.13), named "together with" each other: two coefficients extrapolate to field
+    settings the held-out folds did not see where the block's six do not; with all but one
+    field axis in the model, that axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
     floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in
     place of each model term: a term of your model that stood in for the missing effect
     (collinear with it over the record) is named for replacement ("replaces X") when the

@@ -196,7 +196,14 @@ that the model under judgment cannot move:
    chosen when it cuts the held-out RMS by ≥ 8 % at fold consistency ≥ 2.5 and what it
    adds beyond the replaced terms has HAC |z| ≥ 1 (:func:`gyrotest.envmodel.axes.axes_test`).
    ``Hvec`` in place of all but one moving component is named as that component's term
-   (the model "completes its field vector" with Hx, Hy or Hz).
+   (the model "completes its field vector" with Hx, Hy or Hz). The quadratic block is the
+   flexible answer, not the first: the new second-order term keeps its place when it holds
+   out as well as the block with one more second-order field term
+   (:func:`gyrotest.envmodel.axes.sparse_follow`), and a chosen block gives way to two such
+   terms added beside the model that hold out as well and qualify as a pair
+   (:func:`gyrotest.envmodel.axes.sparse_pair`): the block's cross products of coil axes
+   that part of the sequence moves are fitted from the other folds' settings and extrapolate
+   badly (:data:`gyrotest.envmodel.rules.AXES_SPARSE_TOP`).
 
    **A model term in the missing effect's place** (:func:`_swap_step`): a term of the
    user's model can stand in for the missing effect (a case temperature that drifts with

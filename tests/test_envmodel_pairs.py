@@ -24,8 +24,10 @@ def _cand(label: str, rms: float) -> Candidate:
 @pytest.fixture
 def rigged(monkeypatch):
     """Pairs from a fixed list with fixed held-out RMS; ``fail`` names the pairs whose
-    joint HAC test fails."""
-    def rig(cands, table, fail):
+    joint HAC test fails; every pair's held-out ``gain`` (fraction) is the same, at fold
+    consistency 50 and spectral z 100 (decisive, :func:`gyrotest.envmodel.pairs._decisive`,
+    from a gain of 55 %)."""
+    def rig(cands, table, fail, gain=0.5):
         monkeypatch.setattr(pairs, "_pair_pool", lambda base, out: [])
         monkeypatch.setattr(pairs, "_polynomial_pairs",
                             lambda out: [(cands[a], cands[b]) for a, b in table])
@@ -37,7 +39,7 @@ def rigged(monkeypatch):
             return SimpleNamespace(rms_holdout=table[(a.term, b.term)])
 
         monkeypatch.setattr(pairs, "fit_pair", fit)
-        monkeypatch.setattr(pairs, "held_out_gain", lambda base, r, folds: (0.9, 0.01, 50.0))
+        monkeypatch.setattr(pairs, "held_out_gain", lambda base, r, folds: (gain, 0.01, 50.0))
         monkeypatch.setattr(pairs, "spectral_z", lambda *a, **k: 100.0)
         monkeypatch.setattr(pairs, "_joint_z_ok",
                             lambda r, a, b, wd, t: (a.term, b.term) not in fail)
@@ -56,6 +58,18 @@ def test_failed_lowest_pair_blocks_a_pair_naming_another_member(rigged):
     c = {n: _cand(n, r) for n, r in [("X", 5.0), ("Y", 6.0), ("P", 9.0), ("Q", 9.5)]}
     found = rigged(c, {("X", "P"): 0.5, ("Y", "Q"): 0.4}, fail={("Y", "Q")})
     assert found is None
+
+
+def test_a_decisive_pair_needs_no_joint_hac_test(rigged):
+    """Seed 54092: a linear field sensitivity and |H|², each hidden by the other, gained 75 %
+    together at consistency 18.7 and spectral z 27, but one member's joint HAC z was 3.8."""
+    c = {n: _cand(n, r) for n, r in [("X", 5.0), ("Y", 6.0), ("P", 9.0), ("Q", 9.5)]}
+    found = rigged(c, {("X", "P"): 0.5, ("Y", "Q"): 0.4}, fail={("Y", "Q")}, gain=0.75)
+    assert found[0].term == "Y" and found[1].term == "Q"
+    assert pairs._decisive(0.55, 10.0, 8.0)
+    assert not pairs._decisive(0.54, 50.0, 100.0)
+    assert not pairs._decisive(0.9, 9.9, 100.0)
+    assert not pairs._decisive(0.9, 50.0, 7.9)
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])

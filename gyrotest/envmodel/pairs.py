@@ -46,6 +46,8 @@ from .rules import (
     PAIR_TOP,
     PRODUCT_LEVEL_R,
     REDIRECT_RATIO,
+    SINGLE_EXEMPT_GAIN,
+    SINGLE_EXEMPT_T,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
     TIE,
@@ -143,7 +145,8 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         bar = (PAIR_EXEMPT_SPECTRAL_Z if spectral_exempt(impr, t_cv) and not spec_rej
                else SPECTRAL_Z)
         red = red_floor_for([a.spec.key, b.spec.key])
-        if not spectral_z(r, [a.term, b.term], wd, red=red) >= bar:
+        zs = spectral_z(r, [a.term, b.term], wd, red=red)
+        if not zs >= bar:
             continue
         key = frozenset((id(a), id(b)))
         # neither member's coefficient stood out alone, where the other effect inflated its
@@ -157,7 +160,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if prev is not None and r.rms_holdout >= prev[2].rms_holdout:
             continue
         if late:
-            if not _joint_z_ok(r, a, b, wd, t_cv):
+            if not (_joint_z_ok(r, a, b, wd, t_cv) or _decisive(impr, t_cv, zs)):
                 continue
             joint.add(key)
         best_by[id(named)] = (a, b, r, t_cv)
@@ -722,6 +725,15 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
             continue
         return False
     return True
+
+
+def _decisive(gain: float, t_cv: float, z_spec: float) -> bool:
+    """A pair whose evidence needs no joint HAC test (:data:`HIDDEN_TOP`): held-out
+    ``gain`` ≥ :data:`SINGLE_EXEMPT_GAIN` at fold consistency ``t_cv`` ≥
+    :data:`SINGLE_EXEMPT_T` (the bar a single term needs to skip the spectral test) and
+    spectral z ``z_spec`` ≥ :data:`SPECTRAL_Z` (the far bar) in the pair's fit."""
+    return (gain >= SINGLE_EXEMPT_GAIN and t_cv >= SINGLE_EXEMPT_T
+            and math.isfinite(z_spec) and z_spec >= SPECTRAL_Z)
 
 
 def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:

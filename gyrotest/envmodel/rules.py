@@ -71,6 +71,13 @@ HYST_PAIR_Z = 4.0
 #: 27119, tuned on seeds 27000-27199) and the best pool members' partners outside the pool
 #: (:func:`gyrotest.envmodel.pairs._partner_pairs`; seed 28086, tuned on seeds 28000-29199)
 HIDDEN_TOP = 2
+#: ... except a pair of members that stood out neither alone whose evidence is decisive
+#: (:func:`gyrotest.envmodel.pairs._decisive`): held-out gain ≥ SINGLE_EXEMPT_GAIN at fold
+#: consistency ≥ SINGLE_EXEMPT_T and spectral z ≥ SPECTRAL_Z in the pair's fit. A linear
+#: field sensitivity and |H|² of a gyro 2.3° off the coils, each hidden by the other (seed
+#: 54092: −75 % together at consistency 18.7, spectral z 27), reached joint HAC z 3.8 and 4.4
+#: over a coil sequence of few steps; the pairs fitted to a real gyro's wander in the stored
+#: null runs gained ≤ 59 % at consistency ≤ 8 (twenty-ninth pass, benchmarks/README.md)
 #: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.judge.judge`)
 SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"
 #: a model is at the floor when its held-out RMS is within this factor of it

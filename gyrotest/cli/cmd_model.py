@@ -497,7 +497,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     them (two effects that hide each other are named one after the other; a pair with a
     warm-up at fold consistency >= 2.13 when its spectral z is >= 8; when the best pair
     fails the joint HAC test (both members |z| < 1 alone), a qualifying pair naming the
-    same member first stands in; a pair whose
+    same member first stands in (such a pair passes without that test at a gain >= 55 %,
+    fold consistency >= 10 and spectral z >= 8); a pair whose
     first member alone makes the model worse only when the next step then names an
     effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the

@@ -70,7 +70,10 @@ that the model under judgment cannot move:
    its more useful member first, and the next step tests the other. The pair with the
    lowest held-out RMS decides; when it fails the joint HAC test below (both members' own
    |z| < 1), only a qualifying pair that names the same member first stands in (the test
-   concerned the partner's form). A trend (``ramp``) is
+   concerned the partner's form); a pair whose evidence is decisive -- held-out gain ≥ 55 %
+   at fold consistency ≥ 10 and spectral z ≥ 8 -- needs no joint HAC test
+   (:func:`gyrotest.envmodel.pairs._decisive`: a coil sequence of few steps leaves a
+   field term few effective degrees of freedom). A trend (``ramp``) is
    also paired with every member of the pool, whatever its own gain (beside a missing
    lagged coil an ageing ramp gains nothing alone, not even in sample), under the joint
    HAC test below (:func:`gyrotest.envmodel.pairs._trend_pairs`); likewise the two best

@@ -137,12 +137,8 @@ def sparse_follow(wd: WorkData, base_specs, chosen: Candidate, out: list[Candida
                      and not c.replaces and math.isfinite(c.rms_holdout)),
                     key=lambda c: c.rms_holdout)[:AXES_SPARSE_TOP]
     for c in follow:
-        try:
-            r = fit_model(wd, list(base_specs) + [chosen.spec, c.spec], folds=folds,
-                          thetas0=thetas0, light=True)
-        except (InputError, AnalysisError, ValueError, np.linalg.LinAlgError):
-            continue
-        if r.rms_holdout <= block.rms_holdout:
+        r = fit_pair(wd, base_specs, chosen, c, thetas0, folds)
+        if r is not None and r.rms_holdout <= block.rms_holdout:
             return True
     return False
 

@@ -116,7 +116,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     lowest, lowest_named = math.inf, None
     for a, b in pairs:
         r = fit_pair(wd, base_specs, a, b, thetas0, folds,
-                      start=start.get(frozenset((id(a), id(b)))))
+                     start=start.get(frozenset((id(a), id(b)))))
         if r is None:
             continue
         impr, _, t_cv = held_out_gain(base, r, folds)
@@ -195,7 +195,7 @@ def _named(a: Candidate, b: Candidate, joint: bool) -> Candidate:
 
 
 def fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, folds: int,
-              start: dict | None = None) -> FitResult | None:
+             start: dict | None = None) -> FitResult | None:
     """The base model with candidates ``a`` and ``b`` added, started from the base's and both
     candidates' nonlinear parameters (or from ``start``); None when it cannot be fitted."""
     th = dict(thetas0)

@@ -68,8 +68,13 @@ def test_a_decisive_pair_needs_no_joint_hac_test(rigged):
     assert found[0].term == "Y" and found[1].term == "Q"
     assert pairs._decisive(0.55, 10.0, 8.0)
     assert not pairs._decisive(0.54, 50.0, 100.0)
-    assert not pairs._decisive(0.9, 9.9, 100.0)
+    assert not pairs._decisive(0.69, 9.9, 100.0)
     assert not pairs._decisive(0.9, 50.0, 7.9)
+    # seed 55189: a larger gain needs less fold consistency
+    assert pairs._decisive(0.70, 5.0, 8.0)
+    assert pairs._decisive(0.797, 7.18, 9.12)
+    assert not pairs._decisive(0.9, 4.9, 100.0)
+    assert not pairs._decisive(0.56, 5.19, 9.78)  # the far null's wander pair
 
 
 @pytest.mark.parametrize("order", [0, 1, 2])

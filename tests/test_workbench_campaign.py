@@ -851,3 +851,16 @@ def test_a_field_sensitivity_hidden_by_the_field_squared_is_named():
     labels = [a["label"] for a in row["added"]]
     assert labels[:1] == ["Hz(Hz_uT)"], labels
     assert row["final_over_true"] <= 1.2, row["final_over_true"]
+
+
+def test_a_hidden_g_sensitivity_pair_with_a_large_gain_is_named():
+    """Seed 55189 (tilt table, base model with the anisoelastic term acc_ax·acc_ay): a
+    g-sensitivity along acc_ay and its square, 6.4× and 2.8× the floor, hide each other.
+    Together they cut the held-out RMS by 80 % at fold consistency 7.2 and spectral z 9.1,
+    joint HAC z 3.93 and 3.98: "no missing effect" at 5× the floor, 4.9× the true model,
+    until a larger gain needed less consistency (:data:`gyrotest.envmodel.rules.DECISIVE_GAIN`)."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(55189))
+    labels = [a["label"] for a in row["added"]]
+    assert labels[:2] == ["g(acc_ay)", "g2(acc_ay)"], labels
+    assert row["final_over_true"] <= 1.1, row["final_over_true"]

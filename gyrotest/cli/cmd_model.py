@@ -295,7 +295,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "first member that alone makes the model worse only when the next step then "
               "names an effect; a pair of terms that stood out neither alone needs HAC "
               "|z| ≥ 4 each in its fit unless it gains ≥ 55 % at fold consistency ≥ 10 "
-              "with spectral z ≥ 8); far "
+              "or ≥ 70 % at ≥ 5, with spectral z ≥ 8); far "
               "above the floor a red residual's lowest bins are floored at the power law "
               "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
               "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
@@ -502,8 +502,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     them (two effects that hide each other are named one after the other; a pair with a
     warm-up at fold consistency >= 2.13 when its spectral z is >= 8; when the best pair
     fails the joint HAC test (both members |z| < 1 alone), a qualifying pair naming the
-    same member first stands in (such a pair passes without that test at a gain >= 55 %,
-    fold consistency >= 10 and spectral z >= 8); a pair whose
+    same member first stands in (such a pair passes without that test at a gain >= 55 %
+    with fold consistency >= 10, or >= 70 % with >= 5, and spectral z >= 8); a pair whose
     first member alone makes the model worse only when the next step then names an
     effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
     because other missing effects inflate its error, when its coefficient stands out of the

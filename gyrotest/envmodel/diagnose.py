@@ -71,7 +71,7 @@ that the model under judgment cannot move:
    lowest held-out RMS decides; when it fails the joint HAC test below (both members' own
    |z| < 1), only a qualifying pair that names the same member first stands in (the test
    concerned the partner's form); a pair whose evidence is decisive -- held-out gain ≥ 55 %
-   at fold consistency ≥ 10 and spectral z ≥ 8 -- needs no joint HAC test
+   at fold consistency ≥ 10, or ≥ 70 % at ≥ 5, and spectral z ≥ 8 -- needs no joint HAC test
    (:func:`gyrotest.envmodel.pairs._decisive`: a coil sequence of few steps leaves a
    field term few effective degrees of freedom). A trend (``ramp``) is
    also paired with every member of the pool, whatever its own gain (beside a missing

@@ -27,6 +27,7 @@ from .candidate import (
 from .fit import FitResult, WorkData, fit_model
 from .rules import (
     BIG_GAIN,
+    DECISIVE_GAIN,
     FAR_GAIN,
     FAR_RATIO,
     FAR_T,
@@ -48,6 +49,7 @@ from .rules import (
     REDIRECT_RATIO,
     SINGLE_EXEMPT_GAIN,
     SINGLE_EXEMPT_T,
+    SPECTRAL_EXEMPT_T,
     SPECTRAL_REJECT,
     SPECTRAL_Z,
     TIE,
@@ -730,9 +732,11 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
 def _decisive(gain: float, t_cv: float, z_spec: float) -> bool:
     """A pair whose evidence needs no joint HAC test (:data:`HIDDEN_TOP`): held-out
     ``gain`` ≥ :data:`SINGLE_EXEMPT_GAIN` at fold consistency ``t_cv`` ≥
-    :data:`SINGLE_EXEMPT_T` (the bar a single term needs to skip the spectral test) and
-    spectral z ``z_spec`` ≥ :data:`SPECTRAL_Z` (the far bar) in the pair's fit."""
-    return (gain >= SINGLE_EXEMPT_GAIN and t_cv >= SINGLE_EXEMPT_T
+    :data:`SINGLE_EXEMPT_T` (the bar a single term needs to skip the spectral test), or
+    ≥ :data:`DECISIVE_GAIN` at ≥ :data:`SPECTRAL_EXEMPT_T`, and spectral z ``z_spec`` ≥
+    :data:`SPECTRAL_Z` (the far bar) in the pair's fit."""
+    return (((gain >= SINGLE_EXEMPT_GAIN and t_cv >= SINGLE_EXEMPT_T)
+             or (gain >= DECISIVE_GAIN and t_cv >= SPECTRAL_EXEMPT_T))
             and math.isfinite(z_spec) and z_spec >= SPECTRAL_Z)
 
 

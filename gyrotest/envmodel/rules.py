@@ -77,7 +77,13 @@ HIDDEN_TOP = 2
 #: field sensitivity and |H|² of a gyro 2.3° off the coils, each hidden by the other (seed
 #: 54092: −75 % together at consistency 18.7, spectral z 27), reached joint HAC z 3.8 and 4.4
 #: over a coil sequence of few steps; the pairs fitted to a real gyro's wander in the stored
-#: null runs gained ≤ 59 % at consistency ≤ 8 (twenty-ninth pass, benchmarks/README.md)
+#: null runs gained ≤ 59 % at consistency ≤ 8 (twenty-ninth pass, benchmarks/README.md).
+#: A larger gain needs less consistency: ≥ DECISIVE_GAIN at ≥ SPECTRAL_EXEMPT_T (seed 55189:
+#: a g-sensitivity and its square, hidden by each other beside a modelled anisoelastic term,
+#: −80 % together at consistency 7.2 and spectral z 9.1, joint HAC z 3.93 and 3.98; the one
+#: late pair of the 297 stored far nulls that failed its joint test gained 56 % at 5.2,
+#: thirtieth pass)
+DECISIVE_GAIN = 0.70
 #: how the spectral gate's rejection starts (:func:`gyrotest.envmodel.judge.judge`)
 SPECTRAL_REJECT = "its coefficient does not stand out of the residual's slow noise"
 #: a model is at the floor when its held-out RMS is within this factor of it

@@ -309,7 +309,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
               "second-order field terms that hold out as well as a pair); then (above 1.2x "
               "the floor) "
               "the largest in-sample gains (≥ 20 %) in place of each model term; then "
-              "(≥ 20x the floor) three or more effects that hide one another: the 10 "
+              "(≥ 2x the floor) three or more effects that hide one another: the 10 "
               "channel-driven candidates of largest in-sample gain fitted together and "
               "eliminated backward (a member goes at < 2 % held-out cost or HAC |z| < 4), "
               "≥ 3 left, ≥ 50 % at fold consistency ≥ 5, spectral z ≥ 8; ties go to "
@@ -561,7 +561,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     swap qualifies, fits the record no worse, holds out better than the candidate beside
     the term at fold consistency >= 2.13, and the candidate's p x trials beside the term
     is < 0.01 (< 0.001 for a ramp, warm-up, sinusoid or hysteresis). When still none
-    qualifies and the model is >= 20x the floor, three or more effects may hide one
+    qualifies and the model is >= 2x the floor, three or more effects may hide one
     another (each alone and in pairs holds out worse than all together): the ten
     channel-driven candidates with the largest in-sample gains (no ramp, warm-up,
     sinusoid or hysteresis) are fitted together and eliminated backward (a member goes

@@ -222,7 +222,7 @@ that the model under judgment cannot move:
    "(replaces X)".
 
    **Three or more effects that hide one another** (:mod:`gyrotest.envmodel.groups`):
-   when nothing above qualifies and the model is ≥ 20 × the floor, the ten channel-driven
+   when nothing above qualifies and the model is ≥ 2 × the floor, the ten channel-driven
    candidates with the largest in-sample gains are fitted together and eliminated
    backward (a member goes while leaving it out costs < 2 % held-out RMS, or while its
    HAC |z| in the group's fit is < 4). At least three must remain, cut the held-out RMS

@@ -28,6 +28,13 @@ def _bench():
     return bw, ws
 
 
+def _loop(seed: int) -> tuple[dict, list[str]]:
+    """The campaign's plain user loop on case ``seed``: its row and the labels it added."""
+    bw, ws = _bench()
+    row = bw.run_case(ws.make_case(seed))
+    return row, [a["label"] for a in row["added"]]
+
+
 def _assert_real_null_quiet(seed: int) -> None:
     """A null case on real ADIS16405 noise (skipped without ``../shared``): no alarm."""
     bw, ws = _bench()
@@ -154,9 +161,7 @@ def test_three_large_effects_at_once_are_all_found():
     stayed "possible". Far above the floor its spectral z (10.4 >= 8) now stands in for the
     HAC guard, and the loop adds all three (seed of the unseen set 21000-21199, then used to
     tune the rule)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(21125))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(21125)
     assert labels[0] == "warmup", labels
     assert {"gprod(ax_g,ay_g)", "T(tc1)"} <= set(labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
@@ -166,9 +171,7 @@ def test_hac_backed_term_wins_over_a_spectral_only_one():
     """A term that qualifies only by its spectral z (HAC z 0.2) comes after the terms with a
     HAC test behind them: the temperature term of temp_case is named, not the lagged-node
     rate that held out 3 % better and left the loop 1.27x the true model (seed 21091)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(21091))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(21091)
     assert "dTlagdt(temp_case)" not in labels, labels
     # the first step names the tilt level, not its product with the decoy humidity (the
     # product is that level to r 0.99: rules.PRODUCT_LEVEL_R); beside the level the
@@ -194,9 +197,7 @@ def test_hysteresis_and_its_temperature_level_are_found_as_a_pair():
     alone worse than nothing); together -59 % at z 9.2 and 8.0. The first step names the
     hysteresis together with T(Tcase) and the loop ends at the true model (seed 22154: it
     said "possible missing effect" and stopped at 2.4x)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(22154))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(22154)
     assert labels[:2] == ["hyst(Tcase)", "T(Tcase)"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -220,9 +221,7 @@ def test_a_hysteresis_as_wide_as_the_excursions_is_named_as_the_level():
     is named with the plain level, ramp first, and the loop ends at the true model (seed
     22078: a warm-up was named first, and in a first version of the hidden pairs the
     hysteresis)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(22078))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(22078)
     assert labels == ["ramp", "T(T_gyro)"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -233,9 +232,7 @@ def test_a_term_hidden_by_another_effect_is_found_as_a_pair():
     residual's slow noise (the hysteresis), and the hysteresis alone gains 15 % at HAC z 2.3;
     together they reach the floor. The first step names the warm-up together with the
     hysteresis (seed 23147: "possible missing effect: sin" and 10x the true model before)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(23147))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(23147)
     assert labels[:2] == ["warmup", "hyst(tc1)"], labels
     assert "which hyst(tc1) dominates" in row["steps"][0]["verdict"]
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
@@ -252,9 +249,7 @@ def test_tied_candidates_are_told_apart_by_the_next_step():
     then pass that test itself), and a trend may lead the partner pairs: the ramp and the
     product are found together (-87 %, pair spectral z 45), the ramp named first, then the
     product; the decoy is never named and the loop ends at the true model."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(23141))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(23141)
     assert "ramp" in labels and "chanprod(incl_x,incl_y)" in labels, labels
     assert not any(lab.startswith("chanlag(P_lab") for lab in labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
@@ -268,9 +263,7 @@ def test_a_lag_that_stood_in_for_a_rate_term_gives_way_to_the_plain_temperature(
     eighteenth pass the pair search finds T(tc2) with the rate term directly (a candidate
     the spectral test rejected alone may join a pair), and the verdict says what the lag
     alone would leave."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(23183))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(23183)
     assert labels[0] == "T(tc2)", labels
     verdict = row["steps"][0]["verdict"]
     assert ("stood in for a missing rate term" in verdict
@@ -284,9 +277,7 @@ def test_a_warm_started_time_constant_trap_is_left():
     consistency 1.7: "no missing effect"). The rescan from scratch finds τ 1035 s and
     1972 s (true 1309 s, 2029 s) and the lag is named (seed 24077: 10.5x the true model
     before)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(24077))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(24077)
     assert labels[0] == "Tlag(tc1)", labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -296,9 +287,7 @@ def test_a_product_gives_way_to_the_levels_of_its_factors():
     held-out RMS by 96 % (0.119 deg/h), the two levels together reach 0.039 deg/h (the
     floor). No interaction without its main effects: the levels are named (seed 24177: the
     product was added and the loop stopped at 3.0x the true model)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(24177))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(24177)
     assert sorted(labels) == ["chan(RH_lab)", "chan(pump_vib)"], labels
     # over this log the product is the vibration level to r 0.998 (rules.PRODUCT_LEVEL_R),
     # which decides before the fit of the two levels together (pairs.marginal)
@@ -312,9 +301,7 @@ def test_a_ramp_that_gains_nothing_alone_is_paired():
     """An ageing ramp beside a missing lagged coil gains nothing alone, not even in sample;
     the coil's lag alone takes a poor τ. Paired with the pool (jointly tested) the two reach
     1.2x the floor (seed 24170: a warm-up and T(T_air) were added, 1.5x the true model)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(24170))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(24170)
     assert labels[:2] == ["Tlag(T_air)", "ramp"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -337,9 +324,7 @@ def test_a_strict_consistent_gain_passes_a_floor_estimate_that_is_too_high():
     8 % above the true model's residual: a rotated field term cuts the held-out RMS by 16 %
     (z 4.9, fold consistency 4.2), which a model at its true floor cannot give (seed
     25002: left out before, 1.17x the true model)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(25002))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(25002)
     assert labels == ["warmup", "Hx(Bx)"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -349,9 +334,7 @@ def test_a_slow_true_effect_the_hac_test_sees_is_not_judged_against_the_red_floo
     -54 % held-out at HAC z 4.1. With the red-residual floor its spectral z fell to 1.7 and
     nothing was added (2.2x the true model); a coefficient the HAC test already sees at
     |z| >= 3.5 is judged without the floor."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(33105))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(33105)
     assert labels == ["Tlag(T_gyro)"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -362,9 +345,7 @@ def test_a_short_warm_up_seen_by_one_fold_is_named_far_above_the_floor():
     stays under the bar of a flexible term; its coefficient stands out of the residual's slow
     noise (spectral z 14). Before, nothing was added and the loop ended 23x the true model
     (seed 26125)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(26125))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(26125)
     assert labels[:2] == ["warmup", "chan(rh)"], labels
     assert all(t["named"] for t in row["truth"] if t["missing"]), row["truth"]
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
@@ -385,9 +366,7 @@ def test_two_effects_whose_single_z_the_other_inflates_are_named_as_a_pair():
     reach the floor, each coefficient at HAC z ≥ 4 in the pair's own fit. Before, the pair
     was dropped on its members' single z and the loop ended 132x the true model (seed
     27086)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(27086))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(27086)
     assert labels[:2] == ["chan(RH_pct)", "dTlagdt(T_case_C)"], labels
     assert all(t["named"] for t in row["truth"] if t["missing"]), row["truth"]
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
@@ -398,9 +377,7 @@ def test_two_forms_of_one_sensor_that_hide_each_other_are_found_as_a_block():
     -10 % held-out and T² -97 % (neither enters the pair pool); the four forms of T_gyro
     fitted as one block reach the floor, and the pair of two of them passes the joint HAC
     test. Before, nothing was added and the loop ended 24x the true model (seed 27119)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(27119))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(27119)
     assert labels[0] == "dTlagdt(T_gyro)", labels
     assert "T2(T_gyro)" in labels, labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
@@ -412,9 +389,7 @@ def test_an_effect_that_hurts_alone_is_found_as_the_partner_of_the_best_candidat
     warm-up alone gains -27 % at HAC z 0.3; the warm-up with dT/dt as its partner gains
     -92 % at z 8 and 9. Before, the loop took a spurious ramp first and ended 13x the true
     model (seed 28086)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(28086))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(28086)
     assert labels[0] == "warmup", labels
     assert "ramp" not in labels, labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
@@ -588,9 +563,7 @@ def test_a_warm_up_near_the_floor_takes_the_clear_gain_route_on_its_hac_test():
     the warm-up cuts the held-out RMS by 45 %, but only the first fold sees it (consistency
     5.0, under the 6 of a flexible term) and its HAC test gives p x trials 0.0014. Before,
     the loop stopped at "possible" and ended 1.9x the true model (rules.WARMUP_CLEAR_P)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(39181))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(39181)
     assert labels[:1] == ["warmup"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -634,9 +607,7 @@ def test_a_rotated_gyro_with_a_large_field_product_takes_the_quadratic_block():
     spent its five steps naming Hprod(Bx,By), Hsq(Bz), Hsq(By), Hsq(Bx) and ended 1.5x the
     true model. The full quadratic block in place of Hprod(By,Bz) holds out 2.70 -> 0.25 deg/h
     against 1.99 for the best new term, and is now chosen first (rules.AXES_FIRST)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(39015))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(39015)
     assert labels[:2] == ["Hprod(By,Bz)", "Hquad(Bx,By,Bz)"], labels
     assert len(labels) <= 3, labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
@@ -650,9 +621,7 @@ def test_the_quadratic_block_does_not_go_before_a_missing_linear_field_term():
     lookahead also takes candidates the held-out evidence cannot tell apart (LOOKAHEAD_T),
     Hz comes first here (with its partner Hprod 1.76 deg/h against 2.21 for Hsq), and the
     loop goes on to the rotated field's Hy and Hx and the warm-up."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(39199))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(39199)
     assert set(labels[:2]) == {"Hsq(Hy_uT)", "Hz(Hz_uT)"}, labels
     assert not any(lb.startswith("Hquad") for lb in labels), labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
@@ -665,9 +634,7 @@ def test_a_users_free_sinusoid_is_searched_again_beside_a_new_warm_up():
     and stayed there: the warm-up held out 0.35 instead of 0.09 deg/h at HAC z 1.0, and the
     loop ended 13x the true model. The warm frequency is now searched from scratch beside a
     new term (varpro recheck_taus)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(41032))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(41032)
     assert labels[:1] == ["warmup"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -693,9 +660,7 @@ def test_candidates_the_held_out_evidence_cannot_tell_apart_go_to_the_lookahead(
     Beside T the missing anisoelastic g cross term stays hidden (0.111 deg/h); beside the
     ramp it comes out at −57 % (0.054). Only candidates within 2 % went to the lookahead, and
     the loop ended 1.4x the true model (rules.LOOKAHEAD_T)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(41060))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(41060)
     assert labels == ["warmup", "ramp", "gprod(acc_ax,acc_ay)"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -716,9 +681,7 @@ def test_a_warm_up_near_the_floor_takes_the_clear_route_from_a_ten_percent_gain(
     by 17.5 % at fold consistency 2.15, p x trials 0.0063 (rules.WARMUP_CLEAR_P), with the
     model 1.25x the floor; the route needed a 20 % gain and the loop ended 1.2x the true
     model."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(41166))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(41166)
     assert labels == ["ramp", "warmup"], labels
     assert row["final_over_true"] <= 1.1, (labels, row["final_over_true"])
 
@@ -800,9 +763,7 @@ def test_a_true_warm_up_passes_the_surrogate_test():
     """A true warm-up (synthetic noise, −46 % held out on the far route) beats every one of
     the 39 surrogates' best chance gains (90 % of them below 9 %): surrogate p 0.025, and
     the loop names it."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(45000))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(45000)
     assert "warmup" in labels, labels
     d = row["steps"][0]
     assert d["verdict"].startswith("missing effect: warmup"), d["verdict"]
@@ -815,9 +776,7 @@ def test_a_short_warm_up_that_brings_the_model_to_the_floor_is_named():
     the loop stopped at 2.3 × the true model. A candidate whose own model comes within
     :data:`gyrotest.envmodel.rules.SPECTRAL_NEAR_POST` × the floor is judged against the
     near bar: its residual, on which the z is taken, is white/flicker noise."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(49097))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(49097)
     assert labels[:2] == ["V", "warmup"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -831,9 +790,7 @@ def test_a_misaligned_field_product_is_named_without_the_quadratic_block():
     better than the block (:func:`gyrotest.envmodel.axes.sparse_follow`), and the block then
     gives way to Hsq(field_y) together with Hsq(field_z)
     (:func:`gyrotest.envmodel.axes.sparse_pair`)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(53181))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(53181)
     assert labels[:2] == ["Hmag2", "Hprod(field_y,field_z)"], labels
     assert not any(lab.startswith("Hquad") for lab in labels), labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
@@ -846,9 +803,7 @@ def test_a_field_sensitivity_hidden_by_the_field_squared_is_named():
     and spectral z 27, but the coil sequence's few steps left Hz at joint HAC z 3.8 (< 4):
     "no missing effect" at 5× the floor, 4.5× the true model. A decisive pair
     (:func:`gyrotest.envmodel.pairs._decisive`) needs no joint HAC test."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(54092))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(54092)
     assert labels[:1] == ["Hz(Hz_uT)"], labels
     assert row["final_over_true"] <= 1.2, row["final_over_true"]
 
@@ -859,9 +814,7 @@ def test_a_hidden_g_sensitivity_pair_with_a_large_gain_is_named():
     Together they cut the held-out RMS by 80 % at fold consistency 7.2 and spectral z 9.1,
     joint HAC z 3.93 and 3.98: "no missing effect" at 5× the floor, 4.9× the true model,
     until a larger gain needed less consistency (:data:`gyrotest.envmodel.rules.DECISIVE_GAIN`)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(55189))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(55189)
     assert labels[:2] == ["g(acc_ay)", "g2(acc_ay)"], labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
 
@@ -872,9 +825,7 @@ def test_three_hidden_g_effects_below_twenty_times_the_floor_are_named():
     floor the best single term held out −13.6 %, all three together −87 %. The group search
     ran only from 20× the floor ("no missing effect", 7.6× the true model); it now runs from
     the far ratio (:data:`gyrotest.envmodel.rules.GROUP_RATIO`)."""
-    bw, ws = _bench()
-    row = bw.run_case(ws.make_case(56107))
-    labels = [a["label"] for a in row["added"]]
+    row, labels = _loop(56107)
     assert row["steps"][0]["top"]["route"].startswith("together with"), row["steps"][0]["top"]
     assert {"g(ax_g)", "gprod(ax_g,ay_g)"} <= set(labels), labels
     assert row["final_over_true"] <= 1.1, row["final_over_true"]

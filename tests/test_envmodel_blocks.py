@@ -109,13 +109,13 @@ def _old_rule(X, y, train, beta_full, frac=0.02):
     return b
 
 
-def test_fold_coefficients_support_directions():
+def testfold_coefficients_support_directions():
     """Fold coefficients are free only along directions the training blocks support: plain
     least squares when every direction is supported, the one-column rule (a transient living
     in the held-out chunk keeps its full-data coefficient) reproduced, and a *combination*
     of columns that moves only in the held-out chunk (two field axes swept together once)
     kept at its full-data value instead of being extrapolated."""
-    from gyrotest.envmodel.fit import _fold_coefficients
+    from gyrotest.envmodel.fit import fold_coefficients
 
     rng = np.random.default_rng(3)
     n = 400
@@ -126,7 +126,7 @@ def test_fold_coefficients_support_directions():
     X = np.column_stack([np.ones(n), rng.normal(size=n), np.sin(t / 30)])
     y = X @ [1.0, 2.0, -0.5] + rng.normal(scale=0.1, size=n)
     bf = np.linalg.lstsq(X, y, rcond=None)[0]
-    np.testing.assert_allclose(_fold_coefficients(X, y, train, bf),
+    np.testing.assert_allclose(fold_coefficients(X, y, train, bf),
                                np.linalg.lstsq(X[train], y[train], rcond=None)[0], atol=1e-10)
     # 2. a transient that lives only in the held-out chunk: the one-column rule
     tr = np.where((t >= 300) & (t < 350), np.exp(-(t - 300) / 5.0), 0.0)
@@ -135,9 +135,9 @@ def test_fold_coefficients_support_directions():
     bf2 = np.linalg.lstsq(X2, y2, rcond=None)[0]
     # (equal to the one-column rule up to the slight correlation of the columns, which
     # tilts the unsupported direction)
-    np.testing.assert_allclose(_fold_coefficients(X2, y2, train, bf2),
+    np.testing.assert_allclose(fold_coefficients(X2, y2, train, bf2),
                                _old_rule(X2, y2, train, bf2), rtol=2e-3)
-    assert _fold_coefficients(X2, y2, train, bf2)[2] == pytest.approx(bf2[2], rel=2e-3)
+    assert fold_coefficients(X2, y2, train, bf2)[2] == pytest.approx(bf2[2], rel=2e-3)
     # 3. two columns that each vary in training, but their difference only in the held-out
     #    chunk: the combination keeps its full-data value
     a = np.sin(t / 7.0)
@@ -146,7 +146,7 @@ def test_fold_coefficients_support_directions():
     X3 = np.column_stack([np.ones(n), a, b])
     y3 = X3 @ [0.0, 1.0, 2.0] + rng.normal(scale=0.05, size=n)
     bf3 = np.linalg.lstsq(X3, y3, rcond=None)[0]
-    bfold = _fold_coefficients(X3, y3, train, bf3)
+    bfold = fold_coefficients(X3, y3, train, bf3)
     # along the supported direction (a + b move together) the training data decide; the
     # held-out prediction of the unsupported bump is the full-data one, not an extrapolation
     held = ~train

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fit import cv_layout, holdout_folds
+from .fit import cv_layout, fold_coefficients, holdout_folds
 from .terms import nonlinear_bounds
 
 
@@ -113,14 +113,24 @@ def phase_surrogates(e: np.ndarray, k: int, rng: np.random.Generator) -> np.ndar
 def holdout_rms(X: np.ndarray, Y: np.ndarray, fold: np.ndarray, masks: list[np.ndarray]
                 ) -> np.ndarray:
     """Held-out RMS of each column of ``Y`` under the blocked folds (``fold`` id per block,
-    training ``masks``): ordinary least squares on the training blocks, residual on the
-    held-out ones, pooled over the folds."""
+    training ``masks``): least squares on the training blocks by the rule of the diagnosis
+    (:func:`gyrotest.envmodel.fit.fold_coefficients`: free only along the directions the
+    training blocks support, the full-record coefficients along the others), residual on
+    the held-out ones, pooled over the folds.
+
+    The rule matters here as much as in the diagnosis: a Helmholtz sequence whose one
+    sweep that moves two axes together lies in one chunk leaves that fold's plain
+    least-squares fit near-singular (condition 3·10⁴ in seed 58071), its noise-fitted
+    coefficients extrapolate to 36 × the residual's RMS, and any candidate correlated with
+    that direction "gained" up to 95 % on the surrogates -- a chance gain the diagnosis
+    itself can never see."""
     H = np.full(Y.shape, np.nan)
+    B_full = fold_coefficients(X, Y, np.ones(len(X), bool), np.zeros((X.shape[1], Y.shape[1])))
     for f, m in enumerate(masks):
         held = fold == f
         if not held.any() or m.sum() <= X.shape[1]:
             continue
-        B = np.linalg.lstsq(X[m], Y[m], rcond=None)[0]
+        B = fold_coefficients(X, Y, m, B_full)
         H[held] = Y[held] - X[held] @ B
     with np.errstate(invalid="ignore"):
         return np.sqrt(np.nanmean(H ** 2, axis=0))

@@ -332,7 +332,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             continue
         th_f = fitter.optimise(thetas, m, local=True, kinds=("freq",), fresh=("freq",))
         Xf = fitter.X(th_f)
-        bf = _fold_coefficients(Xf, wd.y, m, beta)
+        bf = fold_coefficients(Xf, wd.y, m, beta)
         held = fold == f
         hres[held] = wd.y[held] - Xf[held] @ bf
         fold_rms.append(float(np.sqrt(np.mean(hres[held] ** 2))))
@@ -373,10 +373,20 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
 MIN_FOLD_SUPPORT = 0.02
 
 
-def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
-                       beta_full: np.ndarray) -> np.ndarray:
+def _beta(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The least-squares coefficients of :func:`gyrotest.envmodel.stats.lstsq` (columns
+    scaled for conditioning) for one series ``y`` or for each column of an n x K array."""
+    scale = np.sqrt(np.sum(X * X, axis=0))
+    scale[scale == 0] = 1.0
+    b = np.linalg.lstsq(X / scale, y, rcond=None)[0]
+    return b / (scale if b.ndim == 1 else scale[:, None])
+
+
+def fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
+                      beta_full: np.ndarray) -> np.ndarray:
     """Least-squares coefficients on the training blocks of a fold, free only along the
-    directions the training blocks support.
+    directions the training blocks support (``y`` one series, or an n x K array of series
+    with ``beta_full`` p x K: the same rule for each column).
 
     A direction v of coefficient space is supported when the training blocks carry at least
     :data:`MIN_FOLD_SUPPORT` of the variation the whole record carries along it:
@@ -395,7 +405,7 @@ def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     const = v_all <= 0
     cols = np.flatnonzero(~const)
     if len(cols) == 0:
-        return st.lstsq(X[train], y[train])[0]
+        return _beta(X[train], y[train])
     xt = X[train][:, cols] - X[train][:, cols].mean(axis=0)
     scale = np.sqrt(v_all[cols])
     F = full[:, cols] / scale
@@ -408,14 +418,14 @@ def _fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     lam, U = np.linalg.eigh(W.T @ At @ W)
     V = W @ U[:, lam >= MIN_FOLD_SUPPORT]       # supported directions (scaled coefficients)
     if V.shape[1] == len(cols) and keep.all():
-        return st.lstsq(X[train], y[train])[0]
+        return _beta(X[train], y[train])
     base = np.array(beta_full, dtype=float)
     Xtr = X[train]
     yt = y[train] - Xtr @ base
     D = [Xtr[:, cols] @ (V / scale[:, None])] if V.shape[1] else []
     D += [Xtr[:, np.flatnonzero(const)]]
     Dm = np.column_stack(D)
-    c = st.lstsq(Dm, yt)[0]
+    c = _beta(Dm, yt)
     b = base
     k = V.shape[1]
     if k:

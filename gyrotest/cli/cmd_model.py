@@ -533,7 +533,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     A ramp, warm-up or hysteresis added as the missing effect (not in place of a model
     term) must also beat a
     look-elsewhere surrogate test: the best gain any candidate reaches on 39
-    phase-randomised surrogates of the residual may reach its gain in at most 3 of them
+    phase-randomised surrogates of the residual (held out fold by fold as the diagnosis
+    holds out the log) may reach its gain in at most 3 of them
     (surrogate p <= 0.1); otherwise the best other qualifying candidate whose own gain
     passes that test is named, or none.
     A product of two channels gives way to the level terms of its factors when those do

@@ -17,7 +17,8 @@ any candidate of the step reaches on noise with the same spectrum as the model's
 2. **The best chance gain** of each surrogate s_k: for every candidate c of the step (its
    regressor at the fitted nonlinear parameters and on a log-spaced grid over the
    parameter's range), the held-out gain 1 − RMS_ho([X_b, x_c]; s_k)/RMS_ho(X_b; s_k) over
-   the same blocked folds as the diagnosis (ordinary least squares per fold), maximised over
+   the same blocked folds and fold fits as the diagnosis (least squares free only along the
+   directions each fold's training blocks support, :func:`holdout_rms`), maximised over
    the candidates: M_k. Because the candidate model contains the base model, the gain on
    y − X_b·β equals the gain on s_k; the base model's own regressors X_b stay in both fits.
 3. **p = (1 + #{M_k ≥ g}) / (K + 1)**, g the chosen term's held-out gain in the diagnosis

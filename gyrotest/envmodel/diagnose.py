@@ -144,7 +144,8 @@ that the model under judgment cannot move:
    A ramp, warm-up or hysteresis added by any of the above (not a swap, below) must
    also beat the **look-elsewhere surrogate test** (:mod:`gyrotest.envmodel.chance`): the
    best held-out gain any candidate of the step reaches on 39 phase-randomised surrogates
-   of the base model's residual (noise with its periodogram, aligned with nothing) may reach
+   of the base model's residual (noise with its periodogram, aligned with nothing; each
+   held out with the folds' own fits, as the log is) may reach
    its gain in at most 3 of them (surrogate p ≤ 0.1, :data:`gyrotest.envmodel.rules.CHANCE_P`);
    otherwise the best other significant candidate that is not a nuisance term and whose
    own gain the same surrogates do not reach is chosen, or none (the term stays a

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import cv_layout, fold_coefficients, holdout_folds
+from .stats import lstsq_coef
 from .terms import nonlinear_bounds
 
 
@@ -126,7 +127,7 @@ def holdout_rms(X: np.ndarray, Y: np.ndarray, fold: np.ndarray, masks: list[np.n
     that direction "gained" up to 95 % on the surrogates -- a chance gain the diagnosis
     itself can never see."""
     H = np.full(Y.shape, np.nan)
-    B_full = fold_coefficients(X, Y, np.ones(len(X), bool), np.zeros((X.shape[1], Y.shape[1])))
+    B_full = lstsq_coef(X, Y)
     for f, m in enumerate(masks):
         held = fold == f
         if not held.any() or m.sum() <= X.shape[1]:

@@ -373,15 +373,6 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
 MIN_FOLD_SUPPORT = 0.02
 
 
-def _beta(X: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The least-squares coefficients of :func:`gyrotest.envmodel.stats.lstsq` (columns
-    scaled for conditioning) for one series ``y`` or for each column of an n x K array."""
-    scale = np.sqrt(np.sum(X * X, axis=0))
-    scale[scale == 0] = 1.0
-    b = np.linalg.lstsq(X / scale, y, rcond=None)[0]
-    return b / (scale if b.ndim == 1 else scale[:, None])
-
-
 def fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
                       beta_full: np.ndarray) -> np.ndarray:
     """Least-squares coefficients on the training blocks of a fold, free only along the
@@ -405,7 +396,7 @@ def fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     const = v_all <= 0
     cols = np.flatnonzero(~const)
     if len(cols) == 0:
-        return _beta(X[train], y[train])
+        return st.lstsq_coef(X[train], y[train])
     xt = X[train][:, cols] - X[train][:, cols].mean(axis=0)
     scale = np.sqrt(v_all[cols])
     F = full[:, cols] / scale
@@ -418,14 +409,14 @@ def fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     lam, U = np.linalg.eigh(W.T @ At @ W)
     V = W @ U[:, lam >= MIN_FOLD_SUPPORT]       # supported directions (scaled coefficients)
     if V.shape[1] == len(cols) and keep.all():
-        return _beta(X[train], y[train])
+        return st.lstsq_coef(X[train], y[train])
     base = np.array(beta_full, dtype=float)
     Xtr = X[train]
     yt = y[train] - Xtr @ base
     D = [Xtr[:, cols] @ (V / scale[:, None])] if V.shape[1] else []
     D += [Xtr[:, np.flatnonzero(const)]]
     Dm = np.column_stack(D)
-    c = _beta(Dm, yt)
+    c = st.lstsq_coef(Dm, yt)
     b = base
     k = V.shape[1]
     if k:

@@ -28,13 +28,20 @@ from scipy import stats
 PREWHITEN_MAX_EIG = 0.97
 
 
-def lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least-squares coefficients β = argmin ‖y − Xβ‖² (columns scaled for conditioning)
-    and the residual sum of squares RSS. Units: those of y per unit of each column."""
+def lstsq_coef(X: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients β = argmin ‖y − Xβ‖² (columns scaled for conditioning) of
+    one series ``y`` or of each column of an n × K array (then p × K). Units: those of y per
+    unit of each column."""
     scale = np.sqrt(np.sum(X * X, axis=0))
     scale[scale == 0] = 1.0
     beta_s, *_ = np.linalg.lstsq(X / scale, y, rcond=None)
-    beta = beta_s / scale
+    return beta_s / (scale if beta_s.ndim == 1 else scale[:, None])
+
+
+def lstsq(X: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least-squares coefficients β of :func:`lstsq_coef` and the residual sum of squares
+    RSS of the series ``y``."""
+    beta = lstsq_coef(X, y)
     r = y - X @ beta
     return beta, float(r @ r)
 

@@ -59,6 +59,10 @@ class Candidate:
     #: its best partner in the step after it, when a lookahead fitted them: (held-out RMS
     #: deg/h, the partner's term)
     lookahead: tuple[float, str] | None = None
+    #: a lag chosen for the step after it (:func:`gyrotest.envmodel.pairs.lag_or_plain`):
+    #: its time constant fitted beside that partner, s (alone it may sit at the bottom of
+    #: its range while the partner's effect is missing)
+    pair_tau_s: float = math.nan
     #: the look-elsewhere surrogate test of a chosen nuisance term
     #: (:class:`gyrotest.envmodel.chance.ChanceTest`), when it was run
     chance: ChanceTest | None = None

@@ -260,7 +260,7 @@ from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .groups import group_step
 from .judge import judge as _judge
-from .pairs import lag_or_plain, lookahead, marginal, pair_step, redirect
+from .pairs import lag_or_plain, lag_resolved, lookahead, marginal, pair_step, redirect
 from .prepare import prepare_log
 from .prune import Unneeded, unneeded_term
 from .rules import (
@@ -294,7 +294,7 @@ from .screen import (
     block_candidates,
     candidate_terms,
 )
-from .terms import TermSpec, nonlinear_bounds, parse_terms, resolve_terms
+from .terms import TermSpec, parse_terms, resolve_terms
 from .verdict import period_rule, verdict_text
 
 
@@ -710,15 +710,15 @@ FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "c
 
 def _unresolved_lag(chosen: Candidate, sig: list[Candidate], wd: WorkData) -> Candidate:
     """A lag whose fitted time constant is at the bottom of its range or shorter than the
-    smoother window is not resolved by this log: the plain term of the same channel (a
-    missing effect too) is the honest name."""
+    smoother window (:func:`gyrotest.envmodel.pairs.lag_resolved`) is not resolved by this
+    log: the plain term of the same channel (a missing effect too) is the honest name --
+    unless the lag was chosen for its partner in the next step and resolved beside it
+    (``pair_tau_s``)."""
     key = chosen.spec.key if chosen.spec else ""
-    if key not in UNLAGGED or chosen._fit is None:
+    if key not in UNLAGGED or chosen._fit is None or math.isfinite(chosen.pair_tau_s):
         return chosen
     tau = (chosen._fit._thetas.get(chosen.term) or {}).get("tau_s")  # type: ignore[attr-defined]
-    lo = nonlinear_bounds(chosen.spec, wd.duration_s, wd.resolution_s,
-                          wd.refs).get("tau_s", (0.0, 0.0))[0]
-    if tau is None or tau > max(1.05 * lo, wd.refs.smoothing_s):
+    if tau is None or lag_resolved(chosen.spec, tau, wd):
         return chosen
     plain = TermSpec(UNLAGGED[key], chosen.spec.channels).label
     alt = next((c for c in sig if c.term == plain), None)

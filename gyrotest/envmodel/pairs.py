@@ -59,7 +59,7 @@ from .rules import (
     red_floor_for,
     spectral_exempt,
 )
-from .terms import TermSpec
+from .terms import TermSpec, nonlinear_bounds
 
 
 def pair_step(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], thetas0,
@@ -330,47 +330,94 @@ def _best_partners(wd: WorkData, base_specs, alts: list[Candidate],
     return best
 
 
+def lag_resolved(spec: TermSpec, tau_s: float, wd: WorkData) -> bool:
+    """Whether a lag's fitted time constant ``tau_s`` (s) is resolved by the log: above 1.05 ×
+    the bottom of its range and above the smoother window (a shorter lag is the plain term)."""
+    lo = nonlinear_bounds(spec, wd.duration_s, wd.resolution_s, wd.refs).get(
+        "tau_s", (0.0, 0.0))[0]
+    return tau_s > max(1.05 * lo, wd.refs.smoothing_s)
+
+
 def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                  chosen: Candidate, thetas0, folds: int) -> Candidate:
-    """Far above the floor, a lag form chosen (``Tlag(c)``, ``chanlag(c)``) while its plain
-    form is a missing effect too: the lag's time constant may stand in for a rate term that
-    is also missing (a lag is the level minus τ times its rate). Each is fitted with the
-    pair pool and the rate forms (:data:`RATE_FORMS`); the plain form leads when its best
-    partner brings the held-out RMS at least :data:`PAIR_MARGIN` below the lag's best. The
-    rate forms of the lag's own channel are not the plain form's partners: T(c) with the
-    rate of c is the lag's own first-order expansion, not a second effect.
+    """Far above the floor, a lag form and the plain form of one channel (``Tlag(c)`` and
+    ``T(c)``, ``chanlag(c)`` and ``chan(c)``) both missing effects: which one leads is told by
+    the step after them. Each is fitted with the pair pool and the rate forms
+    (:data:`RATE_FORMS`); the other form leads when its best partner brings the held-out RMS
+    at least :data:`PAIR_MARGIN` below the chosen form's best.
 
-    Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the missing rate of a lagged node of
-    another sensor, T(tc2) reaches 0.168 deg/h, Tlag(tc2) at best 0.225."""
+    A lag chosen (a lag is the level minus τ times its rate): its time constant may stand in
+    for a rate term that is also missing. The rate forms of the lag's own channel are not
+    the plain form's partners here -- T(c) with the rate of c is the lag's own first-order
+    expansion, not a second effect. Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the
+    missing rate of a lagged node of another sensor, T(tc2) reaches 0.168 deg/h, Tlag(tc2)
+    at best 0.225.
+
+    The plain form chosen: a lagged node and the rate of its sensor hide each other, and
+    alone the lag can hold out worse than the level. Both forms are then fitted with every
+    rate form, the channel's own included: the level with its own rate is the lag's
+    first-order expansion, so a lag that beats it by the margin has a time constant the
+    log resolves. Seed 59030 (a node 438 s behind T_case with dT/dt of T_case, both
+    missing): T −89.9 %, Tlag −89.4 %; with dT/dt, Tlag reaches 0.110 deg/h (the true
+    model's), T 0.155, and the loop had ended 1.48 × the true model."""
     key = chosen.spec.key if chosen.spec else ""
-    if key not in ("Tlag", "chanlag") or chosen._fit is None:
+    if chosen._fit is None:
         return chosen
-    label = TermSpec(UNLAGGED[key], chosen.spec.channels).label
-    plain = next((c for c in out if c.term == label and c.significant and c._fit is not None
+    if key in ("Tlag", "chanlag"):
+        other_key, lag_chosen = UNLAGGED[key], True
+    elif key in ("T", "chan"):
+        other_key, lag_chosen = {"T": "Tlag", "chan": "chanlag"}[key], False
+    else:
+        return chosen
+    label = TermSpec(other_key, chosen.spec.channels).label
+    other = next((c for c in out if c.term == label and c.significant and c._fit is not None
                   and c.rejected is None and math.isfinite(c.rms_holdout)), None)
-    if plain is None:
+    if other is None:
         return chosen
+    lag, plain = (chosen, other) if lag_chosen else (other, chosen)
     own = set(chosen.spec.channels)
     lags = ("Tlag", "chanlag", "T", "chan")
-    partners = [m for m in _pair_pool(base, out) if m is not chosen and m is not plain
+    partners = [m for m in _pair_pool(base, out) if m is not lag and m is not plain
                 and not (m.spec.key in lags and set(m.spec.channels) == own)]
     rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
-                    and m not in partners and m.improvement_pct > 0),
+                    and m not in partners and (m.improvement_pct > 0 or not lag_chosen)),
                    key=lambda m: -m.improvement_pct)
-    partners += rates[:LOOKAHEAD_MORE]
-    best = _best_partners(wd, base_specs, [chosen], partners, thetas0, folds)
-    best.update(_best_partners(wd, base_specs, [plain], [
-        m for m in partners if not (m.spec.key in RATE_FORMS and set(m.spec.channels) & own)],
-        thetas0, folds))
-    if id(chosen) not in best or id(plain) not in best:
+    if lag_chosen:
+        partners += rates[:LOOKAHEAD_MORE]
+        plain_partners = [m for m in partners
+                          if not (m.spec.key in RATE_FORMS and set(m.spec.channels) & own)]
+    else:
+        # the channel's own rate forms first: they are the lag's other half
+        mine = [m for m in rates if set(m.spec.channels) == own]
+        partners += mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
+        plain_partners = partners
+    best = _best_partners(wd, base_specs, [lag], partners, thetas0, folds)
+    best.update(_best_partners(wd, base_specs, [plain], plain_partners, thetas0, folds))
+    if id(lag) not in best or id(plain) not in best:
         return chosen
-    if best[id(plain)][0] > PAIR_MARGIN * best[id(chosen)][0]:
+    if best[id(other)][0] > PAIR_MARGIN * best[id(chosen)][0]:
         return chosen
-    plain.note = (f"{chosen.term} fits better alone, but with {best[id(plain)][1]} {plain.term} "
-                  f"reaches {best[id(plain)][0]:.4g} deg/h and {chosen.term} "
-                  f"{best[id(chosen)][0]:.4g} deg/h (with {best[id(chosen)][1]}): the lag's "
-                  "time constant stood in for a missing rate term")
-    return plain
+    if not lag_chosen:
+        # the lag beside its partner: a time constant the log resolves there, or the level
+        partner = next((m for m in partners if m.term == best[id(lag)][1]), None)
+        r = (fit_pair(wd, base_specs, lag, partner, thetas0, folds)
+             if partner is not None else None)
+        tau = ((getattr(r, "_thetas", None) or {}).get(lag.term) or {}).get("tau_s")
+        if tau is None or not lag_resolved(lag.spec, tau, wd):
+            return chosen
+        lag.pair_tau_s = float(tau)
+        lag.lookahead = best[id(lag)]
+    if lag_chosen:
+        plain.note = (f"{lag.term} fits better alone, but with {best[id(plain)][1]} "
+                      f"{plain.term} reaches {best[id(plain)][0]:.4g} deg/h and {lag.term} "
+                      f"{best[id(lag)][0]:.4g} deg/h (with {best[id(lag)][1]}): the lag's "
+                      "time constant stood in for a missing rate term")
+    else:
+        lag.note = (f"{plain.term} fits better alone, but with {best[id(lag)][1]} "
+                    f"{lag.term} reaches {best[id(lag)][0]:.4g} deg/h and {plain.term} at "
+                    f"best {best[id(plain)][0]:.4g} deg/h (with {best[id(plain)][1]}): the "
+                    "lag and a rate term hid each other")
+    return other
 
 
 

@@ -45,9 +45,10 @@ def _assert_real_null_quiet(seed: int) -> None:
     assert not row["alarm"], row["added"]
 
 
-def _diagnose_base(seed: int):
+def _diagnose_base(seed: int, extra: tuple[str, ...] = ()):
     """Seed ``seed`` of the simulator read through ingest and prepared, and the diagnosis of
-    its base model: (case, work data, diagnosis)."""
+    its base model (with the terms ``extra`` added, as the loop adds them): (case, work data,
+    diagnosis)."""
     from gyrotest.envmodel import diagnose, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
     from gyrotest.ingest import read_log
@@ -57,7 +58,8 @@ def _diagnose_base(seed: int):
     with tempfile.TemporaryDirectory() as td:
         log = read_log(ws.write_case(case, td), overrides=case.profile)
     wd = prepare(log)
-    return case, wd, diagnose(wd, resolve_terms(parse_terms(case.base_terms), wd.frame))
+    terms = list(case.base_terms) + list(extra)
+    return case, wd, diagnose(wd, resolve_terms(parse_terms(terms), wd.frame))
 
 
 @pytest.fixture(scope="module")
@@ -842,3 +844,17 @@ def test_a_warm_up_beside_a_coil_sequence_beats_its_surrogates():
     assert labels[:1] == ["warmup"], labels
     assert "surrogate p = 0.03" in row["steps"][0]["verdict"], row["steps"][0]["verdict"]
     assert row["final_over_true"] <= 1.1, row["final_over_true"]
+
+
+def test_a_level_gives_way_to_its_lag_when_the_lag_and_a_rate_hide_each_other():
+    """Seed 59030 (static run): a node 438 s behind T_case and dT/dt of T_case are both
+    missing beside a warm-up. Alone, T(T_case) holds out better than Tlag(T_case) (−89.9 %
+    against −89.4 %; the lone lag's τ sits at 42 s, below the smoother), but with dT/dt the
+    lag reaches the true model's 0.110 deg/h and the level only 0.156: the lag leads, with
+    its τ resolved beside the rate (the loop had named T and ended 1.48× the true model)."""
+    _, _, d = _diagnose_base(59030, ("warmup",))
+    top = d.found[0]
+    assert top.term == "Tlag(T_case)", d.verdict
+    assert top.pair_tau_s > 300, top.pair_tau_s
+    assert "the lag and a rate term hid each other" in d.verdict
+    assert "then dTdt(T_case)" in d.verdict

@@ -527,7 +527,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     another candidate (a warm-up hidden by a missing hysteresis). At >= 2x the floor, tied candidates (within 2 %, or
     a gain over them with fold consistency < 2.13) are told apart by the step after them
     (each fitted with the pair pool, second-order forms and channel cross terms), and a lag (Tlag, chanlag) gives way to its
-    plain form when that does >= 10 % better beside a missing rate term of another channel;
+    plain form when that does >= 10 % better beside a missing rate term of another channel
+    (and a level T, chan to its lag when the lag does >= 10 % better beside a rate term, its
+    channel's own included: a lagged node and its sensor's rate hide each other);
     a lag whose time constant reaches the record length is named only on the strict test
     (lagged that long, a channel is a slow trend that fits the gyro's own drift).
     A ramp, warm-up or hysteresis added as the missing effect (not in place of a model

@@ -380,16 +380,19 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     partners = [m for m in _pair_pool(base, out) if m is not lag and m is not plain
                 and not (m.spec.key in lags and set(m.spec.channels) == own)]
     rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
-                    and m not in partners and (m.improvement_pct > 0 or not lag_chosen)),
+                    and m not in partners and m.improvement_pct > 0),
                    key=lambda m: -m.improvement_pct)
     if lag_chosen:
         partners += rates[:LOOKAHEAD_MORE]
         plain_partners = [m for m in partners
                           if not (m.spec.key in RATE_FORMS and set(m.spec.channels) & own)]
     else:
-        # the channel's own rate forms first: they are the lag's other half
+        # only the rate forms, the channel's own first: the lag's other half (another
+        # partner beside which a lag does better is no evidence on this question)
+        rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS),
+                       key=lambda m: -m.improvement_pct)
         mine = [m for m in rates if set(m.spec.channels) == own]
-        partners += mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
+        partners = mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
         plain_partners = partners
     best = _best_partners(wd, base_specs, [lag], partners, thetas0, folds)
     best.update(_best_partners(wd, base_specs, [plain], plain_partners, thetas0, folds))
@@ -418,7 +421,6 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
                     f"best {best[id(plain)][0]:.4g} deg/h (with {best[id(plain)][1]}): the "
                     "lag and a rate term hid each other")
     return other
-
 
 
 #: product terms and the first-order (main-effect) forms of their factors

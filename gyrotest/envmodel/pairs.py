@@ -341,23 +341,23 @@ def lag_resolved(spec: TermSpec, tau_s: float, wd: WorkData) -> bool:
 def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
                  chosen: Candidate, thetas0, folds: int) -> Candidate:
     """Far above the floor, a lag form and the plain form of one channel (``Tlag(c)`` and
-    ``T(c)``, ``chanlag(c)`` and ``chan(c)``) both missing effects: which one leads is told by
-    the step after them. Each is fitted with the pair pool and the rate forms
-    (:data:`RATE_FORMS`); the other form leads when its best partner brings the held-out RMS
+    ``T(c)``, ``chanlag(c)`` and ``chan(c)``) both missing effects: the step after them tells
+    which one leads. The other form leads when its best partner brings the held-out RMS
     at least :data:`PAIR_MARGIN` below the chosen form's best.
 
     A lag chosen (a lag is the level minus τ times its rate): its time constant may stand in
-    for a rate term that is also missing. The rate forms of the lag's own channel are not
+    for a rate term that is also missing. Each is fitted with the pair pool and the rate
+    forms (:data:`RATE_FORMS`); the rate forms of the lag's own channel are not
     the plain form's partners here -- T(c) with the rate of c is the lag's own first-order
     expansion, not a second effect. Seed 23183: Tlag(tc2) −66 %, T(tc2) −39 %; with the
     missing rate of a lagged node of another sensor, T(tc2) reaches 0.168 deg/h, Tlag(tc2)
     at best 0.225.
 
     The plain form chosen: a lagged node and the rate of its sensor hide each other, and
-    alone the lag can hold out worse than the level. Both forms are then fitted with every
-    rate form, the channel's own included: the level with its own rate is the lag's
-    first-order expansion, so a lag that beats it by the margin has a time constant the
-    log resolves. Seed 59030 (a node 438 s behind T_case with dT/dt of T_case, both
+    alone the lag can hold out worse than the level. Both forms are then fitted with the
+    rate forms only, the channel's own first: the level with its own rate is the lag's
+    first-order expansion, so a lag that beats it by the margin has a time constant the log
+    resolves. Seed 59030 (a node 438 s behind T_case with dT/dt of T_case, both
     missing): T −89.9 %, Tlag −89.4 %; with dT/dt, Tlag reaches 0.110 deg/h (the true
     model's), T 0.155, and the loop had ended 1.48 × the true model."""
     key = chosen.spec.key if chosen.spec else ""
@@ -366,7 +366,7 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     if key in ("Tlag", "chanlag"):
         other_key, lag_chosen = UNLAGGED[key], True
     elif key in ("T", "chan"):
-        other_key, lag_chosen = {"T": "Tlag", "chan": "chanlag"}[key], False
+        other_key, lag_chosen = next(k for k, v in UNLAGGED.items() if v == key), False
     else:
         return chosen
     label = TermSpec(other_key, chosen.spec.channels).label
@@ -376,14 +376,13 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
         return chosen
     lag, plain = (chosen, other) if lag_chosen else (other, chosen)
     own = set(chosen.spec.channels)
-    lags = ("Tlag", "chanlag", "T", "chan")
-    partners = [m for m in _pair_pool(base, out) if m is not lag and m is not plain
-                and not (m.spec.key in lags and set(m.spec.channels) == own)]
-    rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
-                    and m not in partners and m.improvement_pct > 0),
-                   key=lambda m: -m.improvement_pct)
     if lag_chosen:
-        partners += rates[:LOOKAHEAD_MORE]
+        lags = ("Tlag", "chanlag", "T", "chan")
+        partners = [m for m in _pair_pool(base, out) if m is not lag and m is not plain
+                    and not (m.spec.key in lags and set(m.spec.channels) == own)]
+        partners += sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
+                            and m not in partners and m.improvement_pct > 0),
+                           key=lambda m: -m.improvement_pct)[:LOOKAHEAD_MORE]
         plain_partners = [m for m in partners
                           if not (m.spec.key in RATE_FORMS and set(m.spec.channels) & own)]
     else:
@@ -392,8 +391,7 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
         rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS),
                        key=lambda m: -m.improvement_pct)
         mine = [m for m in rates if set(m.spec.channels) == own]
-        partners = mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
-        plain_partners = partners
+        partners = plain_partners = mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
     best = _best_partners(wd, base_specs, [lag], partners, thetas0, folds)
     best.update(_best_partners(wd, base_specs, [plain], plain_partners, thetas0, folds))
     if id(lag) not in best or id(plain) not in best:

@@ -357,7 +357,9 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     alone the lag can hold out worse than the level. Both forms are then fitted with the
     rate forms only, the channel's own first: the level with its own rate is the lag's
     first-order expansion, so a lag that beats it by the margin has a time constant the log
-    resolves. Seed 59030 (a node 438 s behind T_case with dT/dt of T_case, both
+    resolves. The level alone counts as its own best when no rate helps it, and the lagged
+    rate of the lag's own channel is not the lag's partner (two time constants of one sensor
+    fit its level). Seed 59030 (a node 438 s behind T_case with dT/dt of T_case, both
     missing): T −89.9 %, Tlag −89.4 %; with dT/dt, Tlag reaches 0.110 deg/h (the true
     model's), T 0.155, and the loop had ended 1.48 × the true model."""
     key = chosen.spec.key if chosen.spec else ""
@@ -391,11 +393,19 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
         rates = sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS),
                        key=lambda m: -m.improvement_pct)
         mine = [m for m in rates if set(m.spec.channels) == own]
-        partners = plain_partners = mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
+        plain_partners = mine + [m for m in rates if m not in mine][:LOOKAHEAD_MORE]
+        # not the lagged rate of the lag's own channel: two time constants of one sensor fit
+        # its level (seed 44056: a true T(T_case), −99.2 % alone; Tlag with dTlagdt of
+        # T_case held out 10 % better and named neither)
+        partners = [m for m in plain_partners
+                    if not (m.spec.key in LAGGED_RATES and set(m.spec.channels) == own)]
     best = _best_partners(wd, base_specs, [lag], partners, thetas0, folds)
     best.update(_best_partners(wd, base_specs, [plain], plain_partners, thetas0, folds))
     if id(lag) not in best or id(plain) not in best:
         return chosen
+    if not lag_chosen and plain.rms_holdout < best[id(plain)][0]:
+        # the level needs no partner: the lag must beat it alone
+        best[id(plain)] = (plain.rms_holdout, "nothing")
     if best[id(other)][0] > PAIR_MARGIN * best[id(chosen)][0]:
         return chosen
     if not lag_chosen:
@@ -520,6 +530,8 @@ def _product_level(chosen: Candidate, out: list[Candidate], mains_of,
 
 #: rate forms :func:`lag_or_plain` tries beside a lag and its plain form
 RATE_FORMS = ("dTdt", "dTlagdt", "dGdt", "dchan", "dchanlag")
+#: ... the rate forms through a lag of their own
+LAGGED_RATES = ("dTlagdt", "dchanlag")
 
 
 #: second-order forms a lookahead tries beside a tied candidate (:func:`lookahead`)

@@ -167,11 +167,12 @@ that the model under judgment cannot move:
    plain form with its best partner among the pool and the rate forms of other channels
    brings the held-out RMS ≥ 10 % below the lag with its own: the lag's time constant stood
    in for a missing rate term. The other way round, a plain form chosen (``T``, ``chan``)
-   gives way to its lag, itself a missing effect, when the lag with its best partner among
-   the pool and every rate form (the channel's own first) brings the held-out RMS ≥ 10 %
-   below the plain form with its own (the level with its own rate is the lag's first-order
-   expansion): a lagged node and its sensor's rate hide each other, and the lag keeps the
-   time constant it takes beside that rate even where alone it is not resolved
+   gives way to its lag, itself a missing effect, when the lag with its best rate form as
+   partner (the channel's own first, not its own lagged rate) brings the held-out RMS
+   ≥ 10 % below the plain form alone and with any rate form (the level with its own rate is
+   the lag's first-order expansion): a lagged node and its sensor's rate hide each other,
+   and the lag keeps the time constant it takes beside that rate even where alone it is not
+   resolved
    (:func:`gyrotest.envmodel.pairs.lag_or_plain`). A product of two channels (``chanprod``,
    ``gprod``, ``Hprod``) chosen while the first-order terms of its factors are not in the
    model gives way to those terms when, fitted together, they do ≥ 10 % better and pass

@@ -405,7 +405,7 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
         return chosen
     if not lag_chosen and plain.rms_holdout < best[id(plain)][0]:
         # the level needs no partner: the lag must beat it alone
-        best[id(plain)] = (plain.rms_holdout, "nothing")
+        best[id(plain)] = (plain.rms_holdout, "")
     if best[id(other)][0] > PAIR_MARGIN * best[id(chosen)][0]:
         return chosen
     if not lag_chosen:
@@ -426,7 +426,8 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     else:
         lag.note = (f"{plain.term} fits better alone, but with {best[id(lag)][1]} "
                     f"{lag.term} reaches {best[id(lag)][0]:.4g} deg/h and {plain.term} at "
-                    f"best {best[id(plain)][0]:.4g} deg/h (with {best[id(plain)][1]}): the "
+                    f"best {best[id(plain)][0]:.4g} deg/h "
+                    f"({'with ' + best[id(plain)][1] if best[id(plain)][1] else 'alone'}): the "
                     "lag and a rate term hid each other")
     return other
 

@@ -415,7 +415,11 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                                "cv_t": getattr(top, "cv_t", None),
                                "z": top.z, "spectral_z": getattr(top, "spectral_z", None),
                                "route": getattr(top, "route", None),
-                               "class": getattr(top, "klass", None)}
+                               "class": getattr(top, "klass", None),
+                               "pair": getattr(top, "pair", None) is not None,
+                               "chance": (top.chance.to_dict()
+                                          if getattr(top, "chance", None) is not None
+                                          else None)}
                 added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,
                               "equivalents": list(getattr(top, "equivalents", None) or [])})
             rm = getattr(d, "remove", None)

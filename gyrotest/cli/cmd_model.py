@@ -538,7 +538,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     phase-randomised surrogates of the residual (held out fold by fold as the diagnosis
     holds out the log) may reach its gain in at most 3 of them
     (surrogate p <= 0.1); otherwise the best other qualifying candidate whose own gain
-    passes that test is named, or none.
+    passes that test is named, or none. A channel term is set aside (left "possible") when
+    those surrogates reach its gain and so do 39 circular shifts and reversals of the
+    residual it leaves (the gyro's own excursions kept); a pair when the best pair of the
+    step's eight best candidates reaches its gain on the surrogates.
     A product of two channels gives way to the level terms of its factors when those do
     >= 10 % better together (no interaction without its main effects), and to the level of
     a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly

@@ -53,6 +53,10 @@ class ChanceTest:
 
     gain: float
     best: np.ndarray
+    #: "phase" (phase-randomised surrogates of the residual, single candidates), "shifts"
+    #: (circular shifts and reversals, :func:`shift_surrogates`) or "pairs" (phase
+    #: surrogates, pairs of candidates: :func:`pair_chance_test`)
+    kind: str = "phase"
 
     @property
     def k(self) -> int:
@@ -75,14 +79,16 @@ class ChanceTest:
         return float(np.quantile(self.best[np.isfinite(self.best)], 0.9))
 
     def text(self) -> str:
+        what = ("pair of candidates" if self.kind == "pairs" else "candidate")
         return (f"its held-out gain ({100 * self.gain:.1f} %) is within what the best "
-                "candidate reaches on noise with the residual's own spectrum: "
+                f"{what} reaches on noise with the residual's own spectrum: "
                 f"{self.exceed} of {self.k} phase-randomised surrogates of the residual reach "
                 f"it (90th percentile {100 * self.q90:.1f} %), so it may be a fit to the "
                 "gyro's own slow noise")
 
     def to_dict(self) -> dict:
-        return {"gain_pct": 100 * self.gain, "surrogates": self.k, "exceed": self.exceed,
+        return {"kind": self.kind, "gain_pct": 100 * self.gain, "surrogates": self.k,
+                "exceed": self.exceed,
                 "q90_pct": 100 * self.q90,
                 "max_pct": 100 * float(np.max(self.best[np.isfinite(self.best)])), "p": self.p}
 
@@ -158,15 +164,39 @@ def regressors(design, cand, wd, grid: int) -> list[np.ndarray]:
     return out
 
 
+def shift_surrogates(e: np.ndarray, k: int) -> np.ndarray:
+    """K circular shifts of the series ``e`` and of ``e`` reversed in time (columns of an
+    n x K array, mean removed): the first K//2 shift e by 10 %-90 % of its length, the others
+    shift the reversed series by 0 %-90 %.
+
+    Unlike a phase-randomised surrogate, a shift keeps the series itself -- its amplitude
+    distribution and its few large, non-stationary excursions (the hump and the drop of a
+    real MEMS gyro's wander, ADIS16405 record) -- and only moves it against the logged
+    channels; reversal adds shapes a causal lag of a channel cannot reach by delay alone.
+    Under the hypothesis that the series is independent of the channels a shift is as likely
+    as the record itself (the torus-translation test: R. Harms, K. E. Condit, S. P. Hubbell
+    and R. B. Foster, "Habitat associations of trees and shrubs in a 50-ha neotropical forest
+    plot", Journal of Ecology 89, 2001, 947-959)."""
+    e = np.asarray(e, float) - float(np.mean(e))
+    n = len(e)
+    h = k // 2
+    cols = [np.roll(e, int(f * n)) for f in np.linspace(0.1, 0.9, h)]
+    cols += [np.roll(e[::-1], int(f * n)) for f in np.linspace(0.0, 0.9, k - h)]
+    return np.column_stack(cols)
+
+
 def best_chance_gains(Xb: np.ndarray, e: np.ndarray, regs: list[np.ndarray],
                       fold: np.ndarray, masks: list[np.ndarray], k: int,
-                      rng: np.random.Generator) -> np.ndarray:
+                      rng: np.random.Generator | None, S: np.ndarray | None = None
+                      ) -> np.ndarray:
     """M_k of the module docstring: for each of ``k`` phase-randomised surrogates of the
-    residual ``e``, the largest held-out gain (fraction) any regressor block of ``regs``
-    gives beside the base design ``Xb`` (-inf where none could be fitted)."""
-    S = phase_surrogates(e, k, rng)
+    residual ``e`` (or each column of ``S`` when given), the largest held-out gain
+    (fraction) any regressor block of ``regs`` gives beside the base design ``Xb`` (-inf
+    where none could be fitted)."""
+    if S is None:
+        S = phase_surrogates(e, k, rng)
     r0 = holdout_rms(Xb, S, fold, masks)
-    best = np.full(k, -np.inf)
+    best = np.full(S.shape[1], -np.inf)
     for xb in regs:
         if not np.all(np.isfinite(xb)):
             continue
@@ -176,10 +206,13 @@ def best_chance_gains(Xb: np.ndarray, e: np.ndarray, regs: list[np.ndarray],
 
 
 def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
-                seed: int) -> ChanceTest | None:
+                seed: int, resid: np.ndarray | None = None, shifts: bool = False
+                ) -> ChanceTest | None:
     """The look-elsewhere surrogate test (module docstring) of a held-out ``gain`` (fraction)
     chosen among the judged candidates ``cands`` of a step on the fitted ``base`` model;
-    None when no candidate regressor could be built."""
+    None when no candidate regressor could be built. ``resid``: the series whose surrogates
+    are drawn (default the base model's residual); ``shifts``: circular shifts and reversals
+    (:func:`shift_surrogates`) instead of phase randomisation."""
     chunk, buf, _ = cv_layout(wd, folds)
     fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
     fitter = base._fitter  # type: ignore[attr-defined]
@@ -191,11 +224,46 @@ def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
             regs += regressors(fitter.d, c, wd, grid)
         except (ValueError, KeyError, FloatingPointError, np.linalg.LinAlgError):
             continue
+    e = base.resid if resid is None else resid  # type: ignore[attr-defined]
+    S = shift_surrogates(e, k) if shifts else None
+    best = best_chance_gains(fitter.X(base._thetas), e,  # type: ignore[attr-defined]
+                             regs, fold, masks, k, np.random.default_rng(seed), S=S)
+    if not np.isfinite(best).any():
+        return None
+    return ChanceTest(gain=gain, best=best, kind="shifts" if shifts else "phase")
+
+
+def pair_chance_test(wd, base, cands, a, b, gain: float, *, folds: int, k: int, top: int,
+                     seed: int) -> ChanceTest | None:
+    """The look-elsewhere surrogate test of a pair (``a``, ``b``) chosen together with a
+    held-out ``gain`` (fraction): M_k is the best held-out gain any pair of the ``top``
+    single candidates of the step (best held-out RMS first, the two members included, each
+    at its fitted nonlinear parameters) reaches on the k-th phase-randomised surrogate of
+    the base model's residual. None when fewer than two regressors could be built."""
+    chunk, buf, _ = cv_layout(wd, folds)
+    fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
+    fitter = base._fitter  # type: ignore[attr-defined]
+    singles = sorted((c for c in cands if c.spec is not None and not c.replaces
+                      and c.pair is None and not c.error and np.isfinite(c.rms_holdout)),
+                     key=lambda c: c.rms_holdout)[:top]
+    for m in (a, b):
+        if m is not None and m.spec is not None and all(m is not c for c in singles):
+            singles.append(m)
+    blocks = []
+    for c in singles:
+        try:
+            blocks.append(regressors(fitter.d, c, wd, 0)[0])
+        except (ValueError, KeyError, FloatingPointError, np.linalg.LinAlgError, IndexError):
+            continue
+    regs = [np.column_stack([blocks[i], blocks[j]])
+            for i in range(len(blocks)) for j in range(i + 1, len(blocks))]
+    if not regs:
+        return None
     best = best_chance_gains(fitter.X(base._thetas), base.resid,  # type: ignore[attr-defined]
                              regs, fold, masks, k, np.random.default_rng(seed))
     if not np.isfinite(best).any():
         return None
-    return ChanceTest(gain=gain, best=best)
+    return ChanceTest(gain=gain, best=best, kind="pairs")
 
 
 __all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]

@@ -151,6 +151,13 @@ that the model under judgment cannot move:
    own gain the same surrogates do not reach is chosen, or none (the term stays a
    "possible" effect): its shape is free enough to fit the gyro's
    own slow noise, and it was the best of many.
+   A channel term chosen on the strict, clear-gain or far route, or a pair, is tested for
+   chance too (:func:`_channel_chance_gate`): a single term is set aside when the phase
+   surrogates of the base residual reach its gain (p > 0.1) *and* so do 39 circular shifts
+   and reversals of the residual the term itself leaves (a real gyro's own excursions kept
+   in place, the term's own power removed); a pair when the best pair of the step's eight
+   best candidates reaches its gain on the phase surrogates. The step then names nothing
+   and its best candidate stays a "possible" effect.
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
@@ -261,7 +268,7 @@ from .candidate import (
     equivalents,
     held_out_gain,
 )
-from .chance import chance_test
+from .chance import chance_test, pair_chance_test
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .groups import group_step
@@ -279,6 +286,8 @@ from .rules import (
     CHANCE_KEYS,
     CHANCE_P,
     CHANCE_SEED,
+    CHANNEL_CHANCE_ROUTES,
+    PAIR_CHANCE_TOP,
     CLEAR_GAIN,
     CLEAR_P,
     CLEAR_P_NUISANCE,
@@ -567,6 +576,11 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # which no addition on the surrogates represents (seed 36096: a ramp in place of a
         # case temperature that drifted with it, -28 % held out)
         chosen = _chance_gate(wd, base, out, chosen, folds)
+    elif (candidates is None and not nested and chosen is not None and chosen.replaces is None
+          and chosen.spec is not None and chosen.klass != "nuisance"
+          and chosen.route is not None and (chosen.route in CHANNEL_CHANCE_ROUTES
+                                            or chosen.route.startswith("together with"))):
+        chosen = _channel_chance_gate(wd, base, out, chosen, folds)
     return out, chosen
 
 
@@ -610,6 +624,65 @@ def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
     nxt = min(other, key=lambda c: c.rms_holdout)
     nxt.equivalents = equivalents(nxt, out, base)
     return nxt
+
+
+def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
+                         ) -> Candidate | None:
+    """The look-elsewhere tests of a chosen channel term or pair
+    (:data:`CHANNEL_CHANCE_ROUTES`): the term; or None (every candidate of the step set
+    aside, the best left as a "possible" effect) when its held-out gain is one that
+    chance reaches on noise like the residual's.
+
+    * A single term must beat the phase-randomised surrogates of the base residual
+      (:func:`.chance.chance_test`, surrogate p ≤ :data:`CHANCE_P`) *or* the circular
+      shifts and reversals of the residual the term itself leaves
+      (:func:`.chance.shift_surrogates`). The first test carries a missed effect's own power
+      into every surrogate and alone is conservative for a true slow channel effect; the
+      second carries only what the term leaves, with a real gyro's own excursions in place.
+      A term both tests reach is set aside.
+    * A pair must beat the best pair of the step's :data:`PAIR_CHANCE_TOP` best single
+      candidates on phase-randomised surrogates of the base residual
+      (:func:`.chance.pair_chance_test`)."""
+    if chosen.pair is not None:
+        partner = next((c for c in out if c.term == chosen.pair[0]), None)
+        gain = 1.0 - chosen.pair[1] / base.rms_holdout if base.rms_holdout > 0 else math.nan
+        if not math.isfinite(gain):
+            return chosen
+        test = pair_chance_test(wd, base, out, chosen, partner, gain, folds=folds,
+                                k=CHANCE_K, top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
+        if test is None:
+            return chosen
+        chosen.chance = test
+        if test.p <= CHANCE_P:
+            return chosen
+        note = test.text()
+    else:
+        gain = chosen.improvement_pct / 100.0
+        fit = chosen._fit
+        if not math.isfinite(gain) or fit is None or fit.resid is None:
+            return chosen
+        test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
+                           seed=CHANCE_SEED)
+        if test is None:
+            return chosen
+        chosen.chance = test
+        if test.p <= CHANCE_P:
+            return chosen
+        shifted = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
+                              seed=CHANCE_SEED, resid=fit.resid, shifts=True)
+        if shifted is None or shifted.p <= CHANCE_P:
+            return chosen
+        note = (f"{test.text()}; and {shifted.exceed} of {shifted.k} circular shifts and "
+                "reversals of the residual it leaves (the gyro's own excursions kept) reach "
+                f"it too (p = {shifted.p:.2f})")
+    for c in out:
+        c.significant = False
+        c.route = None
+    chosen.significant = False
+    chosen.route = None
+    chosen.pair = None
+    chosen.note = note
+    return None
 
 
 def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ratio, alpha,

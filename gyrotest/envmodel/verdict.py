@@ -10,6 +10,7 @@ from .candidate import Candidate, uses_channel
 from .fit import FitResult
 from .rules import (
     AT_FLOOR,
+    CHANCE_P,
     FAR_T_NUISANCE,
     FAR_Z,
     MIN_IMPROVEMENT,
@@ -125,6 +126,9 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
                 f"deg/h) is at {fl_txt}, ratio {ratio:.2f}"), None
     ok = [c for c in cands if math.isfinite(c.improvement_pct) and c.rejected is None]
     best = max(ok, key=lambda c: c.improvement_pct) if ok else None
+    # a term a look-elsewhere test set aside (diagnose._chance_gate, _channel_chance_gate)
+    aside = next((c for c in cands if c.chance is not None and c.note and not c.significant
+                  and c.chance.p > CHANCE_P), None)
     if (best is not None and math.isfinite(best.gain_scatter_pct)
             and best.improvement_pct > max(best.gain_scatter_pct, 100 * MIN_IMPROVEMENT)):
         return (f"possible missing effect: {best.term} — {best.effect}; held-out RMS "
@@ -132,12 +136,16 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
                 f"({-best.improvement_pct:+.1f} %, more than the fold-to-fold scatter "
                 f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}"
                 + (f"; {best.note}" if best.chance is not None and best.note else "") + "); "
-                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log"), best
+                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log"
+                + (f"; {aside.term} was set aside: {aside.note}"
+                   if aside is not None and aside is not best else "")), best
     rej = [c for c in cands if c.rejected]
     v = ("no missing effect found among the candidates"
          + (f"; the held-out residual is {ratio:.2g}x {fl_txt}: an effect outside the "
             "library and the channel screen, or noise slower than white/flicker (random "
             "walk, Markov); see the excursions" if math.isfinite(ratio) else ""))
+    if aside is not None:
+        v += f"; {aside.term} was set aside: {aside.note}"
     if rej:
         v += f"; {rej[0].term} was rejected: {rej[0].rejected}"
     return v, None

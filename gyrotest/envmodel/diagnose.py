@@ -288,6 +288,7 @@ from .rules import (
     CHANCE_KEYS,
     CHANCE_P,
     CHANCE_SEED,
+    CHANNEL_CHANCE_OTHERS,
     CHANNEL_CHANCE_RATIO,
     CHANNEL_CHANCE_ROUTES,
     CLEAR_GAIN,
@@ -643,7 +644,8 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
       (:func:`.chance.shift_surrogates`). The first test carries a missed effect's own power
       into every surrogate and alone is conservative for a true slow channel effect; the
       second carries only what the term leaves, with a real gyro's own excursions in place.
-      A term both tests reach is set aside.
+      A term both tests reach is set aside, and the next qualifying candidate (best held-out
+      first, at most :data:`CHANNEL_CHANCE_OTHERS`) that beats either test is named instead.
     * A pair must beat the best pair of the step's :data:`PAIR_CHANCE_TOP` best single
       candidates on phase-randomised surrogates of the base residual
       (:func:`.chance.pair_chance_test`)."""
@@ -662,8 +664,7 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
         note = test.text()
     else:
         gain = chosen.improvement_pct / 100.0
-        fit = chosen._fit
-        if not math.isfinite(gain) or fit is None or fit.resid is None:
+        if not math.isfinite(gain):
             return chosen
         test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
                            seed=CHANCE_SEED)
@@ -672,21 +673,46 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
         chosen.chance = test
         if test.p <= CHANCE_P:
             return chosen
-        shifted = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                              seed=CHANCE_SEED, resid=fit.resid, shifts=True)
-        if shifted is None or shifted.p <= CHANCE_P:
+        if _beats_shifts(wd, base, out, chosen, gain, folds):
             return chosen
-        note = (f"{test.text()}; and {shifted.exceed} of {shifted.k} circular shifts and "
-                "reversals of the residual it leaves (the gyro's own excursions kept) reach "
-                f"it too (p = {shifted.p:.2f})")
-    for c in out:
-        c.significant = False
-        c.route = None
+        note = (f"{test.text()}; and so do the circular shifts and reversals of the "
+                "residual it leaves (the gyro's own excursions kept)")
     chosen.significant = False
     chosen.route = None
     chosen.pair = None
     chosen.note = note
+    if chosen.chance.kind == "phase":
+        # the same surrogates judge the other qualifying candidates, best held-out first:
+        # the first whose gain they do not reach, or that beats the shifts of its own
+        # residual, is named (seed 63180: a rotated field component set aside beside a
+        # temperature level on the strict route)
+        others = sorted((c for c in out if c is not chosen and c.significant
+                         and c.pair is None and c.replaces is None and c.spec is not None
+                         and math.isfinite(c.improvement_pct)
+                         and math.isfinite(c.rms_holdout)), key=lambda c: c.rms_holdout)
+        for c in others[:CHANNEL_CHANCE_OTHERS]:
+            g = c.improvement_pct / 100.0
+            if chosen.chance.p_of(g) <= CHANCE_P or (
+                    c.klass != "nuisance" and _beats_shifts(wd, base, out, c, g, folds)):
+                c.equivalents = equivalents(c, out, base)
+                return c
+    for c in out:
+        c.significant = False
+        c.route = None
     return None
+
+
+def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int
+                  ) -> bool:
+    """Whether candidate ``c``'s held-out ``gain`` (fraction) beats the best chance gains on
+    the circular shifts and reversals of the residual ``c`` itself leaves
+    (:func:`.chance.shift_surrogates`; p ≤ :data:`CHANCE_P`), or cannot be tested."""
+    fit = c._fit
+    if fit is None or fit.resid is None:
+        return True
+    shifted = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
+                          seed=CHANCE_SEED, resid=fit.resid, shifts=True)
+    return shifted is None or shifted.p <= CHANCE_P
 
 
 def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ratio, alpha,

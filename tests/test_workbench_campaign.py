@@ -35,14 +35,16 @@ def _loop(seed: int) -> tuple[dict, list[str]]:
     return row, [a["label"] for a in row["added"]]
 
 
-def _assert_real_null_quiet(seed: int) -> None:
-    """A null case on real ADIS16405 noise (skipped without ``../shared``): no alarm."""
+def _assert_real_null_quiet(seed: int) -> dict:
+    """A null case on real ADIS16405 noise (skipped without ``../shared``): no alarm.
+    Returns the campaign row."""
     bw, ws = _bench()
     if not ws.real_noise_available():
         pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
     row = bw.run_case(ws.make_case(seed, null=True))
     assert row["noise"]["type"] == "real"
     assert not row["alarm"], row["added"]
+    return row
 
 
 def _diagnose_base(seed: int, extra: tuple[str, ...] = ()):
@@ -870,11 +872,5 @@ def test_a_channel_fit_to_real_wander_that_chance_reaches_is_left_possible(seed,
     single term's on the phase surrogates of the residual (p 0.34) and on the circular shifts
     of the residual it leaves (0.12), the pair's against the best pair of the step's
     candidates (0.73) -- so the step names nothing and says which term it set aside, why."""
-    bw, ws = _bench()
-    if not ws.real_noise_available():
-        pytest.skip("real ADIS16405 log not found (../shared beside the repo)")
-    row = bw.run_case(ws.make_case(seed, null=True))
-    assert row["noise"]["type"] == "real"
-    assert not row["alarm"], row["added"]
-    v = row["steps"][0]["verdict"]
+    v = _assert_real_null_quiet(seed)["steps"][0]["verdict"]
     assert not v.startswith("missing effect") and why in v and "set aside" in v, v

@@ -597,15 +597,8 @@ def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
     gain on noise with the residual's own spectrum, the best other significant candidate
     that is not a nuisance term and whose own gain the surrogates do not reach, else None
     (the nuisance term stays a "possible" effect)."""
-    gain = chosen.improvement_pct / 100.0
-    if not math.isfinite(gain):
-        return chosen
-    test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                       seed=CHANCE_SEED)
-    if test is None:
-        return chosen
-    chosen.chance = test
-    if test.p <= CHANCE_P:
+    test = _phase_test(wd, base, out, chosen, folds)
+    if test is None or test.p <= CHANCE_P:
         return chosen
     chosen.significant = False
     chosen.route = None
@@ -663,17 +656,9 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
             return chosen
         note = test.text()
     else:
-        gain = chosen.improvement_pct / 100.0
-        if not math.isfinite(gain):
-            return chosen
-        test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                           seed=CHANCE_SEED)
-        if test is None:
-            return chosen
-        chosen.chance = test
-        if test.p <= CHANCE_P:
-            return chosen
-        if _beats_shifts(wd, base, out, chosen, gain, folds):
+        test = _phase_test(wd, base, out, chosen, folds)
+        if test is None or test.p <= CHANCE_P or _beats_shifts(wd, base, out, chosen,
+                                                               test.gain, folds):
             return chosen
         note = (f"{test.text()}; and so do the circular shifts and reversals of the "
                 "residual it leaves (the gyro's own excursions kept)")
@@ -700,6 +685,20 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
         c.significant = False
         c.route = None
     return None
+
+
+def _phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int):
+    """The look-elsewhere test of ``chosen``'s held-out gain on phase-randomised surrogates
+    of the base residual (:func:`.chance.chance_test`), kept as ``chosen.chance``; None when
+    it cannot be run."""
+    gain = chosen.improvement_pct / 100.0
+    if not math.isfinite(gain):
+        return None
+    test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
+                       seed=CHANCE_SEED)
+    if test is not None:
+        chosen.chance = test
+    return test
 
 
 def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int

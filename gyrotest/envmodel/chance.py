@@ -28,10 +28,16 @@ any candidate of the step reaches on noise with the same spectrum as the model's
    of the candidates reaches on the residual's own noise.
 
 A true effect the base model misses is itself part of e, so its surrogates carry its power
-with random phases; the test is conservative there, which is why it is applied to these
-three nuisance terms only (the campaign's true slow channel effects of a chamber profile
-with few cycles reach p 0.1-0.25, benchmarks/README.md), and not to a free sinusoid, whose
+with random phases; the test is conservative there, which is why it alone decides only for
+these three nuisance terms (the campaign's true slow channel effects of a chamber profile
+with few cycles reach p 0.1-0.25, benchmarks/README.md), and not for a free sinusoid, whose
 own spectral line every surrogate keeps (its sine and cosine coefficients fit any phase).
+A channel term chosen below ten times the floor is set aside only when, besides, the
+circular shifts and reversals of the residual the term itself leaves reach its gain
+(:func:`shift_surrogates`: the term's own power removed, the gyro's own excursions kept);
+a pair is tested against the best pair of the step's best candidates
+(:func:`pair_chance_test`). Both are applied by
+:func:`gyrotest.envmodel.diagnose._channel_chance_gate`.
 """
 
 from __future__ import annotations
@@ -266,5 +272,6 @@ def pair_chance_test(wd, base, cands, a, b, gain: float, *, folds: int, k: int, 
     return ChanceTest(gain=gain, best=best, kind="pairs")
 
 
-__all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "phase_surrogates", "regressors"]
+__all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "pair_chance_test",
+           "phase_surrogates", "regressors", "shift_surrogates"]
 

@@ -141,8 +141,9 @@ WARMUP_CLEAR_P = 0.01
 #: −52 %; synthetic: two hysteresis branches −7 % and −10 %), the other four p 0.025 (a
 #: real gyro's own warm-up, ramp and sinusoid among them); the 44 true single nuisance
 #: effects of seeds 45000-45199 and 47000-47199 all p ≤ 0.05. Channel terms are not
-#: tested: the true slow effects of a chamber profile with few cycles are themselves most of
-#: the residual, and reached p 0.1-0.25 against its surrogates. Until the thirty-first pass
+#: judged by this test alone (CHANNEL_CHANCE_ROUTES below): the true slow effects of a
+#: chamber profile with few cycles are themselves most of the residual, and reached p
+#: 0.1-0.25 against its surrogates. Until the thirty-first pass
 #: the surrogates were held out with plain least squares per fold, not the diagnosis's fold
 #: fits (free only along the directions a fold's training blocks support): on a Helmholtz
 #: or tilt sequence whose one two-axis setting lies in one chunk that fold was near-singular,

@@ -157,9 +157,10 @@ that the model under judgment cannot move:
    and reversals of the residual the term itself leaves (a real gyro's own excursions kept
    in place, the term's own power removed); a pair when the best pair of the step's eight
    best candidates reaches its gain on the phase surrogates. The step then names nothing
-   and its best candidate stays a "possible" effect. The gate applies below 10 × the floor
-   (:data:`gyrotest.envmodel.rules.CHANNEL_CHANCE_RATIO`): further above it the residual is
-   mostly missing effects, which every surrogate carries.
+   and its best candidate stays a "possible" effect. The gate applies from 2 to 10 × the
+   floor (:data:`gyrotest.envmodel.rules.CHANNEL_CHANCE_RATIO`): further above it the
+   residual is mostly missing effects, which every surrogate carries; nearer the floor a
+   true follow-up effect is small beside the noise (seed 15000).
 5. **Ranking**: held-out RMS × (1 + parameters/blocks), parameters counting every searched
    nonlinear parameter. Among missing effects whose held-out RMS is within 2 % of the best,
    a channel-based explanation is preferred to a nuisance term (library < second order <
@@ -582,7 +583,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         chosen = _chance_gate(wd, base, out, chosen, folds)
     elif (candidates is None and not nested and chosen is not None and chosen.replaces is None
           and chosen.spec is not None and chosen.klass != "nuisance"
-          and base_ratio < CHANNEL_CHANCE_RATIO
+          and FAR_RATIO <= base_ratio < CHANNEL_CHANCE_RATIO
           and chosen.route is not None and (chosen.route in CHANNEL_CHANCE_ROUTES
                                             or chosen.route.startswith("together with"))):
         chosen = _channel_chance_gate(wd, base, out, chosen, folds)

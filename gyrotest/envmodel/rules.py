@@ -182,7 +182,9 @@ PAIR_CHANCE_TOP = 8
 #: the floor chosen first at 26.7 x beside a missing warm-up and pressure level, p 0.34 and
 #: 0.56). The real gyro's own wander left the true model at a median 3.4 x and a 90th
 #: percentile 9.9 x the short-τ floor over the 202 real-noise nulls; the ten alarms the
-#: gate removed there were at 1.9-9.5 x
+#: gate removed there were at 1.9-9.5 x. Nor below FAR_RATIO: near the floor a true
+#: follow-up effect is small beside the noise, and the gate set aside the rate of a case
+#: temperature that completes the model of seed 15000 (test_workbench_campaign)
 CHANNEL_CHANCE_RATIO = 10.0
 #: ... and when a single term is set aside, the other qualifying candidates are judged by the
 #: same tests, best held-out first, at most CHANNEL_CHANCE_OTHERS of them; the first that

@@ -279,11 +279,14 @@ def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> li
 
 
 def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
-             reference: bool = False) -> dict:
+             reference: bool = False, path_steps: int = 1) -> dict:
     """Run one case through gyrotest (see the module docstring); returns a JSON-able row.
     ``loop=False`` only fits the true model (the harness check). ``reference``: the floor comes
     from a static reference run of the same simulated gyro (:func:`workbench_sim.reference_noise`,
-    as ``--reference LOG`` does) instead of the log's own noise."""
+    as ``--reference LOG`` does) instead of the log's own noise. ``path_steps``: the steps of
+    the forward path each diagnosis follows (``model diagnose --path``). The loop adds only
+    the chosen effect and diagnoses again, so the path's further steps ("then X" in the
+    verdict) change no decision of the loop; the default 1 skips them."""
     from gyrotest.envmodel import diagnose, fit_model, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
     from gyrotest.ingest import read_log
@@ -387,7 +390,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         for k in range(max_steps):
             stage = f"diagnose step {k}"
             t1 = time.perf_counter()
-            d = diagnose(wd, terms)
+            d = diagnose(wd, terms, path_steps=path_steps)
             dt = time.perf_counter() - t1
             found = d.found
             step = {"step": k, "terms": [s.label for s in terms], "verdict": d.verdict,
@@ -775,7 +778,7 @@ def markdown(s: dict, *, title: str = "") -> str:
 
 # ============================================================================ campaign
 def _job(args: tuple) -> dict:
-    seed, kind, max_hours, max_steps, loop, reference, null = args
+    seed, kind, max_hours, max_steps, loop, reference, null, path_steps = args
     t0 = time.perf_counter()
     try:
         case = ws.make_case(seed, kind, max_hours=max_hours, null=null)
@@ -784,19 +787,21 @@ def _job(args: tuple) -> dict:
                 "error": _fmt_err(e), "traceback": traceback.format_exc(limit=6),
                 "null": False, "truth": [], "times": {"total_s": time.perf_counter() - t0}}
     t_sim = time.perf_counter() - t0
-    row = run_case(case, max_steps=max_steps, loop=loop, reference=reference)
+    row = run_case(case, max_steps=max_steps, loop=loop, reference=reference,
+                   path_steps=path_steps)
     row["times"]["simulate_s"] = t_sim
     return row
 
 
 def run_campaign(seeds: list[int], *, kinds: list[str] | None = None, jobs: int = 1,
                  max_hours: float | None = None, max_steps: int = MAX_STEPS, loop: bool = True,
-                 progress: bool = True, reference: bool = False, nulls: bool = False
-                 ) -> list[dict]:
+                 progress: bool = True, reference: bool = False, nulls: bool = False,
+                 path_steps: int = 1) -> list[dict]:
     """Run every seed (in a multiprocessing Pool when ``jobs`` > 1); rows in seed order.
-    ``nulls``: every case has nothing missing (false alarms only)."""
-    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference, nulls)
-             for s in seeds]
+    ``nulls``: every case has nothing missing (false alarms only); ``path_steps``: see
+    :func:`run_case`."""
+    tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference, nulls,
+              path_steps) for s in seeds]
     rows: list[dict] = []
     t0 = time.perf_counter()
 
@@ -873,6 +878,9 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"~20 short cases (seeds {QUICK_SEEDS.start}-{QUICK_SEEDS.stop - 1}, "
                          f"kinds cycled, <= {QUICK_MAX_HOURS:g} h) for the test suite")
     ap.add_argument("--max-steps", type=int, default=MAX_STEPS, help="diagnoses per case")
+    ap.add_argument("--path-steps", type=int, default=1,
+                    help="forward-path steps per diagnosis (model diagnose --path; the loop's "
+                         "decisions do not depend on it, only the verdict's 'then X' text)")
     ap.add_argument("--max-hours", type=float, default=None, help="cap the record length")
     ap.add_argument("--reference", action="store_true",
                     help="give every case a static reference run of the same simulated gyro "
@@ -909,7 +917,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     rows = run_campaign(seeds, kinds=kinds, jobs=a.jobs, max_hours=max_hours,
                         max_steps=a.max_steps, loop=not a.validate, reference=a.reference,
-                        nulls=a.nulls)
+                        nulls=a.nulls, path_steps=a.path_steps)
     wall = time.perf_counter() - t0
     s = summarise(rows)
     rng = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else \

@@ -176,3 +176,23 @@ def test_expression_huge_power_does_not_hang():
 def test_termspec_dict_roundtrip():
     for s in parse_terms("T2(T_coil),dGdt(a,b),warmup,vib:extra.v*2"):
         assert TermSpec.from_dict(s.to_dict()) == s
+
+
+def test_moving_mean_equals_the_direct_window_mean_with_shrinking_ends():
+    """The cumulative-sum moving mean (full windows on slices, shrinking ones at each
+    segment's ends) against the mean of each window written out, over segment lengths below,
+    at and above the window, and over segment bounds."""
+    from gyrotest.envmodel.effects import moving_mean
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 5, 14, 15, 16, 40):
+        for half in (1, 3, 7):
+            x = 100.0 + rng.normal(size=n).cumsum()
+            bounds = [(0, n // 3), (n // 3, n)] if n > 2 else None
+            want = np.empty(n)
+            for a, b in bounds or [(0, n)]:
+                for i in range(a, b):
+                    h = min(half, i - a, b - 1 - i)
+                    want[i] = x[i - h:i + h + 1].mean()
+            got = moving_mean(x, half, bounds)
+            assert np.allclose(got, want, rtol=0, atol=1e-10), (n, half)

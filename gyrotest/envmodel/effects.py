@@ -46,16 +46,24 @@ def moving_mean(x: np.ndarray, half: int, bounds: list[tuple[int, int]] | None =
     symmetrically near the segment ends). Units: those of x."""
     x = np.asarray(x, dtype=np.float64)
     out = np.empty_like(x)
+    w = 2 * half + 1
     for a, b in bounds or [(0, len(x))]:
         seg = x[a:b]
         n = len(seg)
         if n == 0:
             continue
-        h = np.minimum(np.minimum(np.arange(n), n - 1 - np.arange(n)), half)
         off = seg[0]
-        c = np.concatenate([[0.0], np.cumsum(seg - off)])
-        k = np.arange(n)
-        out[a:b] = (c[k + h + 1] - c[k - h]) / (2 * h + 1) + off
+        c = np.empty(n + 1)
+        c[0] = 0.0
+        np.cumsum(seg - off, out=c[1:])
+        if n >= w:
+            # the full window on slices; only the ends take the shrinking one
+            out[a + half:b - half] = (c[w:] - c[:n + 1 - w]) / w + off
+            k = np.concatenate([np.arange(half), np.arange(n - half, n)])
+        else:
+            k = np.arange(n)
+        h = np.minimum(np.minimum(k, n - 1 - k), half)
+        out[a + k] = (c[k + h + 1] - c[k - h]) / (2 * h + 1) + off
     return out
 
 

@@ -89,10 +89,12 @@ class WorkData:
     def bmean(self, x: np.ndarray) -> np.ndarray:
         """Block means of a fine-grid array (n_f,) or (n_f, k)."""
         sel = self._sel
-        ids = self.block[sel]
+        ids, every = self._ids
         if x.ndim == 1:
-            return np.bincount(ids, weights=x[sel], minlength=self.nb) / self.counts
-        return np.column_stack([np.bincount(ids, weights=x[sel, j], minlength=self.nb)
+            return np.bincount(ids, weights=x if every else x[sel],
+                               minlength=self.nb) / self.counts
+        return np.column_stack([np.bincount(ids, weights=x[:, j] if every else x[sel, j],
+                                            minlength=self.nb)
                                 / self.counts for j in range(x.shape[1])])
 
     def smooth(self, x: np.ndarray) -> np.ndarray:
@@ -108,6 +110,14 @@ class WorkData:
         if not hasattr(self, "_sel_cache"):
             self._sel_cache = self.block >= 0
         return self._sel_cache
+
+    @property
+    def _ids(self) -> tuple[np.ndarray, bool]:
+        """The block id of each selected fine sample, and whether every sample is selected."""
+        if not hasattr(self, "_ids_cache"):
+            sel = self._sel
+            self._ids_cache = (self.block[sel], bool(sel.all()))
+        return self._ids_cache
 
 
 def _nice_floor(x: float) -> float:

@@ -211,18 +211,12 @@ def best_chance_gains(Xb: np.ndarray, e: np.ndarray, regs: list[np.ndarray],
     return best
 
 
-def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
-                seed: int, resid: np.ndarray | None = None, shifts: bool = False
-                ) -> ChanceTest | None:
-    """The look-elsewhere surrogate test (module docstring) of a held-out ``gain`` (fraction)
-    chosen among the judged candidates ``cands`` of a step on the fitted ``base`` model;
-    None when no candidate regressor could be built. ``resid``: the series whose surrogates
-    are drawn (default the base model's residual); ``shifts``: circular shifts and reversals
-    (:func:`shift_surrogates`) instead of phase randomisation."""
-    chunk, buf, _ = cv_layout(wd, folds)
-    fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
+def candidate_regressors(wd, base, cands, grid: int) -> list[np.ndarray]:
+    """The block regressors (:func:`regressors`) of every single candidate of ``cands`` that
+    adds a term to the fitted ``base`` model (no swap, no pair, no failed fit): the
+    candidates :func:`chance_test` maximises over."""
     fitter = base._fitter  # type: ignore[attr-defined]
-    regs = []
+    regs: list[np.ndarray] = []
     for c in cands:
         if c.spec is None or c.replaces or c.pair is not None or c.error:
             continue
@@ -230,6 +224,23 @@ def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
             regs += regressors(fitter.d, c, wd, grid)
         except (ValueError, KeyError, FloatingPointError, np.linalg.LinAlgError):
             continue
+    return regs
+
+
+def chance_test(wd, base, cands, gain: float, *, folds: int, k: int, grid: int,
+                seed: int, resid: np.ndarray | None = None, shifts: bool = False,
+                regs: list[np.ndarray] | None = None) -> ChanceTest | None:
+    """The look-elsewhere surrogate test (module docstring) of a held-out ``gain`` (fraction)
+    chosen among the judged candidates ``cands`` of a step on the fitted ``base`` model;
+    None when no candidate regressor could be built. ``resid``: the series whose surrogates
+    are drawn (default the base model's residual); ``shifts``: circular shifts and reversals
+    (:func:`shift_surrogates`) instead of phase randomisation; ``regs``: the candidates'
+    regressors when already built (:func:`candidate_regressors` of ``cands``)."""
+    chunk, buf, _ = cv_layout(wd, folds)
+    fold, masks = holdout_folds(wd.nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
+    fitter = base._fitter  # type: ignore[attr-defined]
+    if regs is None:
+        regs = candidate_regressors(wd, base, cands, grid)
     e = base.resid if resid is None else resid  # type: ignore[attr-defined]
     S = shift_surrogates(e, k) if shifts else None
     best = best_chance_gains(fitter.X(base._thetas), e,  # type: ignore[attr-defined]
@@ -272,6 +283,7 @@ def pair_chance_test(wd, base, cands, a, b, gain: float, *, folds: int, k: int, 
     return ChanceTest(gain=gain, best=best, kind="pairs")
 
 
-__all__ = ["ChanceTest", "best_chance_gains", "chance_test", "holdout_rms", "pair_chance_test",
+__all__ = ["ChanceTest", "best_chance_gains", "candidate_regressors", "chance_test",
+           "holdout_rms", "pair_chance_test",
            "phase_surrogates", "regressors", "shift_surrogates"]
 

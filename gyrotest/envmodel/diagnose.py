@@ -271,7 +271,7 @@ from .candidate import (
     equivalents,
     held_out_gain,
 )
-from .chance import chance_test, pair_chance_test
+from .chance import candidate_regressors, chance_test, pair_chance_test
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
 from .groups import group_step
@@ -657,9 +657,11 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
             return chosen
         note = test.text()
     else:
-        test = _phase_test(wd, base, out, chosen, folds)
+        # the candidates' regressors once for every test of the step below
+        regs = candidate_regressors(wd, base, out, CHANCE_GRID)
+        test = _phase_test(wd, base, out, chosen, folds, regs)
         if test is None or test.p <= CHANCE_P or _beats_shifts(wd, base, out, chosen,
-                                                               test.gain, folds):
+                                                               test.gain, folds, regs):
             return chosen
         note = (f"{test.text()}; and so do the circular shifts and reversals of the "
                 "residual it leaves (the gyro's own excursions kept)")
@@ -679,7 +681,8 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
         for c in others[:CHANNEL_CHANCE_OTHERS]:
             g = c.improvement_pct / 100.0
             if chosen.chance.p_of(g) <= CHANCE_P or (
-                    c.klass != "nuisance" and _beats_shifts(wd, base, out, c, g, folds)):
+                    c.klass != "nuisance" and _beats_shifts(wd, base, out, c, g, folds,
+                                                            regs)):
                 c.equivalents = equivalents(c, out, base)
                 return c
     for c in out:
@@ -688,22 +691,23 @@ def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, fold
     return None
 
 
-def _phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int):
+def _phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int,
+                regs: list | None = None):
     """The look-elsewhere test of ``chosen``'s held-out gain on phase-randomised surrogates
-    of the base residual (:func:`.chance.chance_test`), kept as ``chosen.chance``; None when
-    it cannot be run."""
+    of the base residual (:func:`.chance.chance_test`; ``regs`` the step's candidate
+    regressors when built), kept as ``chosen.chance``; None when it cannot be run."""
     gain = chosen.improvement_pct / 100.0
     if not math.isfinite(gain):
         return None
     test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                       seed=CHANCE_SEED)
+                       seed=CHANCE_SEED, regs=regs)
     if test is not None:
         chosen.chance = test
     return test
 
 
-def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int
-                  ) -> bool:
+def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int,
+                  regs: list | None = None) -> bool:
     """Whether candidate ``c``'s held-out ``gain`` (fraction) beats the best chance gains on
     the circular shifts and reversals of the residual ``c`` itself leaves
     (:func:`.chance.shift_surrogates`; p ≤ :data:`CHANCE_P`), or cannot be tested."""
@@ -711,7 +715,7 @@ def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, fol
     if fit is None or fit.resid is None:
         return True
     shifted = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                          seed=CHANCE_SEED, resid=fit.resid, shifts=True)
+                          seed=CHANCE_SEED, resid=fit.resid, shifts=True, regs=regs)
     return shifted is None or shifted.p <= CHANCE_P
 
 

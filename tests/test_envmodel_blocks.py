@@ -5,6 +5,8 @@ through the user loop."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from test_envmodel_helpers import make_log
@@ -228,17 +230,19 @@ def test_axes_test_is_the_restriction_to_the_replaced_terms():
                               wd)[0])
 
 
-@pytest.mark.parametrize("deg, named", [(4.0, True), (0.0, False)])
-def test_axes_step_names_the_block_only_for_a_rotated_gyro(deg, named):
+@pytest.mark.parametrize("deg, named, weak", [(4.0, True, False), (0.0, False, False),
+                                             (0.0, False, True)])
+def test_axes_step_names_the_block_only_for_a_rotated_gyro(deg, named, weak):
     """With Hy in the model, a gyro 4° off the coils gets Hvec in its place (the cross-axis
-    parts are 7 % of the effect); an aligned one does not."""
+    parts are 7 % of the effect); an aligned one does not, nor on the weak test that applies
+    when no new effect qualifies."""
     from gyrotest.envmodel.axes import axes_step
 
     log, w = _small_rotation_log(deg)
     wd = prepare(log)
     base = fit_model(wd, ["Hy(By)"])
     specs = [s for s in base.specs if s.key != "bias"]
-    judged, chosen = axes_step(wd, base, specs, dict(base._thetas), 5)
+    judged, chosen = axes_step(wd, base, specs, dict(base._thetas), 5, weak=weak)
     assert [c.term for c in judged] == ["Hvec(Bx,By,Bz)"]
     if named:
         assert chosen is not None and chosen.replaces == "Hy(By)"
@@ -247,3 +251,20 @@ def test_axes_step_names_the_block_only_for_a_rotated_gyro(deg, named):
         assert np.allclose(got, w, atol=0.005), (got, w)
     else:
         assert chosen is None, judged[0].improvement_pct
+
+
+def test_block_qualifies_on_the_strong_or_the_weak_test():
+    """The thresholds of :func:`block_qualifies`: the strong test (gain, fold consistency,
+    Wald z) always; the weak one (a smaller, less consistent gain whose added coefficients
+    stand at z >= AXES_Z_WEAK) only when no new effect qualifies."""
+    from gyrotest.envmodel import rules as R
+    from gyrotest.envmodel.axes import block_qualifies
+
+    assert block_qualifies(R.AXES_GAIN, R.AXES_T, R.AXES_Z)
+    assert not block_qualifies(R.AXES_GAIN, R.AXES_T, math.nan)
+    g, t, z = R.AXES_GAIN_WEAK, R.AXES_T_WEAK, R.AXES_Z_WEAK
+    assert g < R.AXES_GAIN and t < R.AXES_T
+    assert not block_qualifies(g, t, z) and block_qualifies(g, t, z, weak=True)
+    assert block_qualifies(g, t, -z, weak=True)  # the Wald z is two-sided
+    for worse in ((0.99 * g, t, z), (g, 0.99 * t, z), (g, t, 0.99 * z)):
+        assert not block_qualifies(*worse, weak=True), worse

@@ -27,7 +27,17 @@ from .candidate import Candidate, held_out_gain
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .pairs import fit_pair, mark_pair
-from .rules import AXES_GAIN, AXES_SPARSE_TOP, AXES_T, AXES_Z, FAR_GAIN, FAR_T
+from .rules import (
+    AXES_GAIN,
+    AXES_GAIN_WEAK,
+    AXES_SPARSE_TOP,
+    AXES_T,
+    AXES_T_WEAK,
+    AXES_Z,
+    AXES_Z_WEAK,
+    FAR_GAIN,
+    FAR_T,
+)
 from .screen import block_candidates, term_class
 from .terms import TermSpec, describe
 
@@ -83,14 +93,30 @@ def _simplest(spec: TermSpec, replaced: list[TermSpec], repl: list[str], frame
     return TermSpec(("Hx", "Hy", "Hz")[axis], (ch,)), [], []
 
 
+def block_qualifies(gain: float, t_cv: float, z: float, weak: bool = False) -> bool:
+    """Whether a field block with held-out gain ``gain`` (fraction), fold consistency
+    ``t_cv`` and Wald z ``z`` of what it adds (:func:`axes_test`) qualifies
+    (:func:`axes_step`)."""
+    if not (math.isfinite(z) and math.isfinite(gain) and math.isfinite(t_cv)):
+        return False
+    if gain >= AXES_GAIN and t_cv >= AXES_T and abs(z) >= AXES_Z:
+        return True
+    return bool(weak and gain >= AXES_GAIN_WEAK and t_cv >= AXES_T_WEAK
+                and abs(z) >= AXES_Z_WEAK)
+
+
 def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0: dict,
-              folds: int) -> tuple[list[Candidate], Candidate | None]:
+              folds: int, weak: bool = False) -> tuple[list[Candidate], Candidate | None]:
     """Try each field block in place of the model's own field terms of its order; return
     the judged blocks and the one that qualifies (the best by held-out RMS), or None.
 
     A block qualifies when it cuts the held-out RMS by ≥ :data:`AXES_GAIN`, consistently
     across the folds (gain/(scatter/√folds) ≥ :data:`AXES_T`), and what it adds beyond the
-    replaced terms exceeds its HAC standard error (:func:`axes_test`, z ≥ :data:`AXES_Z`)."""
+    replaced terms exceeds its HAC standard error (:func:`axes_test`, z ≥ :data:`AXES_Z`).
+    ``weak`` (no new effect qualifies in the step): also when it cuts the held-out RMS by
+    ≥ :data:`AXES_GAIN_WEAK` at fold consistency ≥ :data:`AXES_T_WEAK` and what it adds
+    stands at Wald z ≥ :data:`AXES_Z_WEAK` (a sequence that moves coil pairs together in
+    few blocks shows the cross-axis parts in few folds)."""
     out: list[Candidate] = []
     for spec, repl in block_candidates(wd.frame, base.specs):
         replaced = [s for s in base_specs if s.label in repl]
@@ -104,8 +130,7 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
         except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
             continue
         gain, scatter, t_cv = held_out_gain(base, r, folds)
-        ok = bool(gain >= AXES_GAIN and t_cv >= AXES_T and math.isfinite(z)
-                  and abs(z) >= AXES_Z)
+        ok = block_qualifies(gain, t_cv, z, weak)
         replaces = "; ".join(repl) or None
         try:
             custom = custom_text(spec, {}, wd.frame)
@@ -170,4 +195,4 @@ def sparse_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     return mark_pair(best) if best is not None else None
 
 
-__all__ = ["axes_step", "axes_test", "sparse_follow", "sparse_pair"]
+__all__ = ["axes_step", "axes_test", "block_qualifies", "sparse_follow", "sparse_pair"]

@@ -544,7 +544,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # the field effects the model has, in the gyro's own axes: when no new effect
         # qualifies, or when the block holds out clearly better than a new field effect of
         # its own order (:data:`AXES_FIRST`)
-        _, block = axes_step(wd, base, base_specs, thetas0, folds)
+        _, block = axes_step(wd, base, base_specs, thetas0, folds, weak=chosen is None)
         if block is not None and (chosen is None or (
                 chosen.spec.key in BLOCK_ORDER.get(block.spec.key, ())
                 and block.rms_holdout < (1 - AXES_FIRST) * chosen.rms_holdout

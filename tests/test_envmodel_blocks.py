@@ -255,16 +255,21 @@ def test_axes_step_names_the_block_only_for_a_rotated_gyro(deg, named, weak):
 
 def test_block_qualifies_on_the_strong_or_the_weak_test():
     """The thresholds of :func:`block_qualifies`: the strong test (gain, fold consistency,
-    Wald z) always; the weak one (a smaller, less consistent gain whose added coefficients
-    stand at z >= AXES_Z_WEAK) only when no new effect qualifies."""
+    Wald z) always; the weak one (a smaller gain whose fold consistency and Wald z each
+    reach their floor and together, (t + |z|)/sqrt 2, reach AXES_COMBINED_WEAK) only when no
+    new effect qualifies."""
     from gyrotest.envmodel import rules as R
     from gyrotest.envmodel.axes import block_qualifies
 
     assert block_qualifies(R.AXES_GAIN, R.AXES_T, R.AXES_Z)
     assert not block_qualifies(R.AXES_GAIN, R.AXES_T, math.nan)
-    g, t, z = R.AXES_GAIN_WEAK, R.AXES_T_WEAK, R.AXES_Z_WEAK
-    assert g < R.AXES_GAIN and t < R.AXES_T
+    g, c = R.AXES_GAIN_WEAK, R.AXES_COMBINED_WEAK
+    assert g < R.AXES_GAIN
+    t = R.AXES_T_WEAK
+    z = c * math.sqrt(2.0) - t  # the combined evidence exactly at its bar
+    assert z >= R.AXES_Z_WEAK
     assert not block_qualifies(g, t, z) and block_qualifies(g, t, z, weak=True)
     assert block_qualifies(g, t, -z, weak=True)  # the Wald z is two-sided
-    for worse in ((0.99 * g, t, z), (g, 0.99 * t, z), (g, t, 0.99 * z)):
+    for worse in ((0.99 * g, t, z), (g, 0.99 * t, z), (g, t, 0.99 * z),
+                  (g, 0.99 * R.AXES_T_WEAK, 10.0), (g, 10.0, 0.99 * R.AXES_Z_WEAK)):
         assert not block_qualifies(*worse, weak=True), worse

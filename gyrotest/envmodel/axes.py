@@ -28,6 +28,7 @@ from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
 from .pairs import fit_pair, mark_pair
 from .rules import (
+    AXES_COMBINED_WEAK,
     AXES_GAIN,
     AXES_GAIN_WEAK,
     AXES_SPARSE_TOP,
@@ -96,13 +97,17 @@ def _simplest(spec: TermSpec, replaced: list[TermSpec], repl: list[str], frame
 def block_qualifies(gain: float, t_cv: float, z: float, weak: bool = False) -> bool:
     """Whether a field block with held-out gain ``gain`` (fraction), fold consistency
     ``t_cv`` and Wald z ``z`` of what it adds (:func:`axes_test`) qualifies
-    (:func:`axes_step`)."""
+    (:func:`axes_step`): the strong test (:data:`AXES_GAIN`, :data:`AXES_T`, :data:`AXES_Z`);
+    ``weak``, also a gain ≥ :data:`AXES_GAIN_WEAK` whose two pieces of evidence each reach
+    :data:`AXES_T_WEAK` and :data:`AXES_Z_WEAK` and together (Stouffer's sum
+    (t_cv + |z|)/√2) reach :data:`AXES_COMBINED_WEAK`."""
     if not (math.isfinite(z) and math.isfinite(gain) and math.isfinite(t_cv)):
         return False
     if gain >= AXES_GAIN and t_cv >= AXES_T and abs(z) >= AXES_Z:
         return True
     return bool(weak and gain >= AXES_GAIN_WEAK and t_cv >= AXES_T_WEAK
-                and abs(z) >= AXES_Z_WEAK)
+                and abs(z) >= AXES_Z_WEAK
+                and (t_cv + abs(z)) / math.sqrt(2.0) >= AXES_COMBINED_WEAK)
 
 
 def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0: dict,
@@ -113,10 +118,9 @@ def axes_step(wd: WorkData, base: FitResult, base_specs: list[TermSpec], thetas0
     A block qualifies when it cuts the held-out RMS by ≥ :data:`AXES_GAIN`, consistently
     across the folds (gain/(scatter/√folds) ≥ :data:`AXES_T`), and what it adds beyond the
     replaced terms exceeds its HAC standard error (:func:`axes_test`, z ≥ :data:`AXES_Z`).
-    ``weak`` (no new effect qualifies in the step): also when it cuts the held-out RMS by
-    ≥ :data:`AXES_GAIN_WEAK` at fold consistency ≥ :data:`AXES_T_WEAK` and what it adds
-    stands at Wald z ≥ :data:`AXES_Z_WEAK` (a sequence that moves coil pairs together in
-    few blocks shows the cross-axis parts in few folds)."""
+    ``weak`` (no new effect qualifies in the step): also on the weak test of
+    :func:`block_qualifies` (a sequence that moves coil pairs together in few blocks shows
+    the cross-axis parts in few folds)."""
     out: list[Candidate] = []
     for spec, repl in block_candidates(wd.frame, base.specs):
         replaced = [s for s in base_specs if s.label in repl]

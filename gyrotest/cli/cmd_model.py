@@ -551,8 +551,10 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     fold consistency >= 4. When no new effect qualifies, the model's own field terms of an
     order are tried in the gyro's axes: the block over every moving field axis (Hvec for
     Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
-    >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1 (a gyro
-    mounted a few degrees off the coils); the quadratic block is also chosen before a new
+    >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1, or by
+    >= 5 % when fold consistency and |z| are each >= 1 and (t + |z|)/sqrt(2) >= 2.5 (a gyro
+    mounted a few degrees off the coils; a sequence that moves coils together in few blocks
+    shows the cross-axis parts in few folds); the quadratic block is also chosen before a new
     second-order field term (Hsq, Hprod, Hmag2) when it holds out >= 10 % better than that
     term (the cross-axis parts of a large second-order effect would each qualify and take
     the steps one by one), unless that term with one more second-order field term holds

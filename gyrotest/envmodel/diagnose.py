@@ -214,7 +214,11 @@ that the model under judgment cannot move:
    degrees off the coils sees each sensitivity as a mix of every coil axis, and the small
    cross-axis parts are below what a new effect must show near the floor. The block is
    chosen when it cuts the held-out RMS by ≥ 8 % at fold consistency ≥ 2.5 and what it
-   adds beyond the replaced terms has HAC |z| ≥ 1 (:func:`gyrotest.envmodel.axes.axes_test`).
+   adds beyond the replaced terms has HAC |z| ≥ 1 (:func:`gyrotest.envmodel.axes.axes_test`);
+   when no new effect qualifies, also at ≥ 5 % when the fold consistency and |z| each reach
+   1 and together ((t + |z|)/√2) 2.5 (:func:`gyrotest.envmodel.axes.block_qualifies`: a
+   sequence that moves two coils together in few blocks shows the cross-axis parts in few
+   folds).
    ``Hvec`` in place of all but one moving component is named as that component's term
    (the model "completes its field vector" with Hx, Hy or Hz). The quadratic block is the
    flexible answer, not the first: the new second-order term keeps its place when it holds

@@ -156,7 +156,7 @@ def _p_shift(e, regs, Xb, fold, masks, k):
 
 
 def test_shift_test_of_the_residual_left_keeps_power_where_phases_are_conservative():
-    """The second test of a chosen channel term (diagnose._channel_chance_gate): the
+    """The second test of a chosen channel term (gates.channel_chance_gate): the
     surrogates are circular shifts and reversals of the residual the term *leaves*, so a
     true effect's own power is not in them. A channel acting at 0.3 x the noise's RMS
     passes the shift test in every record (the phase surrogates of the base residual, which

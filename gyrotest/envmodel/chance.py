@@ -37,7 +37,7 @@ circular shifts and reversals of the residual the term itself leaves reach its g
 (:func:`shift_surrogates`: the term's own power removed, the gyro's own excursions kept);
 a pair is tested against the best pair of the step's best candidates
 (:func:`pair_chance_test`). Both are applied by
-:func:`gyrotest.envmodel.diagnose._channel_chance_gate`.
+:func:`gyrotest.envmodel.gates.channel_chance_gate`.
 """
 
 from __future__ import annotations

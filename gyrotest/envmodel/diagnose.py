@@ -152,7 +152,7 @@ that the model under judgment cannot move:
    "possible" effect): its shape is free enough to fit the gyro's
    own slow noise, and it was the best of many.
    A channel term chosen on the strict, clear-gain or far route, or a pair, is tested for
-   chance too (:func:`_channel_chance_gate`): a single term is set aside when the phase
+   chance too (:func:`.gates.channel_chance_gate`): a single term is set aside when the phase
    surrogates of the base residual reach its gain (p > 0.1) *and* so do 39 circular shifts
    and reversals of the residual the term itself leaves (a real gyro's own excursions kept
    in place, the term's own power removed); a pair when the best pair of the step's eight
@@ -275,9 +275,9 @@ from .candidate import (
     equivalents,
     held_out_gain,
 )
-from .chance import candidate_regressors, chance_test, pair_chance_test
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
+from .gates import chance_gate, channel_chance_gate
 from .groups import group_step
 from .judge import judge as _judge
 from .pairs import lag_or_plain, lag_resolved, lookahead, marginal, pair_step, redirect
@@ -288,12 +288,7 @@ from .rules import (
     ALPHA,
     AT_FLOOR,
     AXES_FIRST,
-    CHANCE_GRID,
-    CHANCE_K,
     CHANCE_KEYS,
-    CHANCE_P,
-    CHANCE_SEED,
-    CHANNEL_CHANCE_OTHERS,
     CHANNEL_CHANCE_RATIO,
     CHANNEL_CHANCE_ROUTES,
     CLEAR_GAIN,
@@ -304,7 +299,6 @@ from .rules import (
     GROUP_RATIO,
     LOOKAHEAD_T,
     MIN_IMPROVEMENT,
-    PAIR_CHANCE_TOP,
     SWAP_FIT_GAIN,
     SWAP_SKIP,
     SWAP_TOP,
@@ -584,143 +578,14 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
         # not a swap (:func:`_swap_step`): its gain is also the replaced term's removal,
         # which no addition on the surrogates represents (seed 36096: a ramp in place of a
         # case temperature that drifted with it, -28 % held out)
-        chosen = _chance_gate(wd, base, out, chosen, folds)
+        chosen = chance_gate(wd, base, out, chosen, folds)
     elif (candidates is None and not nested and chosen is not None and chosen.replaces is None
           and chosen.spec is not None and chosen.klass != "nuisance"
           and FAR_RATIO <= base_ratio < CHANNEL_CHANCE_RATIO
           and chosen.route is not None and (chosen.route in CHANNEL_CHANCE_ROUTES
                                             or chosen.route.startswith("together with"))):
-        chosen = _channel_chance_gate(wd, base, out, chosen, folds)
+        chosen = channel_chance_gate(wd, base, out, chosen, folds, follows=follows)
     return out, chosen
-
-
-def _chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
-                 ) -> Candidate | None:
-    """The look-elsewhere surrogate test of a chosen ramp, warm-up or hysteresis
-    (:mod:`.chance`, :data:`CHANCE_KEYS`,
-    :data:`CHANCE_P`): the term; or, when the best candidate of the step reaches its held-out
-    gain on noise with the residual's own spectrum, the best other significant candidate
-    that is not a nuisance term and whose own gain the surrogates do not reach, else None
-    (the nuisance term stays a "possible" effect)."""
-    test = _phase_test(wd, base, out, chosen, folds)
-    if test is None or test.p <= CHANCE_P:
-        return chosen
-    chosen.significant = False
-    chosen.route = None
-    chosen.note = test.text()
-    # the same surrogates judge the others: one whose gain they reach is no better
-    other = []
-    for c in out:
-        if not c.significant:
-            continue
-        if not (math.isfinite(c.improvement_pct)
-                and test.p_of(c.improvement_pct / 100.0) <= CHANCE_P):
-            c.significant = False
-            c.route = None
-        elif (c.pair is None and not c.hac_waived and c.klass != "nuisance"
-              and math.isfinite(c.rms_holdout)):
-            other.append(c)
-    if not other:
-        for c in out:
-            c.significant = False
-        return None
-    nxt = min(other, key=lambda c: c.rms_holdout)
-    nxt.equivalents = equivalents(nxt, out, base)
-    return nxt
-
-
-def _channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
-                         ) -> Candidate | None:
-    """The look-elsewhere tests of a chosen channel term or pair
-    (:data:`CHANNEL_CHANCE_ROUTES`): the term; or None (every candidate of the step set
-    aside, the best left as a "possible" effect) when its held-out gain is one that
-    chance reaches on noise like the residual's.
-
-    * A single term must beat the phase-randomised surrogates of the base residual
-      (:func:`.chance.chance_test`, surrogate p ≤ :data:`CHANCE_P`) *or* the circular
-      shifts and reversals of the residual the term itself leaves
-      (:func:`.chance.shift_surrogates`). The first test carries a missed effect's own power
-      into every surrogate and alone is conservative for a true slow channel effect; the
-      second carries only what the term leaves, with a real gyro's own excursions in place.
-      A term both tests reach is set aside, and the next qualifying candidate (best held-out
-      first, at most :data:`CHANNEL_CHANCE_OTHERS`) that beats either test is named instead.
-    * A pair must beat the best pair of the step's :data:`PAIR_CHANCE_TOP` best single
-      candidates on phase-randomised surrogates of the base residual
-      (:func:`.chance.pair_chance_test`)."""
-    if chosen.pair is not None:
-        partner = next((c for c in out if c.term == chosen.pair[0]), None)
-        gain = 1.0 - chosen.pair[1] / base.rms_holdout if base.rms_holdout > 0 else math.nan
-        if not math.isfinite(gain):
-            return chosen
-        test = pair_chance_test(wd, base, out, chosen, partner, gain, folds=folds,
-                                k=CHANCE_K, top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
-        if test is None:
-            return chosen
-        chosen.chance = test
-        if test.p <= CHANCE_P:
-            return chosen
-        note = test.text()
-    else:
-        # the candidates' regressors once for every test of the step below
-        regs = candidate_regressors(wd, base, out, CHANCE_GRID)
-        test = _phase_test(wd, base, out, chosen, folds, regs)
-        if test is None or test.p <= CHANCE_P or _beats_shifts(wd, base, out, chosen,
-                                                               test.gain, folds, regs):
-            return chosen
-        note = (f"{test.text()}; and so do the circular shifts and reversals of the "
-                "residual it leaves (the gyro's own excursions kept)")
-    chosen.significant = False
-    chosen.route = None
-    chosen.pair = None
-    chosen.note = note
-    if chosen.chance.kind == "phase":
-        # the same surrogates judge the other qualifying candidates, best held-out first:
-        # the first whose gain they do not reach, or that beats the shifts of its own
-        # residual, is named (seed 63180: a rotated field component set aside beside a
-        # temperature level on the strict route)
-        others = sorted((c for c in out if c is not chosen and c.significant
-                         and c.pair is None and c.replaces is None and c.spec is not None
-                         and math.isfinite(c.improvement_pct)
-                         and math.isfinite(c.rms_holdout)), key=lambda c: c.rms_holdout)
-        for c in others[:CHANNEL_CHANCE_OTHERS]:
-            g = c.improvement_pct / 100.0
-            if chosen.chance.p_of(g) <= CHANCE_P or (
-                    c.klass != "nuisance" and _beats_shifts(wd, base, out, c, g, folds,
-                                                            regs)):
-                c.equivalents = equivalents(c, out, base)
-                return c
-    for c in out:
-        c.significant = False
-        c.route = None
-    return None
-
-
-def _phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int,
-                regs: list | None = None):
-    """The look-elsewhere test of ``chosen``'s held-out gain on phase-randomised surrogates
-    of the base residual (:func:`.chance.chance_test`; ``regs`` the step's candidate
-    regressors when built), kept as ``chosen.chance``; None when it cannot be run."""
-    gain = chosen.improvement_pct / 100.0
-    if not math.isfinite(gain):
-        return None
-    test = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                       seed=CHANCE_SEED, regs=regs)
-    if test is not None:
-        chosen.chance = test
-    return test
-
-
-def _beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int,
-                  regs: list | None = None) -> bool:
-    """Whether candidate ``c``'s held-out ``gain`` (fraction) beats the best chance gains on
-    the circular shifts and reversals of the residual ``c`` itself leaves
-    (:func:`.chance.shift_surrogates`; p ≤ :data:`CHANCE_P`), or cannot be tested."""
-    fit = c._fit
-    if fit is None or fit.resid is None:
-        return True
-    shifted = chance_test(wd, base, out, gain, folds=folds, k=CHANCE_K, grid=CHANCE_GRID,
-                          seed=CHANCE_SEED, resid=fit.resid, shifts=True, regs=regs)
-    return shifted is None or shifted.p <= CHANCE_P
 
 
 def _swap_step(wd, base, base_specs, out: list[Candidate], thetas0, n_c, base_ratio, alpha,

@@ -163,7 +163,7 @@ CHANCE_GRID = 6
 CHANCE_P = 0.1
 CHANCE_SEED = 952
 #: a channel term or pair chosen on these routes (or "together with" a partner) must also
-#: beat chance (:func:`gyrotest.envmodel.diagnose._channel_chance_gate`): a single term the
+#: beat chance (:func:`gyrotest.envmodel.gates.channel_chance_gate`): a single term the
 #: phase-randomised surrogates of the base residual *and* the circular shifts and reversals
 #: of the residual it leaves (:func:`gyrotest.envmodel.chance.shift_surrogates`) both reach
 #: at p > CHANCE_P is set aside, and a pair the best pair of the step's PAIR_CHANCE_TOP best

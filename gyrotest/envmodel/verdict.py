@@ -126,7 +126,7 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
                 f"deg/h) is at {fl_txt}, ratio {ratio:.2f}"), None
     ok = [c for c in cands if math.isfinite(c.improvement_pct) and c.rejected is None]
     best = max(ok, key=lambda c: c.improvement_pct) if ok else None
-    # a term a look-elsewhere test set aside (diagnose._chance_gate, _channel_chance_gate)
+    # a term a look-elsewhere test set aside (gates.chance_gate, gates.channel_chance_gate)
     aside = next((c for c in cands if c.chance is not None and c.note and not c.significant
                   and c.chance.p > CHANCE_P), None)
     if (best is not None and math.isfinite(best.gain_scatter_pct)

@@ -862,6 +862,25 @@ def test_a_level_gives_way_to_its_lag_when_the_lag_and_a_rate_hide_each_other():
     assert "then dTdt(T_case)" in d.verdict
 
 
+def test_a_single_the_chance_gate_sets_aside_gives_way_to_a_pair_that_beats_chance():
+    """Fresh seed 69199 of the thirty-fifth pass (static run, synthetic noise): the supply
+    voltage (2.9 x the floor) and the rate of a case sensor that lags its node by 235 s
+    (4.6 x) are both missing. V alone held out −31 % at HAC z 2.9, but the phase surrogates
+    of the base residual -- every one carrying the missed rate -- reached that gain (p 0.15)
+    and so did the shifts of the residual V leaves: the gate set V aside and the loop ended
+    at 4.3 x the true model. Together the two take the held-out RMS to the true model's, and
+    no pair of the step's best candidates does that on the surrogates (p 0.025): the step
+    names V with dT/dt(T_case) next, and says why V alone was set aside."""
+    from gyrotest.envmodel import fit_model
+
+    case, wd, d = _diagnose_base(69199)
+    top = d.found[0]
+    assert top.term == "V" and top.pair is not None and top.pair[0] == "dTdt(T_case)", d.verdict
+    assert top.chance is not None and top.chance.kind == "pairs" and top.chance.p <= 0.1
+    assert "V alone was set aside" in d.verdict, d.verdict
+    assert top.pair[1] <= 1.1 * fit_model(wd, case.true_terms).rms_holdout, top.pair
+
+
 @pytest.mark.parametrize("seed, why", [(70962, "pair of candidates")])
 def test_a_channel_fit_to_real_wander_that_chance_reaches_is_left_possible(seed, why):
     """A real-noise null of the thirty-third pass's tuning set (seeds 70001-71399 drawn with

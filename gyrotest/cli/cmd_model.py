@@ -542,6 +542,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     those surrogates reach its gain and so do 39 circular shifts and reversals of the
     residual it leaves (the gyro's own excursions kept); a pair when the best pair of the
     step's eight best candidates reaches its gain on the surrogates (at 2-10x the floor).
+    A channel term set aside with no other single to name may be one of two effects that
+    hide each other (the missed one is in every surrogate): the step's best qualifying pair
+    is named instead when it beats that pair test.
     A product of two channels gives way to the level terms of its factors when those do
     >= 10 % better together (no interaction without its main effects), and to the level of
     a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly

@@ -157,7 +157,10 @@ that the model under judgment cannot move:
    and reversals of the residual the term itself leaves (a real gyro's own excursions kept
    in place, the term's own power removed); a pair when the best pair of the step's eight
    best candidates reaches its gain on the phase surrogates. The step then names nothing
-   and its best candidate stays a "possible" effect. The gate applies from 2 to 10 × the
+   and its best candidate stays a "possible" effect -- unless, for a single set aside with
+   no other single to name, the step's best qualifying pair beats the pair test
+   (:func:`.gates.set_aside_pair`: a missed partner effect is in every surrogate of the
+   single). The gate applies from 2 to 10 × the
    floor (:data:`gyrotest.envmodel.rules.CHANNEL_CHANCE_RATIO`): further above it the
    residual is mostly missing effects, which every surrogate carries; nearer the floor a
    true follow-up effect is small beside the noise (seed 15000).

@@ -878,6 +878,18 @@ def test_a_decisive_pair_passes_where_a_member_has_few_degrees_of_freedom():
     assert top.pair[1] <= 1.1 * fit_model(wd, case.true_terms).rms_holdout, top.pair
 
 
+def test_a_redirect_keeps_the_single_that_does_as_well_with_a_member_of_the_pair():
+    """Seed 69070 (climate run, synthetic noise): the humidity and vibration levels are both
+    missing. chan(RH_lab) is chosen (−49 %); the pair search also finds the humidity's
+    lagged rate with chan(vib_level), which passes on decisive evidence (−84 % at fold
+    consistency 37). chan(RH_lab) with that same vibration level does as well, so the chosen
+    level stays and the next step names the vibration (the redirect had ended the loop at
+    1.22 x the true model with the lagged rate)."""
+    _, _, d = _diagnose_base(69070)
+    top = d.found[0]
+    assert top.term == "chan(RH_lab)" and top.displaced is None, d.verdict
+
+
 def test_a_single_the_chance_gate_sets_aside_gives_way_to_a_pair_that_beats_chance():
     """Fresh seed 69199 of the thirty-fifth pass (static run, synthetic noise): the supply
     voltage (2.9 x the floor) and the rate of a case sensor that lags its node by 235 s

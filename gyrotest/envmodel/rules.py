@@ -312,7 +312,9 @@ PAIR_POOL = 8
 #: held-out RMS below REDIRECT_RATIO x the single term's: the pair's more useful member is
 #: named first. Until the twelfth pass this also needed the single term's gain to be below
 #: 60 %; a rate term of the wrong sensor took −79 % and left the model 14x the floor while
-#: the true pair (the lagging sensor's rate and a humidity level) reached 3x (seed 24162)
+#: the true pair (the lagging sensor's rate and a humidity level) reached 3x (seed 24162).
+#: Not when the single term with a partner -- a member of the pair pool, or of the pair
+#: found -- holds out within 1/PAIR_MARGIN of that pair (the next step finds the partner)
 REDIRECT_RATIO = 0.5
 #: a term the user's model holds can stand in for the missing effect (a case temperature
 #: that drifts with the ageing ramp of a static run): added beside it, the missing term

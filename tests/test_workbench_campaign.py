@@ -868,8 +868,9 @@ def test_a_decisive_pair_passes_where_a_member_has_few_degrees_of_freedom():
     an ageing ramp (9 x) are both missing, and each hides the other (alone −27 % and +14 %
     held out). Together they take the held-out RMS −91 % at fold consistency 31 and spectral
     z 60, but on a table of few positions the ramp's HAC z in the pair's fit was 3.8, below
-    the joint test's 4, and the loop ended at 11.2 x the true model. Decisive held-out and
-    spectral evidence passes the pair (pairs._decisive)."""
+    the joint test's 4, and the loop ended at 11.2 x the true model. Held-out and spectral
+    evidence decisive against the model and against g alone (−88 %) passes the pair
+    (pairs._decisive_over_members)."""
     from gyrotest.envmodel import fit_model
 
     case, wd, d = _diagnose_base(79011, ("gprod(acc_ax,acc_ay)",))

@@ -526,8 +526,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
     another candidate (a warm-up hidden by a missing hysteresis). A pair tested jointly
     that fails the joint test still qualifies on decisive evidence (gain >= 55 % at fold
-    consistency >= 10, or >= 70 % at >= 5, and spectral z >= 8): a tilt table of few
-    positions leaves a member few effective degrees of freedom. At >= 2x the floor, tied candidates (within 2 %, or
+    consistency >= 10, or >= 70 % at >= 5, and spectral z >= 8) against the model and
+    against its better member alone: a tilt table of few positions leaves a member few
+    effective degrees of freedom. At >= 2x the floor, tied candidates (within 2 %, or
     a gain over them with fold consistency < 2.13) are told apart by the step after them
     (each fitted with the pair pool, second-order forms and channel cross terms), and a lag (Tlag, chanlag) gives way to its
     plain form when that does >= 10 % better beside a missing rate term of another channel

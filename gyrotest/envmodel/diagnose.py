@@ -76,7 +76,8 @@ that the model under judgment cannot move:
    field term few effective degrees of freedom). A trend (``ramp``) is
    also paired with every member of the pool, whatever its own gain (beside a missing
    lagged coil an ageing ramp gains nothing alone, not even in sample), under the joint
-   HAC test below or with decisive evidence (:func:`gyrotest.envmodel.pairs._trend_pairs`;
+   HAC test below or with decisive evidence against the model and its better member alone
+   (:func:`gyrotest.envmodel.pairs._trend_pairs`;
    a tilt table of few positions leaves a member few effective degrees of freedom too);
    likewise the two best
    members of the pool (and a warm-up of the pool, which only the first folds see, wherever

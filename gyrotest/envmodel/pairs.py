@@ -122,11 +122,11 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         if r is None:
             continue
         impr, _, t_cv = held_out_gain(base, r, folds)
-        # the joint HAC test -- or decisive evidence (:func:`_decisive_over_members`, once the
-        # spectral z is known): a tilt sequence of few positions leaves a member few effective degrees
-        # of freedom (seed 79011: g of acc_ay and an ageing ramp, each hidden by the other,
-        # −91 % together at consistency 31 and spectral z 60, the ramp at HAC z 3.8 < 4;
-        # the loop had ended at 11.2 x the true model)
+        # the joint HAC test -- or decisive evidence (:func:`_decisive_over_members`, once
+        # the spectral z is known): a tilt sequence of few positions leaves a member few
+        # effective degrees of freedom (seed 79011: g of acc_ay and an ageing ramp, each
+        # hidden by the other, −91 % together at consistency 31 and spectral z 60, the ramp
+        # at HAC z 3.8 < 4; the loop had ended at 11.2 x the true model)
         joint_fail = (frozenset((id(a), id(b))) in joint
                       and not _joint_z_ok(r, a, b, wd, t_cv))
         if joint_fail and not impr >= min(SINGLE_EXEMPT_GAIN, DECISIVE_GAIN):
@@ -664,7 +664,7 @@ def _trend_pairs(out: list[Candidate], pool: list[Candidate]
     trapped τ of 176 s; the two together −84 %, 1.2× the floor), so neither the gain nor
     the fit-gain rule brings it into the pool. Such a pair must pass the joint HAC test of
     :func:`_joint_z_ok` (a ramp fits a gyro's random walk as well as any drift), or carry
-    decisive held-out and spectral evidence (:func:`_decisive`)."""
+    decisive held-out and spectral evidence (:func:`_decisive_over_members`)."""
     trends = [c for c in _pairable(out) if c.spec.key in TRENDS and c not in pool]
     return [(m, t) for t in trends for m in pool if m.spec.key not in TRENDS]
 
@@ -682,7 +682,7 @@ def _partner_pairs(out: list[Candidate], pool: list[Candidate]
     warm-up alone −27 % at HAC z 0.3; the two together −92 %, 1.1× the true model, at z 8.1
     and 8.9). Such a pair must pass the joint HAC test of :func:`_joint_z_ok` like the
     other pairs that no single-term evidence backs, or carry decisive evidence
-    (:func:`_decisive`)."""
+    (:func:`_decisive_over_members`)."""
     # a trend leads too (seed 23141: the ramp and a g cross term hidden behind it); so does
     # a warm-up of the pool wherever it ranks: only the first folds see it, so its own gain
     # understates it (seed 41065, real noise: a ramp and a sinusoid ranked above a warm-up
@@ -804,8 +804,8 @@ def _joint_z_ok(r: FitResult, a: Candidate, b: Candidate, wd: WorkData,
 
 
 def _decisive(gain: float, t_cv: float, z_spec: float) -> bool:
-    """A pair whose evidence needs no joint HAC test (:data:`HIDDEN_TOP`; and a pair tested
-    jointly that fails that test, :func:`_find_pair`): held-out
+    """A pair whose evidence needs no joint HAC test (:data:`HIDDEN_TOP`; and, with
+    :func:`_decisive_over_members`, a pair tested jointly that fails that test): held-out
     ``gain`` ≥ :data:`SINGLE_EXEMPT_GAIN` at fold consistency ``t_cv`` ≥
     :data:`SINGLE_EXEMPT_T` (the bar a single term needs to skip the spectral test), or
     ≥ :data:`DECISIVE_GAIN` at ≥ :data:`SPECTRAL_EXEMPT_T`, and spectral z ``z_spec`` ≥

@@ -28,7 +28,7 @@ from .rules import (
 
 
 def chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds: int
-                 ) -> Candidate | None:
+                ) -> Candidate | None:
     """The look-elsewhere surrogate test of a chosen ramp, warm-up or hysteresis
     (:mod:`.chance`, :data:`CHANCE_KEYS`,
     :data:`CHANCE_P`): the term; or, when the best candidate of the step reaches its held-out
@@ -83,12 +83,7 @@ def channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds
       candidates on phase-randomised surrogates of the base residual
       (:func:`.chance.pair_chance_test`)."""
     if chosen.pair is not None:
-        partner = next((c for c in out if c.term == chosen.pair[0]), None)
-        gain = 1.0 - chosen.pair[1] / base.rms_holdout if base.rms_holdout > 0 else math.nan
-        if not math.isfinite(gain):
-            return chosen
-        test = pair_chance_test(wd, base, out, chosen, partner, gain, folds=folds,
-                                k=CHANCE_K, top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
+        test = _pair_chance(wd, base, out, chosen, folds)
         if test is None:
             return chosen
         chosen.chance = test
@@ -100,7 +95,7 @@ def channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds
         regs = candidate_regressors(wd, base, out, CHANCE_GRID)
         test = phase_test(wd, base, out, chosen, folds, regs)
         if test is None or test.p <= CHANCE_P or beats_shifts(wd, base, out, chosen,
-                                                               test.gain, folds, regs):
+                                                              test.gain, folds, regs):
             return chosen
         note = (f"{test.text()}; and so do the circular shifts and reversals of the "
                 "residual it leaves (the gyro's own excursions kept)")
@@ -121,7 +116,7 @@ def channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds
             g = c.improvement_pct / 100.0
             if chosen.chance.p_of(g) <= CHANCE_P or (
                     c.klass != "nuisance" and beats_shifts(wd, base, out, c, g, folds,
-                                                            regs)):
+                                                           regs)):
                 c.equivalents = equivalents(c, out, base)
                 return c
         # ... nor another single: the set-aside term may be one of two effects that hide
@@ -132,8 +127,8 @@ def channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds
             pair.note = (f"{chosen.term} alone was set aside ({ch.exceed} of {ch.k} "
                          "phase-randomised surrogates of the residual reach its gain, and so "
                          "do the shifts of the residual it leaves: a missed partner is in "
-                         f"every one); the pair {pair.term} + {pair.pair[0]} beats the best pair of "
-                         "the step's candidates on the phase surrogates "
+                         f"every one); the pair {pair.term} + {pair.pair[0]} beats the best "
+                         "pair of the step's candidates on the phase surrogates "
                          f"(p = {pair.chance.p:.2g})")
             return pair
     for c in out:
@@ -143,7 +138,7 @@ def channel_chance_gate(wd, base, out: list[Candidate], chosen: Candidate, folds
 
 
 def phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int,
-                regs: list | None = None):
+               regs: list | None = None):
     """The look-elsewhere test of ``chosen``'s held-out gain on phase-randomised surrogates
     of the base residual (:func:`.chance.chance_test`; ``regs`` the step's candidate
     regressors when built), kept as ``chosen.chance``; None when it cannot be run."""
@@ -158,7 +153,7 @@ def phase_test(wd, base, out: list[Candidate], chosen: Candidate, folds: int,
 
 
 def beats_shifts(wd, base, out: list[Candidate], c: Candidate, gain: float, folds: int,
-                  regs: list | None = None) -> bool:
+                 regs: list | None = None) -> bool:
     """Whether candidate ``c``'s held-out ``gain`` (fraction) beats the best chance gains on
     the circular shifts and reversals of the residual ``c`` itself leaves
     (:func:`.chance.shift_surrogates`; p ≤ :data:`CHANCE_P`), or cannot be tested."""
@@ -192,12 +187,7 @@ def set_aside_pair(wd, base, out: list[Candidate], folds: int, follows=None
     pair = pair_step(wd, base, base_specs, out, thetas0, folds, follows=follows)
     if pair is None:
         return None
-    partner = next((c for c in out if c.term == pair.pair[0]), None)
-    gain = 1.0 - pair.pair[1] / base.rms_holdout if base.rms_holdout > 0 else math.nan
-    test = None
-    if math.isfinite(gain):
-        test = pair_chance_test(wd, base, out, pair, partner, gain, folds=folds,
-                                k=CHANCE_K, top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
+    test = _pair_chance(wd, base, out, pair, folds)
     if test is None or test.p > CHANCE_P:
         pair.significant = False
         pair.route = None
@@ -206,6 +196,20 @@ def set_aside_pair(wd, base, out: list[Candidate], folds: int, follows=None
     pair.chance = test
     pair.equivalents = equivalents(pair, out, base)
     return pair
+
+
+def _pair_chance(wd, base, out: list[Candidate], pair: Candidate, folds: int):
+    """The look-elsewhere test of ``pair`` (a candidate marked "together with" its partner,
+    ``pair.pair = (partner term, pair held-out RMS)``): its held-out gain over the base
+    model against the best pair of the step's :data:`PAIR_CHANCE_TOP` best candidates on
+    phase-randomised surrogates of the base residual (:func:`.chance.pair_chance_test`);
+    None when the gain is undefined or the test cannot be run."""
+    partner = next((c for c in out if c.term == pair.pair[0]), None)
+    gain = 1.0 - pair.pair[1] / base.rms_holdout if base.rms_holdout > 0 else math.nan
+    if not math.isfinite(gain):
+        return None
+    return pair_chance_test(wd, base, out, pair, partner, gain, folds=folds, k=CHANCE_K,
+                            top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
 
 
 __all__ = ["beats_shifts", "chance_gate", "channel_chance_gate", "phase_test",

@@ -107,6 +107,13 @@ def render() -> str:
     out.append(".SH COMMANDS")
     for name in cli.list_commands(root):
         _section(name, cli.get_command(root, name), root, out)
+    from gyrotest.envmodel.rules_doc import RULES
+
+    out.append(".SH WORKBENCH VERDICT RULES")
+    out.append(esc("The decision rules of gyrotest model diagnose (also printed by its --rules "
+                   "option), in the order they are applied."))
+    for head, text in RULES:
+        out += [".TP", f".B {esc(head)}", esc(text)]
     out += [
         ".SH FILES", esc(FILES),
         ".SH UNITS", esc(UNITS),

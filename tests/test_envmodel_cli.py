@@ -5,6 +5,7 @@ traceback, no output file)."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -279,3 +280,36 @@ def test_the_candidate_table_names_each_rejection_reason():
     assert _rejected_label("its time constant (9709 s) is at the top of its range (the record "
                            "length): the log does not resolve the lag") \
         == "lag as long as the record"
+
+
+def test_diagnose_rules_prints_every_rule_without_a_log():
+    """`model diagnose --rules` prints the decision rules (the man page's WORKBENCH VERDICT
+    RULES) and exits 0 before any log is read; the numbers in the text are the thresholds
+    the diagnosis applies (gyrotest.envmodel.rules)."""
+    from gyrotest.envmodel import rules as r
+    from gyrotest.envmodel.rules_doc import RULES
+
+    res = run_cli(["model", "diagnose", "--rules"])
+    assert res.code == 0, res.err
+    for head, _ in RULES:
+        assert head in res.out, head
+    text = " ".join(t for _, t in RULES)
+    for phrase in (f">= {r.SINGLE_EXEMPT_GAIN:.0%} with fold consistency >= {r.SINGLE_EXEMPT_T:g}",
+                   f">= {r.DECISIVE_GAIN:.0%} with >= {r.SPECTRAL_EXEMPT_T:g}",
+                   f"spectral z >= {r.SPECTRAL_Z:g}",
+                   f"fold consistency >= {r.HYST_CV_T:g} (>= {r.HYST_WEAK_CV_T:g}",
+                   f"or >= {r.HYST_STRONG_CV_T:g} with p x trials < {r.WEAK_P:g}",
+                   f"{r.CHANCE_K} phase-randomised surrogates",
+                   f"(surrogate p <= {r.CHANCE_P:g})",
+                   f"|r| >= {r.PRODUCT_LEVEL_R:g}"):
+        assert phrase.replace("%", " %") in text, phrase
+    man = (Path(__file__).resolve().parents[1] / "man" / "gyrotest.1").read_text("utf-8")
+    assert "WORKBENCH VERDICT RULES" in man
+    # the diagnosis itself prints the one-line form and points to --rules
+    s = Path(__file__).resolve().parents[1] / "sample_data"
+    res = run_cli(["model", "diagnose", s / "magnetic.parquet", "--profile",
+                   s / "magnetic.profile.toml", "--terms", "T,Hy,Hz"])
+    assert res.code == 0, res.err
+    flat = " ".join(res.out.split())
+    assert "every rule with its thresholds: gyrotest model diagnose --rules" in flat
+    assert "ties go to channel-based terms" not in flat

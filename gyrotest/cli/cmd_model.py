@@ -239,6 +239,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
     from rich.markup import escape
     from rich.table import Table
 
+    from ..envmodel.rules_doc import SUMMARY
+
     out = console()
     b = diag.base
     out.print(f"[bold]model diagnose[/bold]: base terms {escape(' + '.join(b.terms))}; held-out "
@@ -277,44 +279,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
                       f"{fmt_num(p['rms_holdout_before_dph'])} → "
                       f"{fmt_num(p['rms_holdout_after_dph'])} deg/h (held-out/floor "
                       f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
-    out.print(f"  rule: missing effect = held-out RMS down (fold consistency ≥ 1) by "
-              f"≥ {diag.min_improvement_pct:g} % "
-              f"and HAC p × trials × candidates < {diag.alpha:g}, or down by ≥ 5 % with p × "
-              "trials < 0.01 (0.001 for ramp/warm-up/sinusoid/hysteresis; a warm-up ≥ 10 % "
-              "at fold consistency ≥ 2.13 with 0.01) while the model is "
-              "above 1.2x the noise floor, or (model ≥ 2x the floor) down by ≥ 10 % "
-              "consistently across the folds (gain/(fold scatter/√folds) ≥ 2.13, |z| ≥ 1, "
-              "or as a last resort spectral z ≥ 8 when other effects inflate the HAC error; "
-              "ramp/warm-up/sinusoid/hysteresis ≥ 20 % at ≥ 3.75, a warm-up at ≥ 2.13 with "
-              "spectral z ≥ 8); off the strict test, spectral (Whittle) z ≥ 8 against the "
-              "residual's own spectrum (≥ 4 while the model is within 2x the floor, or when "
-              "the candidate brings it within 1.25x) unless "
-              "the gain is ≥ 55 % with fold consistency ≥ 5 or ≥ 40 % at ≥ 10 (a pair: ≥ 40 "
-              "% at ≥ 5, then z ≥ 6; none when a member failed the test alone; a pair with "
-              "a warm-up at fold consistency ≥ 2.13 with z ≥ 8; a pair's "
-              "first member that alone makes the model worse only when the next step then "
-              "names an effect; a pair of terms that stood out neither alone needs HAC "
-              "|z| ≥ 4 each in its fit unless it gains ≥ 55 % at fold consistency ≥ 10 "
-              "or ≥ 70 % at ≥ 5, with spectral z ≥ 8); far "
-              "above the floor a red residual's lowest bins are floored at the power law "
-              "of the band above (not for a warm-up or at HAC |z| ≥ 3.5); hysteresis "
-              "needs fold consistency ≥ 4 (≥ 10 off the strict test, ≥ 100 at p × trials < 0.05); "
-              "a lag with τ ≥ 95 % of the record only on the strict test; a product that is "
-              "its factor's level to |r| ≥ 0.98 gives way to that level (≥ 2x the floor); "
-              "within 1.1x the floor a gain ≥ 20 % (≥ 10 % "
-              "strict, fold consistency ≥ 4); the model's field terms in the gyro's axes "
-              "(Hvec, Hquad) at ≥ 8 %, fold consistency ≥ 2.5 (Hquad also before a new "
-              "second-order field term it beats by ≥ 10 %, unless that term with one more "
-              "second-order field term holds out as well; Hquad gives way to two "
-              "second-order field terms that hold out as well as a pair); then (above 1.2x "
-              "the floor) "
-              "the largest in-sample gains (≥ 20 %) in place of each model term; then "
-              "(≥ 2x the floor) three or more effects that hide one another: the 10 "
-              "channel-driven candidates of largest in-sample gain fitted together and "
-              "eliminated backward (a member goes at < 2 % held-out cost or HAC |z| < 4), "
-              "≥ 3 left, ≥ 50 % at fold consistency ≥ 5, spectral z ≥ 8; ties go to "
-              "channel-based "
-              "terms and to the channels the model already uses")
+    out.print("  rule: " + escape(SUMMARY.format(min_pct=diag.min_improvement_pct,
+                                                   alpha=diag.alpha)))
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)
@@ -458,6 +424,19 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
              "diagnose' to find a missing effect")
 
 
+def _print_rules(ctx, _param, value):
+    """--rules: the verdict's decision rules (:mod:`gyrotest.envmodel.rules_doc`), then exit."""
+    if not value or ctx.resilient_parsing:
+        return
+    import shutil
+
+    from ..envmodel.rules_doc import rules_text
+
+    width = min(100, max(60, shutil.get_terminal_size((88, 24)).columns - 2))
+    click.echo(rules_text(width))
+    ctx.exit(0)
+
+
 @command.command("diagnose")
 @click.argument("log", type=str)
 @term_options
@@ -473,6 +452,9 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
               help="Steps of the forward path: after the missing effect, look for the next "
                    "one in the model that has it (several effects are often missing at once).")
 @click.option("--top", type=int, default=12, show_default=True, help="Rows to show.")
+@click.option("--rules", is_flag=True, is_eager=True, expose_value=False,
+              callback=_print_rules,
+              help="Print every decision rule of the verdict with its thresholds and exit.")
 @plot_option("Base residual and candidate bar chart (.png/.svg/.pdf).")
 @ingest_options
 @json_option
@@ -486,110 +468,18 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     of every logged channel (level, square, |x|, rate of change, first-order lag with a fitted
     time constant, rate of that lag; H_i², H_i·H_j, |H|², g_i·g_j). Each is added in turn
     and scored by its held-out residual RMS (blocked cross-validation), with a HAC test of
-    its coefficient in the augmented model. A missing effect needs its held-out gain more
-    often a gain than not across the folds (gain / (fold scatter / sqrt(folds)) >= 1) and
-    either passes the strict test
-    (p x trials x candidates < alpha, gain >= --min-improvement) or gives a clear gain (>= 5 %
-    while the model is above 1.2x the noise floor, p x trials < 0.01; a warm-up, which most
-    folds cannot see, also >= 10 % at fold consistency >= 2.13), or, when the model is
-    at least 2x the noise floor, cuts the held-out RMS by >= 10 % consistently across the
-    folds (gain / (fold scatter / sqrt(folds)) >= 2.13, |z| >= 1; ramp, warm-up, sinusoid
-    and hysteresis >= 20 % at >= 3.75, a warm-up, which most folds cannot see, at >= 2.13
-    with spectral z >= 8); there, when no single
-    term qualifies (or a pair of two others halves the held-out RMS of the one that does),
-    the best candidates, further channels and the largest in-sample gains are also tried
-    in pairs, and so are the level and square of each channel and a ramp beside each of
-    them (two effects that hide each other are named one after the other; a pair with a
-    warm-up at fold consistency >= 2.13 when its spectral z is >= 8; when the best pair
-    fails the joint HAC test (both members |z| < 1 alone), a qualifying pair naming the
-    same member first stands in (such a pair passes without that test at a gain >= 55 %
-    with fold consistency >= 10, or >= 70 % with >= 5, and spectral z >= 8); a pair whose
-    first member alone makes the model worse only when the next step then names an
-    effect, so the loop cannot add and remove it in turn); last of all, a term whose |z| < 1 only
-    because other missing effects inflate its error, when its coefficient stands out of the
-    residual's spectrum (spectral z >= 8). A
-    sinusoid on the period of a logged stimulus is rejected when a term of that channel
-    gets half its gain; otherwise it stands, and the verdict says whose period it shares.
-    Off the strict test, the added coefficients must also stand out of the candidate
-    model's residual spectrum (frequency-domain GLS z >= 8; >= 4 while the model is
-    within 2x the floor, or when the candidate brings it within 1.25x), unless the held-out
-    gain is >= 55 % with fold consistency >= 5 or >= 40 % at >= 10 (a pair: >= 40 % at >= 5, then z >= 6; no exemption for a pair with a
-    member that failed the test alone): a smooth channel fitted to the gyro's own slow
-    wander is not named. Far above the floor the lowest bins of a red residual's spectrum
-    are raised to the power law of the band above (not for a warm-up, nor for a coefficient
-    at HAC |z| >= 3.5). A hysteresis branch also needs fold consistency >= 4 (>= 10 with
-    p x trials < 0.01 off the strict test, or >= 100 with p x trials < 0.05) and is paired
-    only with the level or square of its own temperature, hyst(c) with T(c) or T2(c), each
-    coefficient at HAC z >= 4 in the pair's fit (a warm-up, one transient with about one
-    degree of freedom, at spectral z >= 8 instead; a hysteresis at spectral z >= 8 when the
-    pair's fold consistency is >= 100); the same joint test (and a gain >= 40 % at fold
-    consistency >= 5) admits a hysteresis or a term set aside by the spectral test beside
-    another candidate (a warm-up hidden by a missing hysteresis). A pair tested jointly
-    that fails the joint test still qualifies on decisive evidence (gain >= 55 % at fold
-    consistency >= 10, or >= 70 % at >= 5, and spectral z >= 8) against the model and
-    against its better member alone: a tilt table of few positions leaves a member few
-    effective degrees of freedom. At >= 2x the floor, tied candidates (within 2 %, or
-    a gain over them with fold consistency < 2.13) are told apart by the step after them
-    (each fitted with the pair pool, second-order forms and channel cross terms), and a lag (Tlag, chanlag) gives way to its
-    plain form when that does >= 10 % better beside a missing rate term of another channel
-    (and a level T, chan to its lag when the lag does >= 10 % better beside a rate term, its
-    channel's own included: a lagged node and its sensor's rate hide each other);
-    a lag whose time constant reaches the record length is named only on the strict test
-    (lagged that long, a channel is a slow trend that fits the gyro's own drift).
-    A ramp, warm-up or hysteresis added as the missing effect (not in place of a model
-    term) must also beat a
-    look-elsewhere surrogate test: the best gain any candidate reaches on 39
-    phase-randomised surrogates of the residual (held out fold by fold as the diagnosis
-    holds out the log) may reach its gain in at most 3 of them
-    (surrogate p <= 0.1); otherwise the best other qualifying candidate whose own gain
-    passes that test is named, or none. A channel term is set aside (left "possible") when
-    those surrogates reach its gain and so do 39 circular shifts and reversals of the
-    residual it leaves (the gyro's own excursions kept); a pair when the best pair of the
-    step's eight best candidates reaches its gain on the surrogates (at 2-10x the floor).
-    A channel term set aside with no other single to name may be one of two effects that
-    hide each other (the missed one is in every surrogate): the step's best qualifying pair
-    is named instead when it beats that pair test.
-    A product of two channels gives way to the level terms of its factors when those do
-    >= 10 % better together (no interaction without its main effects), and to the level of
-    a factor when, over this log, it is that level to |r| >= 0.98 (the other factor nearly
-    constant: a tilt table's vertical gravity component) and the level qualifies, leaving the
-    model >= 2x the floor; the next step tests the product beside it. A model within 1.1x
-    the floor takes a new term only at a gain >= 20 %, or >= 10 % on the strict test with
-    fold consistency >= 4. When no new effect qualifies, the model's own field terms of an
-    order are tried in the gyro's axes: the block over every moving field axis (Hvec for
-    Hx/Hy/Hz, Hquad for Hsq/Hprod/Hmag2) replaces them when it cuts the held-out RMS by
-    >= 8 % at fold consistency >= 2.5 and what it adds beyond them has |z| >= 1, or by
-    >= 5 % when fold consistency and |z| are each >= 1 and (t + |z|)/sqrt(2) >= 2.5 (a gyro
-    mounted a few degrees off the coils; a sequence that moves coils together in few blocks
-    shows the cross-axis parts in few folds); the quadratic block is also chosen before a new
-    second-order field term (Hsq, Hprod, Hmag2) when it holds out >= 10 % better than that
-    term (the cross-axis parts of a large second-order effect would each qualify and take
-    the steps one by one), unless that term with one more second-order field term holds
-    out as well as the block; a chosen quadratic block gives way to two second-order field
-    terms added beside the model that hold out as well (>= 10 % gain at fold consistency
-    >= 2.13), named "together with" each other: two coefficients extrapolate to field
-    settings the held-out folds did not see where the block's six do not; with all but one
-    field axis in the model, that axis's term (Hx, Hy or Hz) is named instead. When still none qualifies above 1.2x the
-    floor, the three candidates with the largest in-sample gains (>= 20 %) are judged in
-    place of each model term: a term of your model that stood in for the missing effect
-    (collinear with it over the record) is named for replacement ("replaces X") when the
-    swap qualifies, fits the record no worse, holds out better than the candidate beside
-    the term at fold consistency >= 2.13, and the candidate's p x trials beside the term
-    is < 0.01 (< 0.001 for a ramp, warm-up, sinusoid or hysteresis). When still none
-    qualifies and the model is >= 2x the floor, three or more effects may hide one
-    another (each alone and in pairs holds out worse than all together): the ten
-    channel-driven candidates with the largest in-sample gains (no ramp, warm-up,
-    sinusoid or hysteresis) are fitted together and eliminated backward (a member goes
-    while leaving it out costs < 2 % held-out RMS, or while its HAC |z| in the group's fit
-    is < 4); at least three must remain, cut the held-out RMS by >= 50 % at fold
-    consistency >= 5, hold out at most half of the best member alone and stand out of the
-    residual's spectrum (z >= 8). The member best alone is named first, "together with"
-    the others, which the next steps test.
-    When no missing effect is found, each term of the model is left out once: one whose
-    removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal
-    ("the model does better without X: remove it"). The noise floor is
-    fixed before any model is fitted: from the log's short-tau noise (differences across
-    steps of a logged channel left out), or from --reference.
+    its coefficient in the augmented model.
+
+    A missing effect is named when its held-out gain repeats across the folds and passes the
+    HAC test (p x trials x candidates < alpha, gain >= --min-improvement), or, off that test,
+    when a clear gain also stands out of the residual's own spectrum and beats a
+    look-elsewhere test on surrogates of the residual, so that a smooth channel or a ramp
+    fitted to the gyro's own slow wander is not named. Effects that hide each other are
+    tried in pairs and groups, a term of your model that stood in for the missing effect is
+    named for replacement, and a term the model does better without is named for removal.
+    Every rule with its thresholds: --rules (and the man page, WORKBENCH VERDICT RULES).
+    The noise floor is fixed before any model is fitted: from the log's short-tau noise
+    (differences across steps of a logged channel left out), or from --reference.
     The verdict names the effect, how to add it (--terms or the equivalent --term), the
     explanations this log cannot tell apart, and the forward path (--path) to the floor.
 

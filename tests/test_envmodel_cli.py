@@ -287,7 +287,7 @@ def test_diagnose_rules_prints_every_rule_without_a_log():
     RULES) and exits 0 before any log is read; the numbers in the text are the thresholds
     the diagnosis applies (gyrotest.envmodel.rules)."""
     from gyrotest.envmodel import rules as r
-    from gyrotest.envmodel.rules_doc import RULES
+    from gyrotest.workbench_rules import RULES
 
     res = run_cli(["model", "diagnose", "--rules"])
     assert res.code == 0, res.err

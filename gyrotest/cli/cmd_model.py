@@ -239,7 +239,7 @@ def render_diagnosis(diag, top: int = 12) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    from ..envmodel.rules_doc import SUMMARY
+    from ..workbench_rules import SUMMARY
 
     out = console()
     b = diag.base
@@ -425,12 +425,12 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 
 
 def _print_rules(ctx, _param, value):
-    """--rules: the verdict's decision rules (:mod:`gyrotest.envmodel.rules_doc`), then exit."""
+    """--rules: the verdict's decision rules (:mod:`gyrotest.workbench_rules`), then exit."""
     if not value or ctx.resilient_parsing:
         return
     import shutil
 
-    from ..envmodel.rules_doc import rules_text
+    from ..workbench_rules import rules_text
 
     width = min(100, max(60, shutil.get_terminal_size((88, 24)).columns - 2))
     click.echo(rules_text(width))

@@ -1,7 +1,8 @@
 """The decision rules of the workbench diagnosis (:mod:`gyrotest.envmodel.diagnose`), in
 words, with their thresholds: what ``gyrotest model diagnose --rules`` prints and the man page
 lists. The thresholds live in :mod:`gyrotest.envmodel.rules`; the text follows them (a change of
-rule changes both).
+rule changes both; ``tests/test_envmodel_cli.py`` checks the main numbers). A plain module outside
+:mod:`gyrotest.envmodel`, so that printing it does not load numpy and scipy.
 """
 
 from __future__ import annotations

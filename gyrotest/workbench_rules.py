@@ -59,7 +59,11 @@ RULES: tuple[tuple[str, str], ...] = (
      "better member alone: a tilt table of few positions leaves a member few effective "
      "degrees of freedom."),
     ("Ties and lags",
-     "At >= 2x the floor, tied candidates (within 2 %, or a gain over them with fold "
+     "Candidates within 2 % of the best held-out RMS are ranked by class (a library term, "
+     "then a second-order form, then a generic channel term, then a ramp, warm-up, sinusoid "
+     "or hysteresis), then by the channels they bring into the model (fewest first: the "
+     "sensors the model already uses explain more simply), then by form (x before x², a lag "
+     "before a rate). At >= 2x the floor, tied candidates (within 2 %, or a gain over them with fold "
      "consistency < 2.13) are told apart by the step after them (each fitted with the pair "
      "pool, second-order forms and channel cross terms), and a lag (Tlag, chanlag) gives way "
      "to its plain form when that does >= 10 % better beside a missing rate term of another "

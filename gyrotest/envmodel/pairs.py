@@ -258,10 +258,12 @@ def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     # (the found pair's own members too: seed 69070, the level of a humidity channel chosen
     # beside a missing vibration level that a pair found by other routes had named with the
     # humidity's lagged rate, 1.22 x the true model)
+    tried: set[int] = set()
     for m in _pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
                                       if chosen in ab] + [found[0], found[1]]:
-        if m is chosen or m.spec is None or chosen.spec is None:
+        if m is chosen or m.spec is None or chosen.spec is None or id(m) in tried:
             continue
+        tried.add(id(m))  # a member found by two routes is fitted once
         r = fit_pair(wd, base_specs, chosen, m, thetas0, folds)
         if r is None:
             continue

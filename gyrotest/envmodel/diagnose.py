@@ -275,7 +275,7 @@ from dataclasses import dataclass, field
 
 from ..errors import InputError
 from . import stats as st
-from .axes import axes_step, sparse_follow, sparse_pair
+from .axes import axes_step, block_pair, sparse_follow, sparse_pair
 from .candidate import (
     Candidate,
     equivalents,
@@ -283,7 +283,7 @@ from .candidate import (
 )
 from .fit import FitResult, WorkData, fit_model
 from .floor import work_floor
-from .gates import chance_gate, channel_chance_gate
+from .gates import chance_gate, channel_chance_gate, pair_chance_gate
 from .groups import group_step
 from .judge import judge as _judge
 from .pairs import lag_or_plain, lag_resolved, lookahead, marginal, pair_step, redirect
@@ -591,6 +591,14 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
           and chosen.route is not None and (chosen.route in CHANNEL_CHANCE_ROUTES
                                             or chosen.route.startswith("together with"))):
         chosen = channel_chance_gate(wd, base, out, chosen, folds, follows=follows)
+    if (chosen is None and candidates is None and not nested and math.isfinite(base_ratio)
+            and base_ratio >= FAR_RATIO):
+        # nor anything else: a new effect beside a field block in place of the model's field
+        # terms, each hiding the other (a gyro off the coils: :func:`.axes.block_pair`),
+        # with the look-elsewhere test of every pair
+        chosen = block_pair(wd, base, base_specs, out, thetas0, folds, follows=follows)
+        if chosen is not None:
+            chosen = pair_chance_gate(wd, base, out, chosen, folds)
     return out, chosen
 
 

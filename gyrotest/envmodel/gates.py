@@ -198,6 +198,25 @@ def set_aside_pair(wd, base, out: list[Candidate], folds: int, follows=None
     return pair
 
 
+def pair_chance_gate(wd, base, out: list[Candidate], pair: Candidate, folds: int
+                     ) -> Candidate | None:
+    """``pair`` (a candidate marked "together with" its partner) when its held-out gain
+    beats the best pair of the step's candidates on phase-randomised surrogates of the base
+    residual (:func:`_pair_chance`, p ≤ :data:`CHANCE_P`) or the test cannot be run; else
+    None, the candidate unmarked."""
+    test = _pair_chance(wd, base, out, pair, folds)
+    if test is not None and test.p > CHANCE_P:
+        pair.significant = False
+        pair.route = None
+        pair.pair = None
+        pair.note = test.text()
+        return None
+    if test is not None:
+        pair.chance = test
+    pair.equivalents = equivalents(pair, out, base)
+    return pair
+
+
 def _pair_chance(wd, base, out: list[Candidate], pair: Candidate, folds: int):
     """The look-elsewhere test of ``pair`` (a candidate marked "together with" its partner,
     ``pair.pair = (partner term, pair held-out RMS)``): its held-out gain over the base
@@ -212,5 +231,6 @@ def _pair_chance(wd, base, out: list[Candidate], pair: Candidate, folds: int):
                             top=PAIR_CHANCE_TOP, seed=CHANCE_SEED)
 
 
-__all__ = ["beats_shifts", "chance_gate", "channel_chance_gate", "phase_test",
+__all__ = ["beats_shifts", "chance_gate", "channel_chance_gate", "pair_chance_gate",
+           "phase_test",
            "set_aside_pair"]

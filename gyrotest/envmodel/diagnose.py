@@ -592,7 +592,7 @@ def _step(wd: WorkData, base: FitResult, candidates, floor: st.NoiseFloor, alpha
                                             or chosen.route.startswith("together with"))):
         chosen = channel_chance_gate(wd, base, out, chosen, folds, follows=follows)
     if (chosen is None and candidates is None and not nested and math.isfinite(base_ratio)
-            and base_ratio >= FAR_RATIO):
+            and base_ratio >= ABOVE_FLOOR):
         # nor anything else: a new effect beside a field block in place of the model's field
         # terms, each hiding the other (a gyro off the coils: :func:`.axes.block_pair`),
         # with the look-elsewhere test of every pair

@@ -127,6 +127,17 @@ RULES: tuple[tuple[str, str], ...] = (
      "5, hold out at most half of the best member alone and stand out of the residual's "
      "spectrum (z >= 8). The member best alone is named first, \"together with\" the others, "
      "which the next steps test."),
+    ("A new effect beside the field in the gyro's axes",
+     "When still none qualifies and the model is >= 1.2x the floor, each field block (Hvec, "
+     "Hquad) in place of the model's field terms of its order is fitted with each candidate "
+     "of the pair pool: a gyro off the coils hides a second effect behind the cross-axis "
+     "parts of its field sensitivity, and the block alone behind that effect. The pair must "
+     "cut the held-out RMS by >= 10 % at fold consistency >= 2.13, to <= 0.9x either member "
+     "alone; the candidate's HAC |z| in the pair's fit must reach 4 and its spectral z 8, "
+     "what the block adds beyond the replaced terms |z| 1, and the pair's gain must beat the "
+     "best pair of the step's candidates on the phase surrogates (p <= 0.1). The candidate "
+     "is named \"together with\" the block (a physical effect before a ramp, warm-up, "
+     "sinusoid or hysteresis within 2 %); the next step names the block."),
     ("Removal, the floor and the verdict",
      "When no missing effect is found, each term of the model is left out once: one whose "
      "removal lowers the held-out RMS by >= 5 % (fold consistency >= 1) is named for removal "

@@ -257,6 +257,18 @@ that the model under judgment cannot move:
    stand out of the residual spectrum (z ≥ 8); the member best alone is named first,
    "together with" the others.
 
+   **A new effect beside the field in the gyro's own axes** (:func:`.axes.block_pair`):
+   when still nothing qualifies and the model is ≥ 1.2 × the floor, each field block in
+   place of the model's field terms of its order is fitted with each member of the pair
+   pool. A gyro off the coils hides a second effect behind the cross-axis parts of its
+   field sensitivity, and the block alone behind that effect (seed 83007: T alone −6 %,
+   ``Hvec`` in place of Hz alone +3 %, together −43 %). The pair must cut the held-out RMS
+   by ≥ 10 % at fold consistency ≥ 2.13, to ≤ 0.9 × either member alone; the new member's
+   HAC |z| in the pair's fit must reach 4 and its spectral z 8, what the block adds beyond
+   the replaced terms Wald |z| 1, and the pair's gain must beat chance (the pair
+   look-elsewhere test). The new effect is named "together with" the block (a physical
+   effect before a nuisance term within 2 %); the next step names the block.
+
 7. **Backward check** (:mod:`gyrotest.envmodel.prune`): when no missing effect is found,
    every term of the model is left out once; one whose removal lowers the held-out RMS by
    ≥ 5 % (gain/(fold scatter/√folds) ≥ 1) is named for removal ("the model does better

@@ -937,6 +937,8 @@ def test_a_new_effect_hidden_behind_a_rotated_field_is_paired_with_the_block():
     assert top.term == "T(T_gyro)", d.verdict
     assert top.route == "together with Hvec(mag_B1,mag_B2,mag_B3) in place of Hz(mag_B3)"
     assert top.pair is not None and top.pair[1] <= 0.6 * d.base.rms_holdout, top.pair
+    assert ("the next step tests Hvec(mag_B1,mag_B2,mag_B3) in place of Hz(mag_B3)"
+            in d.verdict), d.verdict
     # the next step, with T added: the block in place of Hz
     _, _, d2 = _diagnose_base(83007, ("Hz(mag_B3)", "T(T_gyro)"))
     top2 = d2.found[0]

@@ -97,13 +97,17 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
             why = (f"{disp[0]} alone would leave {disp[1]:.4g} deg/h, while" if disp
                    else "no single term explains it:")
             many = ", " in pair[0]  # a group (:mod:`.groups`): three or more members
+            # a field block in place of the model's field terms (:func:`.axes.block_pair`)
+            other = pair[0] + (" in place of " + top.route.split(" in place of ", 1)[1]
+                               if top.route and top.route.startswith("together with")
+                               and " in place of " in top.route else "")
             v += (f"; the model is {ratio:.1f}x the noise floor and {why} "
-                  f"{top.term}{', ' if many else ' and '}{pair[0]} together bring the "
+                  f"{top.term}{', ' if many else ' and '}{other} together bring the "
                   f"held-out RMS to {pair[1]:.4g} deg/h, consistently across the folds "
                   f"(gain/(fold scatter/sqrt(folds)) = {pair[2]:.1f}); "
                   + (f"each alone or in pairs holds out far worse: they hide one another, so "
                      f"the next steps test {pair[0]}" if many else
-                     f"each hides the other, so the next step tests {pair[0]}"))
+                     f"each hides the other, so the next step tests {other}"))
         if top.note:
             v += f"; {top.note}"
         if top.klass == "channel" and math.isfinite(top.r_residual):

@@ -28,7 +28,7 @@ def rigged(monkeypatch):
     consistency 50 and spectral z 100 (decisive, :func:`gyrotest.envmodel.pairs._decisive`,
     from a gain of 55 %)."""
     def rig(cands, table, fail, gain=0.5):
-        monkeypatch.setattr(pairs, "_pair_pool", lambda base, out: [])
+        monkeypatch.setattr(pairs, "pair_pool", lambda base, out: [])
         monkeypatch.setattr(pairs, "_polynomial_pairs",
                             lambda out: [(cands[a], cands[b]) for a, b in table])
         for name in ("_hyst_level_pairs", "_hidden_pairs", "_trend_pairs", "_partner_pairs"):

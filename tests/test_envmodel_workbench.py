@@ -272,7 +272,7 @@ def test_pair_pool_holds_other_channels_plain_forms_and_in_sample_gains():
     the plain form of a lag, and candidates that only the in-sample fit shows (an effect hidden
     by another predicts held-out data worse than nothing)."""
     from gyrotest.envmodel.candidate import Candidate
-    from gyrotest.envmodel.pairs import _pair_pool
+    from gyrotest.envmodel.pairs import pair_pool
     from gyrotest.envmodel.terms import TermSpec
 
     class _Base:
@@ -290,7 +290,7 @@ def test_pair_pool_holds_other_channels_plain_forms_and_in_sample_gains():
            cand("ramp", (), 7.6, 6.8), cand("dchanlag", ("P",), 7.7, 7.4),
            cand("dchan", ("P",), 7.8, 7.3), cand("Tlag", ("T",), 8.0, 7.0),
            cand("sin", (), 11.0, 5.0), cand("chan", ("RH",), 10.5, 9.9)]
-    pool = [c.term for c in _pair_pool(_Base(), out)]
+    pool = [c.term for c in pair_pool(_Base(), out)]
     assert pool[:4] == ["chanlag(supply)", "g(acc)", "g2(acc)", "V"]
     assert "dchan(P)" in pool and "dchanlag(P)" in pool  # the plain form of the lag too
     assert "sin" in pool  # worse than nothing held out, best in-sample

@@ -26,7 +26,7 @@ from . import stats as st
 from .candidate import Candidate, held_out_gain, significance, spectral_z
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
-from .pairs import _pair_pool, fit_pair, mark_pair
+from .pairs import fit_pair, mark_pair, pair_pool
 from .rules import (
     AXES_COMBINED_WEAK,
     AXES_GAIN,
@@ -215,12 +215,14 @@ def block_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
 
     Seed 83007: a gyro 4.4° off the coils, Hz(mag_B3) in the model and T(T_gyro) missing at
     5.9× the floor. T alone gains 6 %, the block ``Hvec`` in place of Hz alone holds out 3 %
-    worse, together they gain 45 %; neither qualifies alone and the general pair search
+    worse, together they gain 43 %; neither qualifies alone and the general pair search
     (:func:`gyrotest.envmodel.pairs._find_pair`) keeps blocks out (they replace terms).
 
-    For each judged block that replaces model terms (``out``) and each member of the pair pool
-    (:func:`gyrotest.envmodel.pairs._pair_pool`) that is not a field term of the block's
-    order: the model without the replaced terms, with the block and the member. A pair
+    For each field block that replaces model terms
+    (:func:`gyrotest.envmodel.screen.block_candidates`; fitted alone unless ``out`` holds it
+    judged) and each member of the pair pool (:func:`gyrotest.envmodel.pairs.pair_pool`)
+    that is not a field term of the block's order nor a generic term of its channels: the
+    model without the replaced terms, with the block and the member. A pair
     qualifies when it cuts the held-out RMS by ≥ :data:`FAR_GAIN` at fold consistency ≥
     :data:`FAR_T`, to at most :data:`PAIR_MARGIN` × either member alone; the member's HAC z
     in the pair's fit reaches :data:`HYST_PAIR_Z` (the joint test of hidden pairs) and its
@@ -249,7 +251,7 @@ def block_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
         blocks.append((spec, repl, fitted))
     if not blocks:
         return None
-    pool = _pair_pool(base, out)
+    pool = pair_pool(base, out)
     found = []
     for spec, repl, blk in blocks:
         replaced = [s for s in base_specs if s.label in repl]
@@ -302,4 +304,5 @@ def block_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     return named
 
 
-__all__ = ["axes_step", "block_pair", "axes_test", "block_qualifies", "sparse_follow", "sparse_pair"]
+__all__ = ["BLOCK_KEYS", "axes_step", "axes_test", "block_pair", "block_qualifies",
+           "sparse_follow", "sparse_pair"]

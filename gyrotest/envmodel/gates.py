@@ -187,29 +187,20 @@ def set_aside_pair(wd, base, out: list[Candidate], folds: int, follows=None
     pair = pair_step(wd, base, base_specs, out, thetas0, folds, follows=follows)
     if pair is None:
         return None
-    test = _pair_chance(wd, base, out, pair, folds)
-    if test is None or test.p > CHANCE_P:
-        pair.significant = False
-        pair.route = None
-        pair.pair = None
-        return None
-    pair.chance = test
-    pair.equivalents = equivalents(pair, out, base)
-    return pair
+    return pair_chance_gate(wd, base, out, pair, folds, untested=False)
 
 
-def pair_chance_gate(wd, base, out: list[Candidate], pair: Candidate, folds: int
-                     ) -> Candidate | None:
+def pair_chance_gate(wd, base, out: list[Candidate], pair: Candidate, folds: int,
+                     untested: bool = True) -> Candidate | None:
     """``pair`` (a candidate marked "together with" its partner) when its held-out gain
     beats the best pair of the step's candidates on phase-randomised surrogates of the base
-    residual (:func:`_pair_chance`, p ≤ :data:`CHANCE_P`) or the test cannot be run; else
-    None, the candidate unmarked."""
+    residual (:func:`_pair_chance`, p ≤ :data:`CHANCE_P`), or when the test cannot be run
+    and ``untested`` allows it; else None, the candidate unmarked."""
     test = _pair_chance(wd, base, out, pair, folds)
-    if test is not None and test.p > CHANCE_P:
+    if (test is None and not untested) or (test is not None and test.p > CHANCE_P):
         pair.significant = False
         pair.route = None
         pair.pair = None
-        pair.note = test.text()
         return None
     if test is not None:
         pair.chance = test

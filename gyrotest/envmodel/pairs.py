@@ -82,7 +82,7 @@ def _find_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
     ``exclude`` left out, held-out RMS below ``below``: (more useful member, the other, the
     pair's held-out RMS, its fold consistency), or None."""
     skip = exclude or set()
-    pool = [c for c in _pair_pool(base, out) if id(c) not in skip]
+    pool = [c for c in pair_pool(base, out) if id(c) not in skip]
     pairs = [(pool[i], pool[j]) for i in range(len(pool)) for j in range(i + 1, len(pool))]
     seen = {frozenset((id(a), id(b))) for a, b in pairs}
     pairs += [(a, b) for a, b in _polynomial_pairs(out)
@@ -259,7 +259,7 @@ def redirect(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
     # beside a missing vibration level that a pair found by other routes had named with the
     # humidity's lagged rate, 1.22 x the true model)
     tried: set[int] = set()
-    for m in _pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
+    for m in pair_pool(base, out) + [o for ab in _polynomial_pairs(out) for o in ab
                                       if chosen in ab] + [found[0], found[1]]:
         if m is chosen or m.spec is None or chosen.spec is None or id(m) in tried:
             continue
@@ -298,7 +298,7 @@ def lookahead(wd: WorkData, base: FitResult, base_specs, out: list[Candidate],
         return chosen
     skip = {id(c) for c in tied} | {id(c) for c in alts}
     skip |= {id(o) for c in alts for o in out if o.term in c.equivalents}
-    partners = [m for m in _pair_pool(base, out) if id(m) not in skip]
+    partners = [m for m in pair_pool(base, out) if id(m) not in skip]
     partners += [b for c in alts for a, b in _polynomial_pairs(out)
                  if a is c and id(b) not in skip and b not in partners]
     # second-order forms of the channels the model already uses: a hidden partner need not
@@ -394,7 +394,7 @@ def lag_or_plain(wd: WorkData, base: FitResult, base_specs, out: list[Candidate]
     own = set(chosen.spec.channels)
     if lag_chosen:
         lags = ("Tlag", "chanlag", "T", "chan")
-        partners = [m for m in _pair_pool(base, out) if m is not lag and m is not plain
+        partners = [m for m in pair_pool(base, out) if m is not lag and m is not plain
                     and not (m.spec.key in lags and set(m.spec.channels) == own)]
         partners += sorted((m for m in _pairable(out) if m.spec.key in RATE_FORMS
                             and m not in partners and m.improvement_pct > 0),
@@ -835,7 +835,7 @@ def _decisive_over_members(r: FitResult, a: Candidate, b: Candidate, gain: float
     return _decisive(g_m, t_m, z_spec)
 
 
-def _pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
+def pair_pool(base: FitResult, out: list[Candidate]) -> list[Candidate]:
     """The candidates :func:`pair_step` pairs (see :data:`PAIR_TOP`, :data:`PAIR_MORE`)."""
     ok = _pairable(out)
 

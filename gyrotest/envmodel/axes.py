@@ -26,7 +26,7 @@ from . import stats as st
 from .candidate import Candidate, held_out_gain, significance, spectral_z
 from .channel_terms import custom_text
 from .fit import FitResult, WorkData, fit_model
-from .pairs import fit_pair, mark_pair, pair_pool
+from .pairs import fit_from_starts, fit_pair, mark_pair, pair_pool
 from .rules import (
     AXES_COMBINED_WEAK,
     AXES_GAIN,
@@ -264,14 +264,7 @@ def block_pair(wd: WorkData, base: FitResult, base_specs, out: list[Candidate], 
             # from the base model's nonlinear parameters and from the member's own (fitted
             # beside the replaced terms, a warm-up's τ may be trapped)
             own = {**thetas0, **(getattr(m._fit, "_thetas", {}) or {})}
-            r = None
-            for th in [dict(thetas0)] + ([own] if own != thetas0 else []):
-                try:
-                    f = fit_model(wd, specs, folds=folds, thetas0=th, light=True)
-                except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
-                    continue
-                if r is None or f.rms_holdout < r.rms_holdout:
-                    r = f
+            r = fit_from_starts(wd, specs, thetas0, own, folds)
             if r is None:
                 continue
             if not r.rms_holdout <= PAIR_MARGIN * min(blk.rms_holdout, m.rms_holdout):

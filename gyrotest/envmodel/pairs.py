@@ -221,6 +221,22 @@ def fit_pair(wd: WorkData, base_specs, a: Candidate, b: Candidate, thetas0, fold
         return None
 
 
+def fit_from_starts(wd: WorkData, specs, thetas0, own, folds: int) -> FitResult | None:
+    """The model ``specs`` fitted from the base model's nonlinear parameters ``thetas0`` and,
+    when they differ, from the members' own ``own`` (a lag's τ or a warm-up's fitted beside
+    another effect may be trapped far from the truth): the fit that holds out better, or
+    None when neither can be fitted."""
+    r = None
+    for th in [dict(thetas0)] + ([own] if own != thetas0 else []):
+        try:
+            f = fit_model(wd, specs, folds=folds, thetas0=th, light=True)
+        except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
+            continue
+        if r is None or f.rms_holdout < r.rms_holdout:
+            r = f
+    return r
+
+
 def mark_pair(found: tuple[Candidate, Candidate, float, float]) -> Candidate:
     """The pair's more useful member, marked significant with the route "together with
     OTHER" (see :func:`_find_pair`)."""
@@ -733,15 +749,8 @@ def _channel_pairs(wd: WorkData, base: FitResult, base_specs, out: list[Candidat
         own = dict(thetas0)
         for c in members:
             own.update(getattr(c._fit, "_thetas", {}) or {})
-        r = None
-        for th in [dict(thetas0)] + ([own] if own != thetas0 else []):
-            try:
-                f = fit_model(wd, list(base_specs) + [c.spec for c in members], folds=folds,
-                              thetas0=th, light=True)
-            except (InputError, AnalysisError, np.linalg.LinAlgError, ValueError):
-                continue
-            if r is None or f.rms_holdout < r.rms_holdout:
-                r = f
+        r = fit_from_starts(wd, list(base_specs) + [c.spec for c in members], thetas0, own,
+                            folds)
         if r is None or not r.rms_holdout <= PAIR_MARGIN * min(c.rms_holdout for c in members):
             continue
         impr, _, t_cv = held_out_gain(base, r, folds)

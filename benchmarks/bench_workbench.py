@@ -254,25 +254,19 @@ def realised_magnitudes(case: ws.Case, wd) -> tuple[float, dict[str, dict]]:
 
 
 def _best_candidates(d, total: np.ndarray, floor: float, u0, top: int = 3) -> list[dict]:
-    """The ``top`` candidates by held-out gain with their evidence and what each would
-    explain of the injected truth (floor units), for studying the decision rules."""
+    """The ``top`` candidates by significance with their test, and what the chosen one
+    explains of the injected truth (floor units), for studying the decisions."""
     import math as _m
-    ok = [c for c in d.candidates if _m.isfinite(c.improvement_pct)]
-    ok.sort(key=lambda c: -c.improvement_pct)
+    ok = [c for c in d.candidates if _m.isfinite(getattr(c, "log_p", _m.nan))]
     out = []
     for c in ok[:top]:
         X = _design(c._fit) if c._fit is not None else None
         u1 = _unexplained(total, X) / floor if X is not None else None
         out.append({"term": c.term, "class": c.klass, "key": c.spec.key if c.spec else None,
-                    "improvement_pct": c.improvement_pct, "scatter_pct": c.gain_scatter_pct,
-                    "cv_t": c.cv_t, "p_trials": c.p_trials, "z": c.z, "p_adj": c.p_adj,
-                    "n_params": c.n_params, "significant": c.significant,
-                    "route": c.route, "spectral_z": c.spectral_z,
-                    "rejected": c.rejected,
-                    # the searched nonlinear parameters (tau_s, width_c, f_Hz, ...)
-                    "theta": {k: float(v) for k, v in
-                              ((getattr(c._fit, "_thetas", None) or {}).get(c.term) or {})
-                              .items()} if c._fit is not None else {},
+                    "lr": c.lr, "df": c.df, "p": c.p, "p_family": c.p_family,
+                    "delta_bic": c.dbic, "searched": c.searched, "n_params": c.n_params,
+                    "significant": c.significant, "replaces": c.replaces,
+                    "theta": {k: float(v) for k, v in (c.theta or {}).items()},
                     "truth_reduction_floor": (u0 - u1) if (u0 is not None and u1 is not None)
                     else None})
     return out
@@ -314,13 +308,16 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                         "gyro": {"rate_unit": "deg/h"}})
         stage = "prepare"
         wd = prepare(log)
+        # the bench metadata: the log starts at the gyro's power-on (a warm-up is possible)
+        wd.power_on = bool(getattr(log.gyro, "power_on_at_start", False))
         row["reference"] = ref_log is not None
         if ref_log is not None:
-            from gyrotest.envmodel.floor import check_reference, reference_floor
+            from gyrotest.envmodel.floor import check_reference
+            from gyrotest.envmodel.likelihood import reference_noise
 
-            fl = reference_floor(ref_log, wd)
-            check_reference(ref_log, log, wd, fl)
-            wd.floor = fl
+            noise = reference_noise(ref_log, wd)
+            check_reference(ref_log, log, wd, noise)
+            wd.noise_ref = noise
         row.update(resolution_s=wd.resolution_s, smoothing_s=wd.refs.smoothing_s, blocks=wd.nb)
         stage = "truth mapping"
         floor, mags = realised_magnitudes(case, wd)
@@ -409,20 +406,17 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                            base_ratio_printed=d.ratio_to_floor,
                            noise_floor_printed_dph=d.noise_floor_dph,
                            first_verdict=d.verdict, alarm=bool(found),
-                           possible=step["possible"])
+                           possible=step["possible"],
+                           noise_first={"N": d.noise.N, "B": d.noise.B, "K": d.noise.K},
+                           whiteness_p=d.whiteness.p if d.whiteness else None)
             if found:
                 top = found[0]
                 step["top"] = {**_spec_info(top.spec), "replaces": top.replaces,
-                               "improvement_pct": top.improvement_pct, "p_adj": top.p_adj,
-                               "p_trials": getattr(top, "p_trials", None),
-                               "cv_t": getattr(top, "cv_t", None),
-                               "z": top.z, "spectral_z": getattr(top, "spectral_z", None),
-                               "route": getattr(top, "route", None),
-                               "class": getattr(top, "klass", None),
-                               "pair": getattr(top, "pair", None) is not None,
-                               "chance": (top.chance.to_dict()
-                                          if getattr(top, "chance", None) is not None
-                                          else None)}
+                               "improvement_pct": top.improvement_pct, "lr": top.lr,
+                               "p": top.p, "p_family": top.p_family, "delta_bic": top.dbic,
+                               "z": top.z, "class": top.klass, "searched": top.searched,
+                               "pair": top.pair is not None,
+                               "equivalents": list(top.equivalents)}
                 added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,
                               "equivalents": list(getattr(top, "equivalents", None) or [])})
             rm = getattr(d, "remove", None)

@@ -151,6 +151,8 @@ class Case:
     base_extra: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
     notes: list[str] = field(default_factory=list)
     skipped: str | None = None
+    #: the log starts at the gyro's power-on (bench metadata; a warm-up is possible)
+    power_on: bool = False
 
     @property
     def true_terms(self) -> list[str]:
@@ -1001,6 +1003,14 @@ def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = N
     rate = bias + noise + sum((e.signal for e in truth), np.zeros(n))
     case.noise_signal = noise
     case.df, case.profile = run.frame(rate, rng)
+    # the bench metadata a lab engineer knows: whether the log starts at the gyro's power-on
+    # (drawn from its own stream so that the case itself does not change): always when a
+    # warm-up transient or self-heating is simulated, else half the runs
+    prng = np.random.default_rng([int(seed), 952])
+    case.power_on = bool(any(e.cls == "warmup" for e in truth)
+                         or "self-heating after power-on" in run.desc
+                         or prng.random() < 0.5)
+    case.profile.setdefault("gyro", {})["power_on_at_start"] = case.power_on
     case.fmt = "parquet" if rng.random() < 0.25 else "csv"
     case.notes += [f"bias {bias:.3g} deg/h"]
     return case

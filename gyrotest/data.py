@@ -77,6 +77,8 @@ class GyroConstants:
     model: str | None = None
     serial: str | None = None
     type: str | None = None
+    #: the log starts at the gyro's power-on (a warm-up transient is a candidate effect)
+    power_on_at_start: bool | None = None
 
     @property
     def angle_quantum_arcsec(self) -> float | None:

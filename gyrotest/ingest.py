@@ -250,7 +250,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     outs = roles["output"]
     arrays = {c: _column_to_float(raw, c, "gyro output") for c in outs}
     gyro = GyroConstants(output_kind=kind, model=g.get("model"), serial=g.get("serial"),
-                         type=g.get("type"))
+                         type=g.get("type"), power_on_at_start=g.get("power_on_at_start"))
     # ---- auxiliary
     temps = {c: _column_to_float(raw, c, "temperature") for c in roles.get("temperature") or []}
     fields = {c: _column_to_float(raw, c, "magnetic field") for c in roles.get("field") or []}

@@ -84,6 +84,7 @@ SCHEMA: dict[str, dict[str, type | tuple]] = {
         "model": str,
         "serial": str,
         "type": str,
+        "power_on_at_start": bool,  # the log starts at the gyro's power-on (warm-up)
     },
     "site": {
         "latitude_deg": (float, int),

@@ -79,3 +79,23 @@ def noise_floor_of(res, log, wd) -> float:
     wd2 = prepare(noise_log, resolution=wd.resolution_s, smoothing_s=wd.refs.smoothing_s,
                   t_ref=21.0)
     return float(np.std(wd2.y))
+
+
+def colored_noise(n: int, dt: float, *, N: float = 0.0, B: float = 0.0, K: float = 0.0,
+                  rng=None) -> np.ndarray:
+    """Gyro rate noise (deg/h) on a grid of ``dt`` s with the IEEE 952 parameters N
+    (deg/√h, white: σ²(τ) = N²/τ), B (deg/h, flicker with two-sided PSD B²/(2πf)) and K
+    (deg/h/√h, rate random walk: σ²(τ) = K²τ/3). Flicker by shaping white noise in the
+    frequency domain (a record twice as long, the first half kept)."""
+    rng = rng or np.random.default_rng()
+    x = (N * 60.0) / np.sqrt(dt) * rng.standard_normal(n)
+    if B > 0:
+        nf = 2 * n
+        W = np.fft.rfft(rng.standard_normal(nf))
+        f = np.fft.rfftfreq(nf, dt)
+        S = np.zeros_like(f)
+        S[1:] = B * B / (2 * np.pi * f[1:])
+        x += np.fft.irfft(W * np.sqrt(S / dt), nf)[:n]
+    if K > 0:
+        x += np.cumsum((K / 60.0) * np.sqrt(dt) * rng.standard_normal(n))
+    return x

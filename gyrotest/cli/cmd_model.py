@@ -53,8 +53,9 @@ def prep_options(f):
                      help="Folds of the blocked cross-validation (held-out RMS)."),
         click.option("--reference", default=None, metavar="LOG",
                      help="Static reference run of the same gyro (read with the same ingest "
-                          "options): its white, flicker and random-walk noise give the noise "
-                          "floor. Default: the log's own short-tau noise."),
+                          "options): its white, flicker and random-walk noise, fitted by "
+                          "maximum likelihood, are fixed for every model of the log. Default: "
+                          "the noise model is fitted on the log itself."),
     ]
     for o in reversed(opts):
         f = o(f)
@@ -73,9 +74,8 @@ def domain_fit_options(*, smooth_help: str, plot_help: str):
         click.option("--folds", type=click.IntRange(2, 20), default=5, show_default=True,
                      help="Folds of the blocked cross-validation."),
         click.option("--reference", default=None, metavar="LOG",
-                     help="Static reference run of the same gyro: its noise gives the floor the "
-                          "held-out RMS is judged against. Default: the log's own short-tau "
-                          "noise."),
+                     help="Static reference run of the same gyro: its noise model (N, B, K) is "
+                          "fixed for the fit. Default: fitted on the log itself."),
         click.option("-o", "--output", default=None,
                      help="Write the fitted model (.json/.toml) for 'gyrotest compensate'."),
         plot_option(plot_help),
@@ -151,7 +151,8 @@ def render_fit(res, *, title: str = "model fit") -> None:
     out.print(f"[bold]{title}[/bold]: {where} (axis {escape(str(d.get('axis')))}, "
               f"{d.get('samples', 0):,} samples, {format_duration(d.get('duration_s', 0))})")
     out.print(f"  working resolution: {_short(res)}")
-    t = Table(title="coefficients (± 1σ HAC, robust to autocorrelated residuals)")
+    t = Table(title="coefficients (± 1σ, generalised least squares under the gyro's noise "
+                    "model)")
     for col, just in (("term", "left"), ("coefficient ± 1σ", "right"), ("unit", "left"),
                       ("significance (|z|)", "left")):
         t.add_column(col, justify=just)
@@ -163,17 +164,14 @@ def render_fit(res, *, title: str = "model fit") -> None:
     out.print(f"  residual RMS: fit [bold]{fmt_num(res.rms_fit)}[/bold] deg/h, held-out "
               f"[bold]{fmt_num(res.rms_holdout)}[/bold] deg/h (no model: {fmt_num(res.rms_raw)})")
     out.print(f"  held-out scheme: {res.holdout_scheme}")
+    out.print("  " + escape(noise_line(res.noise.params)))
     if res.floor:
         f = res.floor
-        out.print(f"  noise floor (fixed for this log, not from this model's residual): "
-                  f"{fmt_num(f.rms_dph)} deg/h (white N = {fmt_num(f.arw_deg_rt_h, 3)} deg/√h, "
-                  f"flicker plateau {fmt_num(f.flicker_B, 3)} deg/h); held-out / floor = "
-                  f"{fmt_num(res.rms_holdout / f.rms_dph, 3)}")
-        out.print(f"    basis: {f.basis}", markup=False)
-    out.print(f"  AIC {res.aic:.1f}, BIC {res.bic:.1f} ({res.n_params} parameters, "
-              f"{res.n_blocks} blocks; compare models on the same log only)")
-    out.print(f"  uncertainty: {res.hac.method}, bandwidth {res.hac.bandwidth:.3g} blocks; "
-              f"condition number {fmt_num(res.condition_number, 3)}")
+        out.print(f"  noise at the working resolution: {fmt_num(f.rms_dph)} deg/h RMS; "
+                  f"held-out / noise = {fmt_num(res.rms_holdout / f.rms_dph, 3)}")
+    out.print(f"  log-likelihood {res.loglik:.1f}; AIC {res.aic:.1f}, BIC {res.bic:.1f} "
+              f"({res.n_params} parameters + the noise model; compare models on the same log "
+              f"only); condition number {fmt_num(res.condition_number, 3)}")
     if res.adev_tau is not None and len(res.adev_tau):
         import numpy as np
 
@@ -219,56 +217,45 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
         raise InputError(f"--reference: {e}") from None
 
 
-def _rejected_label(reason: str) -> str:
-    """A few words for the candidate table from the full rejection ``reason`` (the verdict
-    line gives the whole sentence)."""
-    from ..envmodel.rules import SPECTRAL_REJECT
-
-    if reason.startswith(SPECTRAL_REJECT):
-        return "not out of the residual's slow noise"
-    if "period" in reason:
-        return "period of a logged stimulus"
-    if "time constant" in reason:
-        return "lag as long as the record"
-    if "noise floor" in reason:
-        return "model at the noise floor"
-    return reason.split(":")[0][:40]
+def noise_line(p) -> str:
+    """The noise model in one line (IEEE 952 terms)."""
+    src = ("fixed from the reference run" if p.fixed else
+           "maximum likelihood on this log with this model")
+    return (f"noise model ({src}): N = {p.N:.3g} deg/√h (angle random walk), B = {p.B:.3g} "
+            f"deg/h (bias instability), K = {p.K:.3g} deg/h/√h (rate random walk)")
 
 
 def render_diagnosis(diag, top: int = 12) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    from ..workbench_rules import SUMMARY
-
     out = console()
     b = diag.base
     out.print(f"[bold]model diagnose[/bold]: base terms {escape(' + '.join(b.terms))}; held-out "
-              f"RMS {fmt_num(b.rms_holdout)} deg/h, noise floor {fmt_num(diag.noise_floor_dph)} "
-              f"deg/h (held-out/floor {fmt_num(diag.ratio_to_floor, 3)})")
-    out.print(f"  noise floor: {escape(diag.floor_basis)}")
+              f"RMS {fmt_num(b.rms_holdout)} deg/h, log-likelihood {b.loglik:.1f}")
+    out.print("  " + escape(noise_line(diag.noise)))
     out.print(f"  working resolution: {_short(b)}")
-    t = Table(title="candidate terms, best first (held-out residual; HAC significance in the "
-                    "augmented model)")
+    t = Table(title="candidate terms, most significant first (likelihood ratio under the "
+                    "noise model)")
     for col, just in (("#", "right"), ("term", "left"), ("physical effect", "left"),
-                      ("held-out RMS, deg/h", "right"), ("gain", "right"),
-                      ("evidence", "left"), ("missing?", "left")):
+                      ("Λ", "right"), ("coef.", "right"), ("local p", "right"),
+                      ("family-wise p", "right"), ("ΔBIC", "right"), ("missing?", "left")):
         t.add_column(col, justify=just)
     for i, c in enumerate(diag.candidates[:top], 1):
         eff = c.effect.split(" [")[0]
         if c.replaces:
-            eff = eff.replace(f" (replaces {c.replaces})", "") + f" (replaces {c.replaces})"
-        ev = (c.error or (f"z {c.z:.1f}, p·trials {c.p_trials:.1g}, p_adj {c.p_adj:.1g}"
-                          if math.isfinite(c.z) else "—"))
-        if c.rejected:
-            ev += f"; rejected: {_rejected_label(c.rejected)}"
-        if c.chance is not None:
-            ev += f"; surrogate p {c.chance.p:.2f}"
+            eff += f" (in place of {c.replaces})"
+        if c.searched:
+            eff += f"; {c.searched.split(' over ')[0]} = " + ", ".join(
+                f"{v:.4g}" for v in c.theta.values())
+        bad = c.error or c.degenerate
         mark = ("[green]yes[/green]" + (" (chosen)" if c is diag.chosen else "")
-                if c.significant else "no")
-        t.add_row(str(i), escape(c.term), escape(eff), fmt_num(c.rms_holdout),
-                  f"{c.improvement_pct:+.1f}%" if math.isfinite(c.improvement_pct) else "—",
-                  escape(ev), mark)
+                if c.significant else ("degenerate" if c.degenerate else "no"))
+        t.add_row(str(i), escape(c.term), escape(eff),
+                  fmt_num(c.lr, 3) if not bad else "—", str(c.df),
+                  f"{c.p:.2g}" if math.isfinite(c.p) else "—",
+                  f"{c.p_family:.2g}" if math.isfinite(c.p_family) else "—",
+                  f"{c.dbic:+.1f}" if math.isfinite(c.dbic) else "—", mark)
     out.print(t)
     style = "green" if diag.found else "bold"
     out.print(f"[{style}]{escape(diag.verdict)}[/{style}]")
@@ -277,10 +264,9 @@ def render_diagnosis(diag, top: int = 12) -> None:
         for k, p in enumerate(diag.path, 1):
             out.print(f"    {k}. +{escape(p['term'])}: held-out "
                       f"{fmt_num(p['rms_holdout_before_dph'])} → "
-                      f"{fmt_num(p['rms_holdout_after_dph'])} deg/h (held-out/floor "
-                      f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
-    out.print("  rule: " + escape(SUMMARY.format(min_pct=diag.min_improvement_pct,
-                                                   alpha=diag.alpha)))
+                      f"{fmt_num(p['rms_holdout_after_dph'])} deg/h "
+                      f"(family-wise p {p['p_family']:.2g}); {escape(p['add'])}")
+    out.print("  rule: " + escape(diag.rule))
     if b.excursions:
         out.print("  where the base model fails:")
         _excursion_lines(out, b, 8)
@@ -351,8 +337,9 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
     The gyro rate (minus the rate-table rate, if any) is modelled as a bias plus the TERMS, in
     physical units: D_T (deg/h)/degC, D_Tdot (deg/h)/(degC/h), w_x deg/h per 100 uT, ...
     Fitting runs on smoothed block means (the working resolution is chosen from the noise
-    level and stated); uncertainties are HAC (robust to autocorrelated noise); the held-out RMS
-    comes from blocked cross-validation. Custom terms (--term NAME:EXPR) use temp.NAME,
+    level and stated); the held-out RMS comes from blocked cross-validation. Coefficients are generalised least squares under
+    the gyro's own noise model (white, flicker and random-walk rate noise fitted by maximum
+    likelihood on the log, or fixed from --reference), with its standard errors. Custom terms (--term NAME:EXPR) use temp.NAME,
     field.NAME, extra.NAME, supply, table_rate, t, t_h, + - * / **, abs sqrt exp log log10
     sin cos tan tanh arctan sign square minimum maximum clip, ddt(x) and lag(x, tau_s).
 
@@ -444,10 +431,12 @@ def _print_rules(ctx, _param, value):
 @click.option("--candidates", default=None,
               help="Only try these terms (comma-separated); default every term the channels "
                    "allow.")
-@click.option("--alpha", type=float, default=None,
-              help="Family-wise significance level (default 0.001).")
-@click.option("--min-improvement", type=float, default=1.0, show_default=True,
-              help="Smallest held-out RMS improvement (%) that counts as a missing effect.")
+@click.option("--alpha", type=click.FloatRange(1e-6, 0.5), default=0.01, show_default=True,
+              help="Family-wise probability of naming a missing effect that does not exist, "
+                   "per step.")
+@click.option("--power-on/--no-power-on", "power_on", default=None,
+              help="The log starts at the gyro's power-on, so a warm-up transient is a "
+                   "candidate (default: the profile's [gyro] power_on_at_start, else no).")
 @click.option("--path", "path_steps", type=click.IntRange(1, 10), default=3, show_default=True,
               help="Steps of the forward path: after the missing effect, look for the next "
                    "one in the model that has it (several effects are often missing at once).")
@@ -460,28 +449,24 @@ def _print_rules(ctx, _param, value):
 @json_option
 @with_ingest
 def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, folds,
-                 reference, candidates, alpha, min_improvement, path_steps, top, plot_path,
+                 reference, candidates, alpha, power_on, path_steps, top, plot_path,
                  as_json, ingest_opts):
-    """Which physical effect does the model lack? Try every candidate and rank them.
+    """Which physical effect does the model lack? Test every candidate under the gyro's noise.
 
-    Candidates: every library term the log's channels allow and the model lacks, and a screen
-    of every logged channel (level, square, |x|, rate of change, first-order lag with a fitted
-    time constant, rate of that lag; H_i², H_i·H_j, |H|², g_i·g_j). Each is added in turn
-    and scored by its held-out residual RMS (blocked cross-validation), with a HAC test of
-    its coefficient in the augmented model.
-
-    A missing effect is named when its held-out gain repeats across the folds and passes the
-    HAC test (p x trials x candidates < alpha, gain >= --min-improvement), or, off that test,
-    when a clear gain also stands out of the residual's own spectrum and beats a
-    look-elsewhere test on surrogates of the residual, so that a smooth channel or a ramp
-    fitted to the gyro's own slow wander is not named. Effects that hide each other are
-    tried in pairs and groups, a term of your model that stood in for the missing effect is
-    named for replacement, and a term the model does better without is named for removal.
-    Every rule with its thresholds: --rules (and the man page, WORKBENCH VERDICT RULES).
-    The noise floor is fixed before any model is fitted: from the log's short-tau noise
-    (differences across steps of a logged channel left out), or from --reference.
-    The verdict names the effect, how to add it (--terms or the equivalent --term), the
-    explanations this log cannot tell apart, and the forward path (--path) to the floor.
+    The model is fitted under the gyro's own noise model: white, flicker and random-walk rate
+    noise (N, B, K) fitted by maximum likelihood on the log (or fixed from --reference).
+    Candidates: every library term the log's channels allow and the model lacks, a screen of
+    every logged channel (level, square, rate; a lagged node's level, square and rate with a
+    fitted time constant; products where physics has them), the field blocks in the gyro's
+    own axes, and ramp, sinusoid, hysteresis (a warm-up with --power-on). Each is scored by
+    its likelihood ratio; a candidate is a missing effect when its family-wise p-value (a
+    parametric bootstrap over every candidate and every searched time constant, frequency
+    and width) is at most --alpha. Candidates within ΔBIC 2 are named together with the
+    measurement that would separate them; when none passes alone, pairs are tried. When
+    nothing is missing, the residual is tested against the noise model (Ljung-Box) and a
+    model term the data do not support is named for removal. Every rule: --rules (and the
+    man page, WORKBENCH VERDICT RULES). The verdict names the effect, the complete --terms to
+    paste, and the forward path (--path).
 
     \b
     Examples:
@@ -490,9 +475,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
-    from ..envmodel.diagnose import diagnose_log
     from ..envmodel.prepare import collect_terms
     from ..envmodel.terms import split_terms
+    from ..envmodel.workbench import diagnose_log
 
     specs = collect_terms(terms, custom)
     if plot_path:
@@ -505,8 +490,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     with progress("trying candidate terms") as advance:
         diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref,
                             v_ref=v_ref, resolution=resolution, smooth=smooth, alpha=alpha,
-                            min_improvement_pct=min_improvement, folds=folds,
-                            reference=ref, path_steps=path_steps,
+                            folds=folds, reference=ref, path_steps=path_steps,
+                            power_on=power_on,
                             progress=lambda i, n, label: advance(
                                 1 if i else 0, total=n, description=f"trying {label}"))
     if plot_path:

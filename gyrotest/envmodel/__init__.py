@@ -4,10 +4,12 @@ physical effect, keep a history of the steps, and apply a model to another run.
 Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet report call these):
 
 * :func:`prepare` — a log at the working resolution (block means; see :mod:`.fit`);
-* :func:`fit_model` — coefficients ± HAC uncertainty, held-out RMS, AIC/BIC, collinearity,
-  residual Allan deviation, noise floor, excursions → :class:`FitResult` (``.model`` is the
-  portable :class:`EnvModel`);
-* :func:`diagnose` — rank the candidate terms the model lacks → :class:`Diagnosis`;
+* :func:`fit_model` — coefficients ± 1σ (GLS under the gyro's own noise model, fitted by
+  maximum likelihood: :mod:`.likelihood`), held-out RMS, log-likelihood, AIC/BIC,
+  collinearity, residual Allan deviation, excursions → :class:`FitResult` (``.model`` is
+  the portable :class:`EnvModel`);
+* :func:`diagnose` — test every candidate term the model lacks by its likelihood ratio at a
+  family-wise α (:mod:`.selection`) → :class:`Diagnosis` (:mod:`.workbench`);
 * :func:`thermal_fit`, :func:`thermal_fit_setpoints`, :func:`mag_fit` — domain fits;
 * :func:`compensate` — apply a model to another run → :class:`CompensationResult`;
 * the commands' analyses from a loaded log and their options: :func:`fit_log` (``model
@@ -18,7 +20,6 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 """
 
 from .compensate import CompensationResult, compensate
-from .diagnose import Candidate, Diagnosis, diagnose, diagnose_log
 from .domain import (
     MagResult,
     SetpointResult,
@@ -42,7 +43,9 @@ from .fit import (
 from .history import append_history, load_history
 from .model import EnvModel
 from .prepare import collect_terms, load_for_terms, prepare_log
+from .selection import Candidate
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
+from .workbench import Diagnosis, diagnose, diagnose_log
 
 __all__ = ["EFFECTS", "Candidate", "CompensationResult", "Diagnosis", "EnvFrame", "EnvModel",
            "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalAnalysis",

@@ -105,7 +105,7 @@ def thermal_fit(wd: WorkData, *, sensor: str | None = None,
     temperature channel whose model predicts held-out data best is used (the paper's model is
     in the ambient temperature; a lagging coil sensor fits worse).
 
-    Returns coefficients in the paper's units with HAC 1σ, the fits, and a heating/cooling
+    Returns coefficients in the paper's units with 1σ (GLS under the noise model), the fits, and a heating/cooling
     hysteresis check of the residual (mean residual on heating minus cooling branches).
     Source: Antonova & Matveev eq. (3); IEEE 952 §8.3.
     """
@@ -401,7 +401,7 @@ def mag_fit(wd: WorkData, *, extra_terms: list[str] | None = None, settle_s: flo
     magnetometer log, with the paper's reversal estimate K and up/down sweep hysteresis.
 
     The coefficients come from the model fit of the block data with terms Hx, Hy, Hz (plus
-    ``extra_terms`` such as T or ramp for drift between levels; HAC 1σ). Plateaus are detected
+    ``extra_terms`` such as T or ramp for drift between levels; 1σ from GLS under the noise model). Plateaus are detected
     on the 1-s grid (:func:`detect_plateaus`); each plateau's mean rate, corrected for the
     non-magnetic fitted terms, gives K_i = (Δω(+max) − Δω(−max))/(2·max/H0) per axis and the
     mean up-minus-down difference at levels visited in both sweep directions.
@@ -558,7 +558,8 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
     (a :class:`~gyrotest.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
     (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
     ``smooth`` options as typed), then :func:`thermal_fit`. ``reference``: a static reference
-    log of the same gyro whose noise gives the floor (:func:`gyrotest.envmodel.floor.reference_floor`)."""
+    log of the same gyro whose noise model is fixed for the fit
+    (:func:`gyrotest.envmodel.likelihood.reference_noise`)."""
     check_thermal_input(log is not None, setpoints)
     grad = parse_gradient(gradient)
     sp = th = None

@@ -179,6 +179,18 @@ def lagged_temperature(temp_c: np.ndarray, t: np.ndarray, tau_s: float, t_ref_c:
     return first_order_lag(temp_c, t, tau_s, bounds) - t_ref_c
 
 
+def lagged_temperature_square(temp_c: np.ndarray, t: np.ndarray, tau_s: float, t_ref_c: float,
+                              bounds: list[tuple[int, int]] | None = None) -> np.ndarray:
+    """Square of a lagged (core) temperature offset.
+
+    Formula: x = (T_core − T_ref)², τ·dT_core/dt = T_sensor − T_core (see
+    :func:`first_order_lag`), τ fitted. Units: degC²; coefficient deg/h/degC² (the quadratic
+    sensitivity w2 of a node that lags the logged sensor). Source: Antonova & Matveev eq. (3)
+    w2·t² applied to the core temperature; IEEE 952 §8.3 D_T2.
+    """
+    return lagged_temperature(temp_c, t, tau_s, t_ref_c, bounds) ** 2
+
+
 def magnetic_field(field_ut: np.ndarray, h0_ut: float = H0_UT) -> np.ndarray:
     """Magnetic field component in units of H0.
 
@@ -254,21 +266,40 @@ def thermal_branch(temp_c: np.ndarray, width_c: float,
     for a, b in bounds or [(0, len(T))]:
         if b <= a:
             continue
-        seg = T[a:b].tolist()
-        y = seg[0]
-        ys = [0.0] * len(seg)
-        lo_off, hi_off = -width_c, width_c
-        for i, v in enumerate(seg):
-            lo = v + lo_off
-            if y < lo:
-                y = lo
-            else:
-                hi = v + hi_off
-                if y > hi:
-                    y = hi
-            ys[i] = y
-        out[a:b] = (T[a:b] - np.asarray(ys)) / width_c
+        out[a:b] = (T[a:b] - _play(T[a:b], width_c)) / width_c
     return out
+
+
+def _play(v: np.ndarray, w: float) -> np.ndarray:
+    """The play operator y_k = min(max(y_{k−1}, v_k − w), v_k + w), y_0 = v_0, vectorised by
+    phases: while rising, y is the running maximum of v − w (from the phase's start value);
+    the phase ends where v + w falls below it, and a falling phase (running minimum of
+    v + w) begins; and so on. Each phase is scanned in windows that double in length."""
+    n = len(v)
+    ys = np.empty(n)
+    y = float(v[0])
+    i = 0
+    rising = True
+    while i < n:
+        L = 256
+        while True:
+            j = min(n, i + L)
+            if rising:
+                run = np.maximum(np.maximum.accumulate(v[i:j] - w), y)
+                end = np.flatnonzero(v[i:j] + w < run)
+            else:
+                run = np.minimum(np.minimum.accumulate(v[i:j] + w), y)
+                end = np.flatnonzero(v[i:j] - w > run)
+            if len(end) or j == n:
+                break
+            L *= 4
+        k = int(end[0]) if len(end) else j - i
+        ys[i:i + k] = run[:k]
+        if k:
+            y = float(run[k - 1])
+        i += k
+        rising = not rising
+    return ys
 
 
 def earth_rate_projection(earth_dph: np.ndarray) -> np.ndarray:

@@ -5,27 +5,28 @@ the smoother S_W and the block length T_b, re-exported here).
 
 Estimation
 ----------
-Linear terms by least squares; terms with a time constant or frequency by variable projection
-(the nonlinear parameter is searched on a log grid / from the four highest peaks of the
-residual periodogram and refined by bounded Brent minimisation of the residual sum of
-squares, the linear coefficients solved exactly at each step; two or more time constants
-are then polished jointly by a Nelder–Mead search over their logarithms, since one-parameter
-moves stop in the curved valley where two of them trade off). A model fitted from the
-nonlinear parameters of a smaller one (``thetas0``: every candidate the diagnosis judges)
-re-checks them beside the new terms: each warm time constant on its global grid, a warm
-frequency from scratch, every time constant from scratch when a new nonlinear term joins, and
-jointly those of a new term's channels; each move is kept only when it lowers the residual sum
-of squares by more than 10 % (:mod:`.varpro`). Uncertainties: HAC (see
-:mod:`.stats`) on the Gauss–Newton Jacobian
-(linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty propagates. Held-out
-validation (:func:`cv_layout`): the blocks are cut into contiguous chunks of
-max(6·W, duration/500) (at least 2·folds chunks); chunk c belongs to fold c mod folds; each
-fold is predicted from a fit on the other folds (linear coefficients re-fitted, a searched
-frequency searched afresh on the training folds, time constants kept at the full-data value,
-which a fold without the start-up could not pin down, and so are the coefficients of
-regressors that barely vary outside the held-out chunk), leaving out 2·W on either side of each
-held-out chunk so that neither the smoother nor short-memory noise carries held-out data into
-the training set.
+Under the gyro's own noise model (:mod:`.likelihood`): white, flicker and random-walk rate
+noise seen through the smoother and the block averaging, its two shape parameters and level
+fitted by maximum likelihood with the model (or fixed from a static reference run). The
+linear coefficients are generalised least squares (GLS) under that noise model, with its
+covariance (Xᵀ Σ⁻¹ X)⁻¹ σ̂². Terms with a time constant or frequency by variable projection:
+first on the ordinary residual sum of squares (the nonlinear parameter is searched on a log
+grid / from the four highest peaks of the residual periodogram and refined by bounded Brent
+minimisation, the linear coefficients solved exactly at each step; two or more time
+constants polished jointly by a Nelder–Mead search over their logarithms), then refined
+locally on the GLS objective once the noise model is known, and the noise model refitted. A
+model fitted from the nonlinear parameters of a smaller one (``thetas0``: a candidate the
+diagnosis adds) re-checks them beside the new terms (:mod:`.varpro`). Uncertainties: GLS on
+the Gauss–Newton Jacobian (linear columns plus ∂ŷ/∂θ), so nonlinear-parameter uncertainty
+propagates; the bias D_F's from the noise model's Allan variance at the record length. A
+degenerate design (a variance inflation factor ≥ VIF_MAX) is refused. Held-out validation
+(:func:`cv_layout`): the blocks are cut into contiguous chunks of max(6·W, duration/500) (at
+least 2·folds chunks); chunk c belongs to fold c mod folds; each fold is predicted from a GLS
+fit on the other folds (the same noise shape; a searched frequency searched afresh on the
+training folds, time constants kept at the full-data value, which a fold without the
+start-up could not pin down, and so are the coefficients along directions that barely vary
+outside the held-out chunk), leaving out 2·W on either side of each held-out chunk so that
+neither the smoother nor short-memory noise carries held-out data into the training set.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import numpy as np
 
 from ..errors import AnalysisError
 from . import stats as st
+from .likelihood import NoiseFit, NoiseParams, fit_noise, fixed_noise, gls, lik_grid
 from .model import EnvModel, ModelTerm
 from .terms import (
     TermSpec,
@@ -72,7 +74,7 @@ class Coefficient:
     symbol: str
     term: str
     value: float
-    stderr: float  # HAC 1σ
+    stderr: float  # 1σ, GLS under the gyro's noise model
     stderr_ols: float  # naive OLS on block means (independent-residual assumption)
     unit: str
     kind: str = "linear"
@@ -142,7 +144,8 @@ class FitResult:
     condition_number: float
     vif: dict[str, float]
     warnings: list[str]
-    hac: st.HACInfo
+    noise: NoiseFit  # the gyro's noise model under which the coefficients were fitted
+    loglik: float  # Gaussian log-likelihood (differenced likelihood samples, σ² profiled)
     rms_raw: float  # RMS of the mean-removed block means (no model)
     floor: st.NoiseFloor | None = None
     adev_tau: np.ndarray | None = None
@@ -159,6 +162,18 @@ class FitResult:
     cov: np.ndarray | None = None
     param_names: list[str] = field(default_factory=list)
     wd: WorkData | None = None
+    #: the nonlinear parameters {term label: {name: value}} and the fitter that built the
+    #: design (for predictions and warm starts)
+    thetas: dict = field(default_factory=dict)
+    fitter: Any = None
+
+    @property
+    def _thetas(self) -> dict:
+        return self.thetas
+
+    @property
+    def _fitter(self):
+        return self.fitter
 
     @property
     def terms(self) -> list[str]:
@@ -185,7 +200,9 @@ class FitResult:
             "resolution_s": self.resolution_s, "resolution_note": self.resolution_note,
             "smoothing_window_s": self.model.refs.smoothing_s,
             "condition_number": self.condition_number, "vif": self.vif,
-            "uncertainty": self.hac.to_dict(),
+            "uncertainty": {"method": UNCERTAINTY},
+            "noise_model": self.noise.params.to_dict(),
+            "loglik": self.loglik,
             "noise_floor": self.floor.to_dict() if self.floor else None,
             "residual_allan": ({"tau_s": self.adev_tau, "sigma_dph": self.adev_sigma}
                                if self.adev_tau is not None else None),
@@ -250,18 +267,21 @@ def cv_layout(wd: WorkData, folds: int = 5) -> tuple[int, int, str]:
 def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bool = True,
               folds: int = 5, thetas0: dict | None = None,
               light: bool = False, k_sigma: float = 4.0,
-              new_terms: list[TermSpec] | None = None) -> FitResult:
-    """Fit ``terms`` (plus a bias) to prepared data; see the module docstring.
+              new_terms: list[TermSpec] | None = None,
+              noise_start: NoiseFit | None = None) -> FitResult:
+    """Fit ``terms`` (plus a bias) to prepared data under the gyro's own noise model; see the
+    module docstring.
 
-    Returns a :class:`FitResult` with coefficients in physical units ± HAC 1σ, residual RMS
-    (deg/h) on the fit and on held-out blocks, AIC/BIC, collinearity diagnostics, the residual
-    Allan deviation and noise floor, excursions (|residual| > k·σ) and the portable
-    :class:`EnvModel`. ``light`` skips the Allan/excursion work (used by diagnosis).
-    ``new_terms``: the terms added to a model whose nonlinear parameters ``thetas0`` holds
-    (a candidate judged by the diagnosis); warm time constants of their channels are then
-    also searched jointly (:meth:`gyrotest.envmodel.varpro._Fitter.repolish`); a sinusoid
-    among them is not searched below two cycles per record, as a model's own may be
-    (:data:`gyrotest.envmodel.terms.SIN_MIN_CYCLES`).
+    Returns a :class:`FitResult` with coefficients in physical units ± 1σ (GLS under the
+    fitted noise model, nonlinear parameters by Gauss–Newton), the noise model (N, B, K)
+    with the log-likelihood, residual RMS (deg/h) on the fit and on held-out blocks,
+    AIC/BIC from the likelihood, collinearity diagnostics, the residual Allan deviation,
+    excursions (|residual| > k·σ) and the portable :class:`EnvModel`. ``light`` skips the
+    Allan/excursion work. ``thetas0``/``new_terms``: the nonlinear parameters of a smaller
+    model and the terms added to it (warm start, see :mod:`.varpro`); ``noise_start``: the
+    noise fit of a related model (warm start of the noise shape). A design whose terms are
+    degenerate (a variance inflation factor ≥ :data:`VIF_MAX`) raises AnalysisError naming
+    the collinear terms.
     """
     specs = parse_terms(terms)  # texts and TermSpecs, mixed freely
     specs = [s for s in specs if s.key != "bias"]
@@ -276,6 +296,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
                             "log, fewer terms or a finer --resolution")
     design = Design(wd)
     fitter = _Fitter(design, specs, {c.label for c in new_terms or []})
+    # ---- the nonlinear parameters: least squares first (a start), then under the noise model
     thetas = fitter.optimise(thetas0, None, local=True)
     if thetas0:
         thetas = fitter.recheck_taus(thetas, set(thetas0))
@@ -287,15 +308,33 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
         if fitter.solve(alt, None)[1] < fitter.solve(thetas, None)[1]:
             thetas = alt
         thetas = fitter.polish_joint(thetas)
+    grid = lik_grid(wd)
+    nf = model_noise(wd, grid, fitter, thetas, start=noise_start)
+    if fitter.nl:
+        fitter.lik = nf.lik
+        thetas = fitter.optimise(thetas, None, local=True)
+        if nf.n_free:
+            nf = model_noise(wd, grid, fitter, thetas, start=nf)
+    fitter.lik = nf.lik
+    lik = nf.lik
     X = fitter.X(thetas)
-    beta, rss = st.lstsq(X, wd.y)
+    Xw = lik.whiten(X)
+    yw = lik.whiten(wd.y)
+    beta, rss_w, _ = gls(Xw, yw)
+    ib = [i for i, s in enumerate(specs) if s.key == "bias"]
+    if ib:
+        beta[ib[0]] = float(np.mean(wd.y - X @ beta))
     yhat = X @ beta
     resid = wd.y - yhat
     nb = wd.nb
-    # ---- uncertainties on the Gauss-Newton Jacobian
+    loglik, s2 = lik.profile(rss_w)
+    # ---- uncertainties: GLS on the Gauss–Newton Jacobian (linear columns plus ∂ŷ/∂θ)
     Jn, nl_names = fitter.jacobian(thetas, beta)
     J = np.column_stack([X, Jn]) if Jn.shape[1] else X
-    cov, hinfo = st.hac_covariance(J, resid)
+    _, _, cinv = gls(lik.whiten(J), yw)
+    cov = s2 * cinv
+    if ib:
+        cov[ib[0], ib[0]] = bias_variance(nf.params, wd.duration_s)
     cov_ols = st.ols_covariance(J, resid)
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     se_ols = np.sqrt(np.clip(np.diag(cov_ols), 0, None))
@@ -322,7 +361,10 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
         for mt in mterms:
             if mt.spec.label == s.label:
                 mt.theta_stderr[pname] = float(se[p_lin + i])
-    # ---- held-out validation
+    names = [c.name for c in coefs]
+    cond, vif, corr = st.collinearity(Xw, names[:p_lin])
+    degenerate(vif, corr, names[:p_lin], wd)
+    # ---- held-out validation (the same noise shape, each fold's coefficients by GLS)
     chunk, buf, cv_desc = cv_layout(wd, folds)
     fold, masks = holdout_folds(nb, folds, chunk_blocks=chunk, buffer_blocks=buf)
     hres = np.full(nb, np.nan)
@@ -332,25 +374,30 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             continue
         th_f = fitter.optimise(thetas, m, local=True, kinds=("freq",), fresh=("freq",))
         Xf = fitter.X(th_f)
-        bf = fold_coefficients(Xf, wd.y, m, beta)
+        lk_f = fitter.lik_for(m)
+        if lk_f is None or lk_f.m < 2:
+            continue
+        bf = fold_coefficients_gls(lk_f, lik, Xf, wd.y, m, beta, ib)
         held = fold == f
         hres[held] = wd.y[held] - Xf[held] @ bf
         fold_rms.append(float(np.sqrt(np.mean(hres[held] ** 2))))
     ok = np.isfinite(hres)
     rms_hold = float(np.sqrt(np.mean(hres[ok] ** 2))) if ok.any() else float("nan")
-    rms_fit = float(np.sqrt(rss / nb))
-    aic, bic = st.aic_bic(rss, nb, n_params)
-    names = [c.name for c in coefs]
-    cond, vif, corr = st.collinearity(X, names[:p_lin])
+    rms_fit = float(np.sqrt(np.mean(resid ** 2)))
+    k_all = n_params + nf.n_free + 1  # + the noise level σ²
+    aic = -2.0 * loglik + 2.0 * k_all
+    bic = -2.0 * loglik + k_all * math.log(max(lik.m, 2))
     warnings = _warnings(specs, coefs, vif, corr, names[:p_lin], thetas, fitter, rms_fit,
                          rms_hold, nb, n_params)
     rms_raw = float(np.std(wd.y))
+    noise = nf.params
     model = EnvModel(terms=mterms, refs=wd.refs, axis=wd.axis, resolution_s=wd.resolution_s,
                      fine_dt_s=wd.frame.dt,
                      fit={"rms_fit_dph": rms_fit, "rms_holdout_dph": rms_hold, "aic": aic,
                           "bic": bic, "n_blocks": nb, "n_params": n_params,
-                          "rms_raw_dph": rms_raw,
-                          "uncertainty": hinfo.method},
+                          "rms_raw_dph": rms_raw, "loglik": loglik,
+                          "noise_model": noise.to_dict(),
+                          "uncertainty": UNCERTAINTY},
                      data={k: v for k, v in wd.info.items()})
     res = FitResult(model=model, specs=specs, coefficients=coefs, n_blocks=nb,
                     n_params=n_params, resolution_s=wd.resolution_s,
@@ -358,14 +405,65 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
                     holdout_fold_rms=fold_rms,
                     holdout_scheme=cv_desc,
                     aic=aic, bic=bic, condition_number=cond, vif=vif, warnings=warnings,
-                    hac=hinfo, rms_raw=rms_raw, data=dict(wd.info), t=wd.t, y=wd.y, yhat=yhat,
-                    resid=resid, holdout_resid=hres, fold_of_block=fold, cov=cov,
-                    param_names=names, wd=wd)
-    res._thetas = thetas  # type: ignore[attr-defined]
-    res._fitter = fitter  # type: ignore[attr-defined]
+                    noise=nf, loglik=loglik, rms_raw=rms_raw, data=dict(wd.info), t=wd.t,
+                    y=wd.y, yhat=yhat, resid=resid, holdout_resid=hres, fold_of_block=fold,
+                    cov=cov, param_names=names, wd=wd, thetas=thetas, fitter=fitter)
     if not light:
         finish(res, k_sigma=k_sigma)
     return res
+
+
+#: uncertainty method of every coefficient
+UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk rate noise "
+               "fitted by maximum likelihood on this log, or fixed from a reference run); "
+               "nonlinear parameters by Gauss-Newton")
+from ..workbench_rules import VIF_MAX  # noqa: E402  (degenerate design bound)
+
+
+def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None = None
+                ) -> NoiseFit:
+    """The noise model of a term set at fixed nonlinear parameters: fixed from a reference run
+    (``wd.noise_ref``), else maximum likelihood with β by GLS inside
+    (:func:`gyrotest.envmodel.likelihood.fit_noise`)."""
+    ref = getattr(wd, "noise_ref", None)
+    if ref is not None:
+        return fixed_noise(wd, grid, ref)
+    X = fitter.X(thetas)
+    # differences of the sample means of [X, y], taken once: each trial shape only solves
+    dxy = grid.diffs(grid.means(np.column_stack([X, wd.y])))
+
+    def rss(lk) -> float:
+        A = lk.whiten_diffs(dxy, (X.shape[1] + 1,))
+        return gls(A[:, :-1], A[:, -1])[1]
+
+    return fit_noise(wd, grid, rss, start=start.logits if start is not None else None)
+
+
+def bias_variance(p: NoiseParams, duration_s: float) -> float:
+    """Variance (deg/h)² of the bias D_F of a record of ``duration_s``: the Allan variance of
+    the fitted noise at τ = the record length, N²/T + (2 ln 2/π)·B² + K²·T/3 (IEEE 952
+    Annex C): the scatter of the mean rate from one record to the next."""
+    T = max(duration_s, 1.0)
+    N = p.N * 60.0
+    K = p.K / 60.0
+    return N * N / T + (2 * math.log(2) / math.pi) * p.B ** 2 + K * K * T / 3.0
+
+
+def degenerate(vif: dict[str, float], corr: np.ndarray, names: list[str], wd: WorkData) -> None:
+    """AnalysisError when a term is degenerate with the others (VIF ≥ :data:`VIF_MAX`),
+    naming it and its most correlated partner."""
+    bad = [(v, nm) for nm, v in vif.items() if not v < VIF_MAX]
+    if not bad:
+        return
+    v, nm = max(bad)
+    i = names.index(nm)
+    row = np.abs(np.nan_to_num(corr[i].copy()))
+    row[i] = 0
+    j = int(np.argmax(row))
+    other = names[j] if row[j] > 0 else "the other terms"
+    raise AnalysisError(f"terms {nm} and {other} are degenerate in "
+                        f"{wd.info.get('source', 'this log')} (VIF {v:.3g}): their "
+                        "coefficients are not determined by the data; remove one of them")
 
 
 #: a column whose training-fold variation is below this fraction of its full variation keeps
@@ -425,17 +523,70 @@ def fold_coefficients(X: np.ndarray, y: np.ndarray, train: np.ndarray,
     return b
 
 
+def fold_coefficients_gls(lik_tr, lik, X: np.ndarray, y: np.ndarray, train: np.ndarray,
+                          beta_full: np.ndarray, bias_idx: list[int]) -> np.ndarray:
+    """GLS coefficients on the training blocks of a fold (``lik_tr``: the likelihood on them),
+    free only along the directions the training blocks support -- the rule of
+    :func:`fold_coefficients` in the whitened coordinates of the whole record (``lik``):
+    a direction v is supported when vᵀ·A_train·v ≥ :data:`MIN_FOLD_SUPPORT`·vᵀ·A·v with
+    A = X̃ᵀX̃ the whitened design's information. The bias is the training blocks' mean
+    residual."""
+    b = np.array(beta_full, dtype=float)
+    live = [j for j in range(X.shape[1]) if j not in bias_idx]
+    if live:
+        Xw = lik.whiten(X[:, live])
+        Xt = lik_tr.whiten(X[:, live])
+        yt = lik_tr.whiten(y) - Xt @ b[live]
+        scale = np.sqrt(np.sum(Xw * Xw, axis=0))
+        ok = scale > 0
+        F = Xw[:, ok] / scale[ok]
+        T = Xt[:, ok] / scale[ok]
+        A = F.T @ F
+        At = T.T @ T
+        sv, Q = np.linalg.eigh(A)
+        keep = sv > 1e-10 * max(float(sv.max()), 1e-300)
+        Wm = Q[:, keep] / np.sqrt(sv[keep])
+        lam, U = np.linalg.eigh(Wm.T @ At @ Wm)
+        V = Wm @ U[:, lam >= MIN_FOLD_SUPPORT]
+        if V.shape[1]:
+            D = T @ V
+            c, *_ = np.linalg.lstsq(D, yt, rcond=None)
+            idx = np.array(live)[ok]
+            b[idx] += (V @ c) / scale[ok]
+    if bias_idx:
+        b[bias_idx[0]] = 0.0
+        b[bias_idx[0]] = float(np.mean((y - X @ b)[train]))
+    return b
+
+
 def fine_residual(res: FitResult) -> np.ndarray:
     """Residual on the fine grid (rate − model), deg/h."""
     wd = res.wd
-    fitter = res._fitter  # type: ignore[attr-defined]
+    fitter = res.fitter
     pred = np.zeros(wd.frame.n)
     offs = fitter._offsets()
     beta = np.array([c.value for c in res.coefficients if c.kind == "linear"])
     for s in res.specs:
         a, b = offs[s.label]
-        pred += fitter.d.fine(s, res._thetas.get(s.label)) @ beta[a:b]  # type: ignore[attr-defined]
+        pred += fitter.d.fine(s, res.thetas.get(s.label)) @ beta[a:b]
     return wd.frame.rate - pred
+
+
+def noise_floor(p: NoiseParams, wd: WorkData) -> st.NoiseFloor:
+    """The RMS of the block-mean residual that the noise model ``p`` alone leaves at the
+    working resolution over the record (:func:`gyrotest.envmodel.floor.floor_rms`: white,
+    flicker and random-walk noise), with the parameters it came from."""
+    from .floor import floor_rms
+
+    N = p.N * 60.0
+    plateau = p.B * math.sqrt(2 * math.log(2) / math.pi)
+    K = p.K / 60.0
+    t_eff = getattr(wd, "t_eff", wd.resolution_s)
+    rms = floor_rms(N, plateau, K, t_eff, wd.duration_s)
+    basis = ((p.basis or ("the noise model fitted by maximum likelihood with this model "
+                          "(white, flicker and random-walk rate noise)"))
+             + f"; its RMS at T_eff = {t_eff:.3g} s over {wd.duration_s:.0f} s")
+    return st.NoiseFloor(rms, N, plateau, (t_eff, wd.duration_s), basis, random_walk_K=K)
 
 
 def finish(res: FitResult, k_sigma: float = 4.0) -> None:
@@ -446,13 +597,9 @@ def finish(res: FitResult, k_sigma: float = 4.0) -> None:
     r = fine_residual(res)
     tau, sig = st.oadev(r, wd.frame.dt, segments=wd.frame.bounds)
     res.adev_tau, res.adev_sigma = tau, sig
-    from .floor import work_floor
-
-    # the floor is fixed per log (raw rate or reference run), never from this residual
-    res.floor = work_floor(wd)
+    res.floor = noise_floor(res.noise.params, wd)
     res.excursions = find_excursions(res, k_sigma=k_sigma)
     res.model.fit["noise_floor_dph"] = res.floor.rms_dph
-
 
 
 def fit_document(res: FitResult, *, written: dict | None = None) -> dict:
@@ -538,7 +685,7 @@ def _warnings(specs, coefs, vif, corr, names, thetas, fitter, rms_fit, rms_hold,
         if c.symbol == "D_F" or c.kind != "linear":
             continue
         if abs(c.z) < 2:
-            out.append(f"{c.name}: not significant (|z| = {abs(c.z):.2g} with the HAC error); "
+            out.append(f"{c.name}: not significant (|z| = {abs(c.z):.2g} under the noise model); "
                        "the data do not support this term")
     for s in fitter.nl:
         (pname, val), = thetas[s.label].items()
@@ -557,11 +704,11 @@ def _warnings(specs, coefs, vif, corr, names, thetas, fitter, rms_fit, rms_hold,
 
 def predict_blocks(res: FitResult, specs: list[TermSpec] | None = None) -> np.ndarray:
     """Block-level prediction of a subset of a fit's terms (for partial-residual plots)."""
-    fitter = res._fitter  # type: ignore[attr-defined]
+    fitter = res.fitter
     offs = fitter._offsets()
     beta = np.array([c.value for c in res.coefficients if c.kind == "linear"])
     out = np.zeros(res.n_blocks)
     for s in specs or res.specs:
         a, b = offs[s.label]
-        out += fitter.d.block(s, res._thetas.get(s.label)) @ beta[a:b]  # type: ignore[attr-defined]
+        out += fitter.d.block(s, res.thetas.get(s.label)) @ beta[a:b]
     return out

@@ -30,7 +30,7 @@ FORMAT_VERSION = 1
 
 @dataclass
 class ModelTerm:
-    """One fitted term: spec, nonlinear parameters, coefficient values and 1σ (HAC)."""
+    """One fitted term: spec, nonlinear parameters, coefficient values and 1σ (GLS)."""
 
     spec: TermSpec
     theta: dict[str, float] = field(default_factory=dict)

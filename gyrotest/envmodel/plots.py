@@ -201,13 +201,16 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
                   label="residual (fine grid)")
         if res.floor and math.isfinite(res.floor.white_N):
             tt = np.asarray(res.adev_tau, float)
-            pred = np.sqrt(res.floor.white_N ** 2 / tt + res.floor.flicker_B ** 2)
+            f = res.floor
+            pred = np.sqrt(f.white_N ** 2 / tt + f.flicker_B ** 2
+                           + f.random_walk_K ** 2 * tt / 3.0)
+            p = res.noise.params
             ax.loglog(tt, pred, "--", color=COLORS[1],
-                      label=f"white + flicker noise: N = {res.floor.arw_deg_rt_h:.3g} deg/√h, "
-                            f"B = {res.floor.flicker_B:.3g} deg/h")
+                      label=f"noise model: N = {p.N:.3g} deg/√h, B = {p.B:.3g} deg/h, "
+                            f"K = {p.K:.3g} deg/h/√h")
         ax.set_xlabel("averaging time τ, s")
         ax.set_ylabel("Allan deviation σ(τ), deg/h")
-        ax.set_title("residual Allan deviation: rising above the noise line = unmodelled drift",
+        ax.set_title("residual Allan deviation: above the noise model's line = unmodelled drift",
                      loc="left", fontsize=9.5)
         ax.legend(loc="best")
         figs.append(("allan", fig))
@@ -215,22 +218,23 @@ def fit_figures(res, *, title: str | None = None) -> list[tuple[str, object]]:
 
 
 def diagnosis_figures(diag) -> list[tuple[str, object]]:
-    """Ranked candidate improvements (bars) and the base residual with excursions."""
+    """The base residual with excursions, and the candidates' likelihood ratios (bars)
+    against the one a candidate needs to pass at the family-wise α."""
     base = diag.base
     figs = fit_figures(base, title=f"base model: {' + '.join(base.terms)}")[:1]
-    cands = [c for c in diag.candidates if math.isfinite(c.improvement_pct)][:15]
+    cands = [c for c in diag.candidates if math.isfinite(c.lr) and math.isfinite(c.p_family)][:15]
     if cands:
         fig, ax = new_figure(size=(9, 0.38 * len(cands) + 1.6))
         names = [c.term for c in cands][::-1]
-        vals = [c.improvement_pct for c in cands][::-1]
+        vals = [max(c.lr, 1e-3) for c in cands][::-1]
         cols = [COLORS[2] if c.significant else "#bbbbbb" for c in cands][::-1]
         ax.barh(names, vals, color=cols)
-        ax.axvline(0, color="k", lw=0.6)
-        ax.set_xlabel("held-out residual RMS improvement, %")
-        ax.set_title("candidate terms (green: significant missing effect)", loc="left")
+        ax.set_xscale("log")
+        ax.set_xlabel("likelihood ratio Λ = 2Δℓ (log scale)")
+        ax.set_title(f"candidate terms (green: missing effect at family-wise α = "
+                     f"{diag.alpha:g})", loc="left")
         for y, (v, c) in enumerate(zip(vals, cands[::-1])):
-            ax.text(max(v, 0) + 0.5, y, f"z = {c.z:.1f}" if math.isfinite(c.z) else "",
-                    va="center", fontsize=7.5)
+            ax.text(v * 1.08, y, f"p_fw = {c.p_family:.2g}", va="center", fontsize=7.5)
         figs.append(("candidates", fig))
     return figs
 
@@ -245,13 +249,10 @@ def history_figures(steps, *, size: tuple[float, float] = (8, 6)) -> list[tuple[
     ax.plot(x, [s.rms_holdout_dph for s in steps], "s-", color=COLORS[1], label="held-out")
     fl = [s.noise_floor_dph if s.noise_floor_dph is not None else np.nan for s in steps]
     if np.isfinite(fl).any():
-        # the floor is fixed per log (gyrotest.envmodel.floor); histories written before it
-        # was hold per-step residual estimates, of which the lowest is the closest
-        fixed = np.allclose([f for f in fl if np.isfinite(f)], np.nanmin(fl), rtol=1e-9)
-        best = float(np.nanmin(fl))
-        ax.axhline(best, ls=":", color="k",
-                   label=f"noise floor {best:.3g} deg/h"
-                   + (" (fixed for this log)" if fixed else " (lowest estimate over the steps)"))
+        # the noise model is fitted with each step's model: its level falls as the effects
+        # it had absorbed are modelled; each step's value is drawn
+        ax.plot(x, fl, ":", marker=".", color="k",
+                label="the noise model's RMS at the working resolution")
     ax.set_yscale("log")
     hi = max(max(s.rms_fit_dph, s.rms_holdout_dph) for s in steps)
     lo = min(min([s.rms_fit_dph, s.rms_holdout_dph] + [f for f in fl if np.isfinite(f)])

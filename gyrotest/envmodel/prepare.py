@@ -89,14 +89,17 @@ def duration_or_auto(text: str | None, what: str) -> float | None:
 def prepare_log(log, path: str | None, *, axis: str | None = None, skip: str | float = "0",
                 t_ref: float | None = None, v_ref: float | None = None,
                 resolution: str | None = "auto", smooth: str | None = "auto",
-                specs: Sequence[TermSpec] | None = None, reference=None) -> WorkData:
+                specs: Sequence[TermSpec] | None = None, reference=None,
+                power_on: bool | None = None) -> WorkData:
     """Trim the first ``skip`` (duration text; the warm-up term then counts from the true
     power-on), then :func:`~gyrotest.envmodel.fit.prepare` at the working resolution
     (``resolution``/``smooth``: ``auto`` or a duration). ``path`` is the log file for the
     model's provenance (``-`` for stdin). When the log is too short, the message names
     ``specs``. ``reference``: a static reference :class:`~gyrotest.data.GyroLog` of the same
-    gyro whose noise gives the floor (:func:`gyrotest.envmodel.floor.reference_floor`)
-    instead of the log's own short-τ noise."""
+    gyro whose noise model is fixed for every model of the log
+    (:func:`gyrotest.envmodel.likelihood.reference_noise`) instead of fitted on the log. ``power_on``: the log starts at the gyro's
+    power-on (before ``skip``), so a warm-up transient is a candidate effect of the
+    diagnosis; None: the profile's ``[gyro] power_on_at_start`` (default false)."""
     try:
         wd = _prepare(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
                       resolution=resolution, smooth=smooth)
@@ -105,13 +108,17 @@ def prepare_log(log, path: str | None, *, axis: str | None = None, skip: str | f
             names = ", ".join(s.label for s in specs)
             raise AnalysisError(f"terms {names}: {e}") from None
         raise
+    if power_on is None:
+        power_on = bool(getattr(getattr(log, "gyro", None), "power_on_at_start", False))
+    wd.power_on = bool(power_on)
     if reference is not None:
-        from .floor import check_reference, reference_floor
+        from .floor import check_reference
+        from .likelihood import reference_noise
 
         ax = wd.axis if wd.axis in reference.rates else None
-        fl = reference_floor(reference, wd, axis=ax)
-        check_reference(reference, log, wd, fl)
-        wd.floor = fl
+        noise = reference_noise(reference, wd, axis=ax)
+        check_reference(reference, log, wd, noise)
+        wd.noise_ref = noise
     return wd
 
 

@@ -41,6 +41,7 @@ from .effects import (  # noqa: F401  (re-exported: the effect functions live in
     input_rate,
     input_rate_temperature,
     lagged_temperature,
+    lagged_temperature_square,
     magnetic_field,
     moving_mean,
     sinusoid,
@@ -123,6 +124,10 @@ _reg(Effect("Tlag", "temperature of a lagging core (first-order lag τ)",
             "T_core − T_ref, τ·dT_core/dt = T − T_core", ("D_Tcore",), "deg/h/degC",
             "IEEE 952 §8.3 D_T·ΔT on the core temperature", "temperature", lagged_temperature,
             nonlinear=(NLParam("tau_s", "s", "tau"),), smooth=True))
+_reg(Effect("Tlag2", "quadratic sensitivity of a lagging core (first-order lag τ)",
+            "(T_core − T_ref)², τ·dT_core/dt = T − T_core", ("D_T2core",), "deg/h/degC^2",
+            "Antonova & Matveev eq.(3) w2·t² on the core temperature", "temperature",
+            lagged_temperature_square, nonlinear=(NLParam("tau_s", "s", "tau"),), smooth=True))
 for _i, _ax in enumerate("xyz"):
     _reg(Effect(f"H{_ax}", f"magnetic field along {_ax.upper()}", f"H{_ax}/H0 (H0 = 100 uT)",
                 (f"w_{_ax}",), "deg/h per 100 uT", "Antonova & Matveev eq.(2); IEEE 952 §8.3", "field",
@@ -549,6 +554,9 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
     elif k == "Tlag":
         x = lagged_temperature(frame.temperature[ch[0]], frame.t, theta["tau_s"],
                                refs.t_ref_c.get(ch[0], 0.0), frame.bounds)
+    elif k == "Tlag2":
+        x = lagged_temperature_square(frame.temperature[ch[0]], frame.t, theta["tau_s"],
+                                      refs.t_ref_c.get(ch[0], 0.0), frame.bounds)
     elif k in ("Hx", "Hy", "Hz"):
         x = magnetic_field(frame.field_uT[ch[0]], refs.h0_ut)
     elif k == "V":
@@ -618,7 +626,7 @@ def nonlinear_bounds(spec: TermSpec, duration_s: float, resolution_s: float,
         if refs is not None and spec.channels:
             lo_w = max(lo_w, refs.hyst_min_width_c.get(spec.channels[0], 0.0))
         return {"width_c": (lo_w, max(5.0, 2.0 * lo_w))}
-    if spec.key in ("Tlag", "dTlagdt", "chanlag", "dchanlag"):
+    if spec.key in ("Tlag", "Tlag2", "dTlagdt", "chanlag", "dchanlag"):
         return {"tau_s": (lo_tau, max(lo_tau * 2, duration_s))}
     if spec.key == "warmup":
         return {"tau_w_s": (lo_tau, max(lo_tau * 2, duration_s / 2))}

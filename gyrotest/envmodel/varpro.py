@@ -98,13 +98,41 @@ class _Fitter:
         # the terms a diagnosis proposes: a sinusoid among them is not searched below its
         # bound (terms.SIN_MIN_CYCLES)
         self.candidates = frozenset(candidates)
+        #: the likelihood (:class:`gyrotest.envmodel.likelihood.Likelihood`) under which the
+        #: nonlinear parameters are searched: None, ordinary least squares on the blocks;
+        #: set, generalised least squares under the gyro's noise model (the whitened
+        #: residual sum of squares is minimised)
+        self.lik = None
+        self._lik_masked: dict[bytes, object] = {}
 
     def X(self, thetas: dict[str, dict]) -> np.ndarray:
         return self.d.matrix(self.specs, thetas)
 
+    def lik_for(self, mask: np.ndarray | None):
+        """The likelihood on the blocks of ``mask`` (the same noise shape), or None."""
+        if self.lik is None:
+            return None
+        if mask is None:
+            return self.lik
+        key = np.packbits(np.asarray(mask, bool)).tobytes()
+        lk = self._lik_masked.get(key)
+        if lk is None:
+            from .likelihood import Likelihood, lik_grid
+
+            lk = Likelihood.build(lik_grid(self.wd, mask, g=self.lik.grid.g),
+                                  self.lik.gamma)
+            self._lik_masked[key] = lk
+        return lk
+
     def solve(self, thetas: dict[str, dict], mask: np.ndarray | None) -> tuple[np.ndarray, float]:
         X = self.X(thetas)
         y = self.wd.y
+        lk = self.lik_for(mask)
+        if lk is not None:
+            from .likelihood import gls
+
+            beta, rss, _ = gls(lk.whiten(X), lk.whiten(y))
+            return beta, rss
         if mask is not None:
             X, y = X[mask], y[mask]
         return st.lstsq(X, y)

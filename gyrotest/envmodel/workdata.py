@@ -77,6 +77,11 @@ class WorkData:
     log: Any = None
     #: the fixed noise floor (st.NoiseFloor) the models of this log are judged against
     floor: Any = None
+    #: noise parameters fixed from a static reference run
+    #: (:class:`gyrotest.envmodel.likelihood.NoiseParams`), else None: estimated per model
+    noise_ref: Any = None
+    #: the log starts at the gyro's power-on (a warm-up transient is a candidate effect)
+    power_on: bool = False
 
     @property
     def nb(self) -> int:

@@ -1,0 +1,479 @@
+"""The gyro's own noise model and the Gaussian likelihood of a drift model under it.
+
+Statistical model
+-----------------
+The workbench fits smoothed block means (:mod:`.workdata`): the gyro rate and every regressor
+pass through the same smoother S_W and are averaged over blocks. For the likelihood, blocks are
+averaged further into samples of Δ = g·T_b ≥ W (:func:`lik_grid`), so that the samples carry
+the whole band the smoother passes and no more (at Δ = W the smoother still passes 16 % of the
+power at the Nyquist frequency 1/(2Δ), so the covariance stays well conditioned). Within each
+gap-free run of samples::
+
+    d = D·y = D·X(θ)·β + D·η,        D·η ~ N(0, Σ(q))
+
+D takes first differences (the bias drops out, and random-walk rate noise becomes stationary);
+η is the IEEE 952 noise of the gyro seen through the same filters: white (angle random walk N),
+flicker (bias instability B) and rate random walk K, with two-sided rate PSDs
+N², B²/(2π|f|) and (K/2π)²/f² (IEEE Std 952-1997 Annex C). The autocovariance of D·η at lag
+k·Δ is the integral
+
+    γ(k) = ∫ S_Ω(f) · |H_W(f)|² · |H_Δ(f)|² · 4 sin²(πfΔ) · cos(2πfkΔ) df
+
+with H_W the smoother (moving mean of L fine samples, twice: a Dirichlet kernel to the fourth
+power) and H_Δ the box average over Δ; aliasing is included because the integral runs over the
+whole band of the fine grid. Runs separated by gaps are independent (first differences within
+each run). The exact Gaussian log-likelihood is computed with a Cholesky factor of the
+Toeplitz Σ of each run; β enters by generalised least squares (GLS, closed form) and the
+noise level σ² is profiled analytically, so a noise model has two free shape parameters (the
+shares of white, flicker and random walk in the variance; :func:`fit_noise`).
+
+Sources: IEEE Std 952-1997 Annex C; D. B. Percival, A. T. Walden, *Spectral Analysis for
+Physical Applications*, CUP 1993 (filtered and sampled spectra); J. Durbin, S. J. Koopman,
+*Time Series Analysis by State Space Methods*, OUP 2012 (differencing a random walk).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg, optimize
+
+from ..errors import AnalysisError
+from ..workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
+
+#: fewest first differences a likelihood needs
+MIN_DIFFS = 8
+#: the noise components (key, unit of the parameter)
+COMPONENTS = (("white", "N"), ("flicker", "B"), ("rw", "K"))
+
+
+# ============================================================================ sample grid
+@dataclass
+class LikGrid:
+    """Likelihood samples: means of ``g`` consecutive complete blocks within runs of
+    consecutive blocks. ``idx`` lists the blocks used (run after run, g per sample);
+    ``runs`` the (start, stop) sample ranges of the gap-free runs; ``t`` the sample times."""
+
+    g: int
+    delta_s: float
+    idx: np.ndarray
+    runs: list[tuple[int, int]]
+    t: np.ndarray
+    nb: int
+
+    @property
+    def n(self) -> int:
+        return len(self.t)
+
+    @property
+    def m(self) -> int:
+        """Number of first differences (the likelihood's observations)."""
+        return sum(b - a - 1 for a, b in self.runs if b - a > 1)
+
+    def means(self, a: np.ndarray) -> np.ndarray:
+        """Sample means of a block-level array (nb,) or (nb, k)."""
+        a = np.asarray(a, float)
+        if a.ndim == 1:
+            return a[self.idx].reshape(-1, self.g).mean(axis=1)
+        return a[self.idx].reshape(-1, self.g, a.shape[1]).mean(axis=1)
+
+    def diffs(self, a: np.ndarray) -> list[np.ndarray]:
+        """First differences of a sample-level array, one array per run."""
+        return [np.diff(a[s:e], axis=0) for s, e in self.runs if e - s > 1]
+
+
+def lik_grid(wd, mask: np.ndarray | None = None, n_max: int = NL_MAX,
+             g: int | None = None) -> LikGrid:
+    """The likelihood samples of a prepared log (:class:`~gyrotest.envmodel.workdata.WorkData`):
+    Δ = g·T_b with g = round(max(W, duration/``n_max``)/T_b) (at least 1); only complete
+    blocks (as many fine samples as the block length) of the blocks in ``mask`` (default all)
+    count, and a run ends at a gap, an incomplete block or a block outside the mask; ``g``
+    forces the group size (a training subset on the grid of the whole log)."""
+    tb = wd.resolution_s
+    W = wd.refs.smoothing_s
+    nb = wd.nb
+    target = max(W, wd.duration_s / max(n_max, 1), tb)
+    if g is None:
+        g = max(1, int(round(target / tb)))
+    full = wd.counts >= np.max(wd.counts) - 0.5 if nb else np.zeros(0, bool)
+    ok = full.copy()
+    if mask is not None:
+        ok &= np.asarray(mask, bool)
+    # a new run where consecutive blocks are not adjacent in time
+    step_ok = np.zeros(nb, bool)
+    if nb > 1:
+        step_ok[1:] = np.abs(np.diff(wd.t) - tb) < 0.25 * tb
+    idx: list[np.ndarray] = []
+    runs: list[tuple[int, int]] = []
+    t_out: list[np.ndarray] = []
+    k = 0
+    i = 0
+    while i < nb:
+        if not ok[i]:
+            i += 1
+            continue
+        j = i + 1
+        while j < nb and ok[j] and step_ok[j]:
+            j += 1
+        ns = (j - i) // g
+        if ns >= 2:
+            blk = np.arange(i, i + ns * g)
+            idx.append(blk)
+            t_out.append(wd.t[blk].reshape(ns, g).mean(axis=1))
+            runs.append((k, k + ns))
+            k += ns
+        i = j
+    if not runs:
+        return LikGrid(g, g * tb, np.zeros(0, int), [], np.zeros(0), nb)
+    return LikGrid(g, g * tb, np.concatenate(idx), runs, np.concatenate(t_out), nb)
+
+
+# ============================================================================ spectra
+def _dirichlet2(f: np.ndarray, L: int, dt: float) -> np.ndarray:
+    """|mean of L samples|² transfer at frequency f (Hz) on a grid of step dt."""
+    x = np.pi * f * dt
+    num = np.sin(L * x)
+    den = L * np.sin(x)
+    out = np.ones_like(f)
+    nz = np.abs(den) > 1e-300
+    out[nz] = (num[nz] / den[nz]) ** 2
+    return out
+
+
+def component_psd(f: np.ndarray, key: str) -> np.ndarray:
+    """Two-sided rate PSD of one IEEE 952 noise term with unit parameter, (deg/h)²/Hz.
+
+    white: S = N² (N in (deg/h)·√s; σ²(τ) = N²/τ); flicker: S = B²/(2π|f|) (Allan plateau
+    (2 ln 2/π)·B²); rate random walk: S = (K/2π)²/f² (K in (deg/h)/√s; σ²(τ) = K²τ/3).
+    Source: IEEE Std 952-1997 Annex C, Table C.1."""
+    f = np.abs(np.asarray(f, float))
+    with np.errstate(divide="ignore"):
+        if key == "white":
+            return np.ones_like(f)
+        if key == "flicker":
+            return 1.0 / (2.0 * np.pi * f)
+        if key == "rw":
+            return (1.0 / (2.0 * np.pi)) ** 2 / (f * f)
+    raise ValueError(key)
+
+
+def component_acov(dt: float, half: int, M: int, nlag: int) -> dict[str, np.ndarray]:
+    """Autocovariance (lags 0 … ``nlag`` − 1, at Δ = M·dt) of the first differences of the
+    likelihood samples for each noise component with unit parameter (see the module
+    docstring): fine grid step ``dt`` (s), smoother half-width ``half`` (moving mean of
+    2·half + 1 samples, applied twice), box average of ``M`` fine samples.
+
+    Numerical integration on f ∈ [0, f_max] with step 1/(P·Δ), P ≥ 8·nlag a power of two
+    (the integrand is folded modulo P and one FFT gives every lag); f_max = min(1/(2·dt),
+    24/W) (beyond, the smoother's sidelobes leave < 1e-6 of the variance)."""
+    delta = M * dt
+    L = 2 * half + 1
+    P = 1 << int(math.ceil(math.log2(max(8 * nlag, 64))))
+    df = 1.0 / (P * delta)
+    fmax = min(0.5 / dt, 24.0 / (L * dt))
+    nf = max(P, int(math.ceil(fmax / df)) + 1)
+    f = np.arange(nf) * df
+    H = _dirichlet2(f, L, dt) ** 2 * _dirichlet2(f, M, dt)
+    diff = 4.0 * np.sin(np.pi * f * delta) ** 2
+    w = np.full(nf, 2.0 * df)
+    w[0] = df
+    out = {}
+    for key, _ in COMPONENTS:
+        S = component_psd(f[1:], key)
+        g = np.empty(nf)
+        g[1:] = S * H[1:] * diff[1:]
+        # f → 0 limits: white and flicker vanish after differencing, random walk tends to Δ²
+        g[0] = delta * delta if key == "rw" else 0.0
+        g *= w
+        folded = np.bincount(np.arange(nf) % P, weights=g, minlength=P)
+        gam = np.real(np.fft.fft(folded))[:nlag]
+        out[key] = gam
+    return out
+
+
+# ============================================================================ noise model
+@dataclass
+class NoiseParams:
+    """The gyro's noise in IEEE 952 terms: N (deg/√h), B (deg/h), K (deg/h/√h)."""
+
+    N: float
+    B: float
+    K: float
+    loglik: float = math.nan
+    fixed: bool = False  # from a reference run, not estimated on this log
+    basis: str = ""
+
+    @property
+    def var(self) -> dict[str, float]:
+        """Component parameters squared in the internal units of :func:`component_acov`:
+        N² in (deg/h)²·s, B² in (deg/h)², K² in (deg/h)²/s."""
+        return {"white": (self.N * 60.0) ** 2, "flicker": self.B ** 2,
+                "rw": (self.K / 60.0) ** 2}
+
+    def to_dict(self) -> dict:
+        return {"N_deg_per_sqrt_h": self.N, "B_deg_per_h": self.B,
+                "K_deg_per_h_per_sqrt_h": self.K, "loglik": self.loglik,
+                "from_reference": self.fixed, "basis": self.basis}
+
+    def text(self) -> str:
+        return (f"N = {self.N:.3g} deg/√h, B = {self.B:.3g} deg/h, "
+                f"K = {self.K:.3g} deg/h/√h")
+
+
+def params_from_shares(shares: np.ndarray, sigma2: float, gam0: dict[str, float]
+                       ) -> NoiseParams:
+    """Noise parameters from the shares of the variance of the differenced samples and its
+    level σ²: component c has parameter² = σ²·share_c / γ_c(0)."""
+    v = {k: sigma2 * s / gam0[k] if gam0[k] > 0 else 0.0
+         for (k, _), s in zip(COMPONENTS, shares)}
+    return NoiseParams(N=math.sqrt(max(v["white"], 0.0)) / 60.0,
+                       B=math.sqrt(max(v["flicker"], 0.0)),
+                       K=math.sqrt(max(v["rw"], 0.0)) * 60.0)
+
+
+def _shares(u: np.ndarray) -> np.ndarray:
+    """Softmax of (0, u1, u2): the shares of white, flicker and random walk."""
+    z = np.concatenate([[0.0], np.asarray(u, float)])
+    z = z - z.max()
+    e = np.exp(z)
+    return e / e.sum()
+
+
+@dataclass
+class Likelihood:
+    """The Gaussian likelihood of block-level series on one :class:`LikGrid` under one noise
+    shape; see the module docstring. ``shape`` gives the autocovariance of the differences
+    up to the level σ² (``gamma = Σ_c share_c·γ_c/γ_c(0)``)."""
+
+    grid: LikGrid
+    gamma: np.ndarray
+    factors: dict[int, np.ndarray] = field(default_factory=dict)
+    logdet: float = 0.0
+
+    @classmethod
+    def build(cls, grid: LikGrid, gamma: np.ndarray) -> Likelihood:
+        lk = cls(grid, np.asarray(gamma, float))
+        ld = 0.0
+        for a, b in grid.runs:
+            n = b - a - 1
+            if n < 1:
+                continue
+            L = lk._factor(n)
+            ld += 2.0 * float(np.sum(np.log(np.diag(L))))
+        lk.logdet = ld
+        return lk
+
+    def _factor(self, n: int) -> np.ndarray:
+        L = self.factors.get(n)
+        if L is None:
+            g = self.gamma[:n].copy()
+            g[0] *= 1.0 + 1e-10
+            C = linalg.toeplitz(g)
+            try:
+                L = linalg.cholesky(C, lower=True, check_finite=False)
+            except linalg.LinAlgError:
+                C[np.diag_indices(n)] += 1e-8 * g[0]
+                L = linalg.cholesky(C, lower=True, check_finite=False)
+            self.factors[n] = L
+        return L
+
+    def whiten(self, a: np.ndarray) -> np.ndarray:
+        """Σ^(−1/2)·D·(sample means of) a block-level array (nb,) or (nb, k): GLS becomes
+        ordinary least squares on whitened rows."""
+        return self.whiten_samples(self.grid.means(a))
+
+    def whiten_samples(self, s: np.ndarray) -> np.ndarray:
+        """Σ^(−1/2)·D of a sample-level array (n,) or (n, k)."""
+        return self.whiten_diffs(self.grid.diffs(s), np.shape(s)[1:])
+
+    def whiten_diffs(self, diffs: list[np.ndarray], tail: tuple = ()) -> np.ndarray:
+        """Σ^(−1/2) of first differences already taken per run (:meth:`LikGrid.diffs`)."""
+        parts = []
+        for d in diffs:
+            L = self._factor(len(d))
+            parts.append(linalg.solve_triangular(L, d, lower=True, check_finite=False))
+        if not parts:
+            return np.zeros((0,) + tuple(tail))
+        return np.concatenate(parts, axis=0)
+
+    @property
+    def m(self) -> int:
+        return self.grid.m
+
+    def profile(self, rss: float) -> tuple[float, float]:
+        """(log-likelihood with σ² profiled, σ̂²) for a whitened residual sum of squares."""
+        m = self.m
+        s2 = max(rss, 1e-300) / m
+        return -0.5 * (m * math.log(2 * math.pi * s2) + self.logdet + m), s2
+
+
+def gls(Xw: np.ndarray, yw: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """Least squares on whitened rows: (β, RSS, (XᵀX)⁻¹). Columns that whitening made zero
+    (a constant: the bias) get β = 0 and no variance; near-zero columns are dropped the same
+    way."""
+    p = Xw.shape[1] if Xw.ndim == 2 else 0
+    if p == 0:
+        return np.zeros(0), float(yw @ yw), np.zeros((0, 0))
+    scale = np.sqrt(np.sum(Xw * Xw, axis=0))
+    live = scale > 1e-12 * max(float(scale.max()), 1e-300)
+    beta = np.zeros(p)
+    cov = np.zeros((p, p))
+    if live.any():
+        A = Xw[:, live] / scale[live]
+        Q, R = np.linalg.qr(A)
+        qy = Q.T @ yw
+        try:
+            b = linalg.solve_triangular(R, qy, check_finite=False)
+            Rinv = linalg.solve_triangular(R, np.eye(R.shape[0]), check_finite=False)
+        except (linalg.LinAlgError, ValueError):
+            b, *_ = np.linalg.lstsq(A, yw, rcond=None)
+            Rinv = np.linalg.pinv(R)
+        beta[live] = b / scale[live]
+        ci = (Rinv @ Rinv.T) / np.outer(scale[live], scale[live])
+        cov[np.ix_(live, live)] = ci
+        r = yw - A @ b
+    else:
+        r = yw
+    return beta, float(r @ r), cov
+
+
+@dataclass
+class NoiseFit:
+    """A noise model fitted (or fixed) on one log: the parameters, the shares of the
+    differenced variance, the likelihood object and the component autocovariances."""
+
+    params: NoiseParams
+    shares: np.ndarray
+    lik: Likelihood
+    acov: dict[str, np.ndarray]
+    sigma2: float
+    n_free: int = 2
+    #: the optimiser's logits of the shares (a warm start for a related model)
+    logits: np.ndarray | None = None
+
+    @property
+    def grid(self) -> LikGrid:
+        return self.lik.grid
+
+
+def acov_for(wd, grid: LikGrid) -> dict[str, np.ndarray]:
+    """Unit-parameter component autocovariances of the differenced samples of ``grid``
+    (cached on ``wd`` per sample length)."""
+    cache = getattr(wd, "_acov_cache", None)
+    if cache is None:
+        cache = {}
+        try:
+            wd._acov_cache = cache
+        except AttributeError:  # pragma: no cover - frozen objects
+            pass
+    fr = wd.frame
+    from .effects import smoothing_half
+
+    half = smoothing_half(wd.refs.smoothing_s, fr.dt)
+    m = int(round(wd.resolution_s / fr.dt))
+    M = grid.g * m
+    nlag = max(2, max((b - a for a, b in grid.runs), default=2))
+    key = (M, half, nlag)
+    if key not in cache:
+        cache[key] = component_acov(fr.dt, half, M, nlag)
+    return cache[key]
+
+
+def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
+    """Autocovariance of the differences for shares of the variance (σ² = 1)."""
+    g = np.zeros_like(acov["white"])
+    for (k, _), s in zip(COMPONENTS, shares):
+        if s > 0 and acov[k][0] > 0:
+            g = g + s * acov[k] / acov[k][0]
+    return g
+
+
+def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
+              maxiter: int = 60) -> NoiseFit:
+    """Maximum-likelihood noise shape (white/flicker/random-walk shares of the differenced
+    variance; the level σ² profiled) for the model whose whitened residual sum of squares at
+    a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside). Nelder–Mead over
+    the two logits of the shares from ``start`` (logits) and two standard starts."""
+    acov = acov_for(wd, grid)
+    if grid.m < MIN_DIFFS:
+        raise AnalysisError(f"{wd.info.get('source', 'log')}: only {grid.m} samples of "
+                            f"{grid.delta_s:g} s for the noise model; the log is too short for "
+                            "the working smoother (use a shorter --smooth)")
+    memo: dict[tuple, tuple[float, Likelihood, float]] = {}
+
+    def nll(u) -> float:
+        key = tuple(np.round(np.asarray(u, float), 6))
+        if key in memo:
+            return -memo[key][0]
+        sh = _shares(u)
+        lk = Likelihood.build(grid, shape_gamma(acov, sh))
+        rss = resid_fn(lk)
+        ll, s2 = lk.profile(rss)
+        memo[key] = (ll, lk, s2)
+        return -ll
+
+    # from a related model's shape alone, else from two standard starts (mostly white; even)
+    starts = ([np.asarray(start, float)] if start is not None
+              else [np.array([-3.0, -3.0]), np.array([0.0, 0.0])])
+    best = None
+    for x0 in starts:
+        r = optimize.minimize(nll, x0, method="Nelder-Mead",
+                              bounds=[(-18.0, 18.0), (-18.0, 18.0)],
+                              options={"xatol": 0.05, "fatol": 0.02, "maxiter": maxiter,
+                                       "initial_simplex": [x0, x0 + [1.0, 0.0],
+                                                           x0 + [0.0, 1.0]]})
+        if best is None or r.fun < best.fun:
+            best = r
+    key = tuple(np.round(np.asarray(best.x, float), 6))
+    if key not in memo:
+        nll(best.x)
+    ll, lk, s2 = memo[key]
+    sh = _shares(best.x)
+    gam0 = {k: float(acov[k][0]) for k, _ in COMPONENTS}
+    p = params_from_shares(sh, s2, gam0)
+    p.loglik = ll
+    return NoiseFit(p, sh, lk, acov, s2, logits=np.asarray(best.x, float))
+
+
+def fixed_noise(wd, grid: LikGrid, params: NoiseParams) -> NoiseFit:
+    """The likelihood under noise parameters given from outside (a static reference run):
+    shares and level from the parameters, nothing estimated."""
+    acov = acov_for(wd, grid)
+    v = params.var
+    tot = {k: v[k] * float(acov[k][0]) for k, _ in COMPONENTS}
+    s2 = sum(tot.values())
+    if not s2 > 0:
+        raise AnalysisError("the reference noise model has no variance")
+    sh = np.array([tot[k] / s2 for k, _ in COMPONENTS])
+    lk = Likelihood.build(grid, shape_gamma(acov, sh))
+    return NoiseFit(params, sh, lk, acov, s2, n_free=0)
+
+
+def reference_noise(ref_log, wd, axis: str | None = None) -> NoiseParams:
+    """The noise model of a static reference run of the same gyro (no stimulus), fitted by
+    maximum likelihood through the same smoother, block length and sample length as the log
+    ``wd`` it will judge (a bias only): the parameters are then fixed for every model of
+    that log."""
+    from .workdata import prepare
+
+    ref = prepare(ref_log, axis=axis or ref_log.axes[0], resolution=wd.resolution_s,
+                  smoothing_s=wd.refs.smoothing_s,
+                  fine_dt=wd.frame.dt if wd.frame.dt >= ref_log.tau0 else None)
+    grid = lik_grid(ref, g=max(1, int(round(lik_grid(wd).delta_s / ref.resolution_s))))
+
+    def rss(lk) -> float:
+        yw = lk.whiten(ref.y)
+        return float(yw @ yw)
+
+    nf = fit_noise(ref, grid, rss)
+    p = nf.params
+    return NoiseParams(p.N, p.B, p.K, loglik=math.nan, fixed=True,
+                       basis=f"the noise model of the static reference run {ref_log.source} "
+                             f"({p.text()}, maximum likelihood), fixed")
+
+
+__all__ = ["COMPONENTS", "LikGrid", "Likelihood", "NL_MAX", "NoiseFit", "NoiseParams",
+           "acov_for", "component_acov", "component_psd", "fit_noise", "fixed_noise", "gls",
+           "lik_grid", "reference_noise", "shape_gamma"]

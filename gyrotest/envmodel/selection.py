@@ -1,0 +1,788 @@
+"""Which physical effect is the model missing? One likelihood decides.
+
+The statistical model (:mod:`.likelihood`): the block-mean rate is Σ β_k·x_k(θ_k) plus the
+gyro's own noise -- white, flicker and random-walk rate noise seen through the workbench's
+smoother and block averaging -- whose parameters are fitted by maximum likelihood on the same
+log (or fixed from a static reference run). Every decision is a likelihood-ratio test or an
+information criterion on that model:
+
+1. **Candidates** (:func:`gyrotest.envmodel.screen.candidate_terms`): every library term the
+   log's channels allow and the model lacks, a screen of every logged channel (level, square,
+   rate; a lagged node's level, square and rate with a fitted τ; products where physics has
+   them), the field blocks in the gyro's own axes (``Hvec``, ``Hquad``, in place of the
+   model's per-axis field terms), and the nuisance terms (ramp, sinusoid, hysteresis; a
+   warm-up only when the log starts at the gyro's power-on).
+2. **One test per candidate.** The candidate is added to the model (its design columns
+   whitened by the Cholesky factor of the noise covariance) and scored by the likelihood
+   ratio Λ = 2(ℓ₁ − ℓ₀), with the noise shape of the model and the noise level re-estimated
+   (σ² profiled: Λ = m·ln(RSS₀/RSS₁) on m whitened differences). Under "nothing missing",
+   Λ ~ χ² with the candidate's number of coefficients. A time constant, frequency or
+   hysteresis width searched over a range exists only under the alternative; its p-value is
+   Davies' (1987) bound P(χ²_s > u) + V·u^{(s−1)/2}·e^{−u/2}·2^{−s/2}/Γ(s/2), V the total
+   variation of √Λ over the searched range.
+3. **One criterion.** "Missing effect" when the smallest p-value, multiplied by the number of
+   candidates tried in the step (Bonferroni), is at most the family-wise α (default
+   :data:`ALPHA` = 1 %). When no single candidate passes, pairs of the :data:`PAIR_POOL`
+   best are tried together (two effects that hide each other), at α over every pair of the
+   step's candidates.
+4. **Indistinguishable candidates.** Candidates whose models are within ΔBIC ≤
+   :data:`BIC_TIE` of the best are not told apart by the data (Kass & Raftery 1995): they
+   are named together, with the measurement that would separate them; among them a
+   physical library term is preferred to a generic channel form, and that to a nuisance
+   term (the prior order of :data:`gyrotest.envmodel.screen.CLASS_ORDER`).
+5. **Replace, not stack.** After the chosen term is added, a model term of the same sensor
+   or field that the data no longer support beside it (ΔBIC of dropping it < −BIC_TIE) is
+   named as the term it replaces ("Tlag in place of T").
+6. **Nothing missing.** When no candidate passes, the residual is checked against the noise
+   model: the whitened residual should be white (Ljung–Box test over :data:`WHITE_LAGS`
+   lags at the same α); the verdict prints the residual's N, B, K. A model term the data do
+   not support (ΔBIC of dropping it < −BIC_TIE) is named for removal.
+7. **Never degenerate.** A candidate whose design column lies in the span of the model's
+   (variance inflation ≥ :data:`gyrotest.envmodel.fit.VIF_MAX`) is not proposed.
+
+Sources: S. S. Wilks (1938) (likelihood ratio); R. B. Davies, Biometrika 74 (1987) 33–43;
+R. E. Kass, A. E. Raftery, JASA 90 (1995) 773–795 (Bayes factors, ΔBIC); G. M. Ljung,
+G. E. P. Box, Biometrika 65 (1978) 297–303.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize, special
+from scipy import stats as sps
+
+from ..errors import AnalysisError, InputError
+from ..workbench_rules import (  # noqa: E402  (the decision constants, one source)
+    ALPHA,
+    BIC_TIE,
+    MC_DRAWS,
+    PAIR_POOL,
+    TAU_POINTS,
+    WHITE_LAGS,
+)
+from .fit import VIF_MAX, FitResult, WorkData, fit_model
+from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
+from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
+
+#: within a class, simpler forms first at equal evidence (x before x², a lag before a rate)
+FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,
+              "chanprod": 6, "Tlag": 0, "dTlagdt": 1, "Tlag2": 2, "Hsq": 2, "Hmag2": 2,
+              "Hprod": 3, "T2": 2, "T3": 4, "g2": 2, "gprod": 3}
+#: the plain form of a lagged term (a lag that replaces its plain form is the same sensor)
+UNLAGGED = {"Tlag": "T", "Tlag2": "T2", "dTlagdt": "dTdt", "chanlag": "chan",
+            "dchanlag": "dchan"}
+
+
+# ============================================================================ results
+@dataclass
+class Candidate:
+    """One candidate move (a term added, or a block in place of model terms) and its test."""
+
+    term: str
+    effect: str
+    spec: TermSpec | None
+    klass: str = "library"
+    replaces: str | None = None
+    lr: float = math.nan  # Λ = 2Δℓ at the model's noise shape
+    df: int = 0  # coefficients added (net of those replaced)
+    searched: str | None = None  # the nonlinear parameter searched and its range
+    log_p: float = math.nan  # ln of its own (local) p-value, at the best searched value
+    p_fw: float = math.nan  # family-wise p-value (min-P parametric bootstrap)
+    tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
+    trials: int = 1  # candidates in the family of the step
+    dbic: float = math.nan  # BIC of the model with it minus the model's
+    theta: dict = field(default_factory=dict)
+    significant: bool = False
+    degenerate: str | None = None
+    error: str | None = None
+    equivalents: list[str] = field(default_factory=list)
+    pair: tuple[str, float, float] | None = None  # (other member, pair Λ, pair p_fw)
+    note: str | None = None
+    lr_full: float = math.nan  # Λ with the noise re-estimated under both models
+    rms_fit: float = math.nan
+    rms_holdout: float = math.nan
+    improvement_pct: float = math.nan  # held-out RMS gain of the refitted model, %
+    z: float = math.nan  # the added coefficient's z in the refitted model
+    n_params: int = 0
+    coefficients: list[dict] = field(default_factory=list)
+    advice: str | None = None  # what measurement separates it from its equivalents
+    _fit: FitResult | None = None
+
+    @property
+    def p(self) -> float:
+        return float(math.exp(self.log_p)) if math.isfinite(self.log_p) else math.nan
+
+    @property
+    def p_family(self) -> float:
+        """Family-wise p-value over every candidate and searched value of the step (the
+        min-P parametric bootstrap of :func:`family_p`)."""
+        return self.p_fw if math.isfinite(self.log_p) else math.nan
+
+    @property
+    def p_adj(self) -> float:
+        return self.p_family
+
+    @property
+    def evidence(self) -> str:
+        if self.error:
+            return self.error
+        if self.degenerate:
+            return self.degenerate
+        if not math.isfinite(self.lr):
+            return "not tested"
+        s = f"Λ = {self.lr:.1f} on {self.df} coefficient{'s' if self.df != 1 else ''}"
+        if self.searched:
+            s += f" with {self.searched} searched"
+        pf = self.p_family
+        fw = (f"< {1.0 / MC_DRAWS:.2g}" if math.isfinite(pf) and pf <= 1.0 / (MC_DRAWS + 1) + 1e-15
+              else f"= {_fmt_p(pf)}")
+        s += (f", local p = {_fmt_p(self.p)}, family-wise p {fw} over {self.trials} "
+              f"candidates and their searched values, ΔBIC = {self.dbic:+.1f}")
+        return s
+
+    def add_hint(self, base_terms: list[str] | None = None) -> str:
+        """The complete ``--terms`` (and ``--term``) to paste: the model's terms, without
+        those it replaces, plus this one."""
+        keep = [t for t in (base_terms or []) if t != "bias"
+                and t not in (self.replaces or "").split("; ")]
+        if self.spec is not None and self.spec.key == "custom":
+            lib = [t for t in keep if ":" not in t]
+            h = f"--term '{self.spec.name}:{self.spec.expr}'"
+            return (f"--terms '{','.join(lib)}' " + h) if lib else h
+        return f"--terms '{','.join(keep + [self.term])}'"
+
+    def to_dict(self) -> dict:
+        return {"term": self.term, "effect": self.effect, "class": self.klass,
+                "replaces": self.replaces, "lr": self.lr, "df": self.df,
+                "searched": self.searched, "p": self.p, "p_family": self.p_family,
+                "trials": self.trials, "delta_bic": self.dbic, "theta": self.theta,
+                "significant": self.significant, "degenerate": self.degenerate,
+                "equivalents": self.equivalents, "separate_by": self.advice,
+                "pair": list(self.pair) if self.pair else None, "note": self.note,
+                "lr_noise_reestimated": self.lr_full, "rms_fit_dph": self.rms_fit,
+                "rms_holdout_dph": self.rms_holdout, "improvement_pct": self.improvement_pct,
+                "z": self.z, "coefficients": self.coefficients, "evidence": self.evidence,
+                "error": self.error}
+
+
+def _fmt_p(p: float) -> str:
+    if not math.isfinite(p):
+        return "n/a"
+    if p < 1e-300:
+        return "< 1e-300"
+    return f"{p:.2g}"
+
+
+@dataclass
+class Removal:
+    """A model term the data do not support: the model without it has the better BIC."""
+
+    term: str
+    lr: float
+    df: int
+    dbic: float
+
+    @property
+    def text(self) -> str:
+        return (f"the data do not support {self.term} (Λ = {self.lr:.1f} on {self.df} "
+                f"parameter{'s' if self.df != 1 else ''}, ΔBIC of removing it "
+                f"{self.dbic:+.1f}): the model does as well without it; remove it")
+
+    def to_dict(self) -> dict:
+        return {"term": self.term, "lr": self.lr, "df": self.df, "delta_bic": self.dbic,
+                "text": self.text}
+
+
+@dataclass
+class Whiteness:
+    """Ljung–Box test of the whitened residual (standardised innovations)."""
+
+    q: float
+    lags: int
+    dof: int
+    p: float
+
+    @property
+    def consistent(self) -> bool:
+        return not (self.p < ALPHA)
+
+    def to_dict(self) -> dict:
+        return {"ljung_box_q": self.q, "lags": self.lags, "dof": self.dof, "p": self.p,
+                "consistent": self.consistent}
+
+
+# ============================================================================ statistics
+def davies_log_p(u: float, s: int, V: float) -> float:
+    """ln of Davies' (1987) upper bound on P(sup_θ Λ(θ) > u) for a χ²_s process with total
+    variation V of √Λ over the searched range; V = 0: the plain χ²_s tail."""
+    u = max(float(u), 0.0)
+    s = max(int(s), 1)
+    a = float(sps.chi2.logsf(u, s))
+    if not V > 0 or u <= 0:
+        return a
+    b = (math.log(V) + 0.5 * (s - 1) * math.log(u) - 0.5 * u - 0.5 * s * math.log(2.0)
+         - float(special.gammaln(0.5 * s)))
+    return float(min(0.0, np.logaddexp(a, b)))
+
+
+def total_variation(vals: list[float]) -> float:
+    """Total variation of √Λ along a searched grid (the V of :func:`davies_log_p`)."""
+    r = np.sqrt(np.maximum(np.asarray(vals, float), 0.0))
+    return float(np.sum(np.abs(np.diff(r)))) if len(r) > 1 else 0.0
+
+
+def ljung_box(e: np.ndarray, lags: int = WHITE_LAGS, fitted: int = 2) -> Whiteness:
+    """Ljung & Box (1978): Q = m(m+2)·Σ_{k≤h} ρ_k²/(m−k) ~ χ²_{h−fitted} for white e."""
+    e = np.asarray(e, float)
+    m = len(e)
+    h = int(max(1, min(lags, m // 5)))
+    e = e - e.mean()
+    d = float(e @ e)
+    if m < 10 or d <= 0:
+        return Whiteness(math.nan, h, 0, math.nan)
+    rho = np.array([float(e[k:] @ e[:-k]) / d for k in range(1, h + 1)])
+    q = float(m * (m + 2) * np.sum(rho ** 2 / (m - np.arange(1, h + 1))))
+    dof = max(1, h - fitted)
+    return Whiteness(q, h, dof, float(sps.chi2.sf(q, dof)))
+
+
+# ============================================================================ the screen
+class Screen:
+    """The model of one step, whitened once; candidate columns are scored against it."""
+
+    def __init__(self, wd: WorkData, base: FitResult):
+        self.wd = wd
+        self.base = base
+        self.lik = base.noise.lik
+        self.m = self.lik.m
+        self.design = base.fitter.d
+        self.yw = self.lik.whiten(wd.y)
+        X = base.fitter.X(base.thetas)
+        self.Xw = self.lik.whiten(X)
+        self.offsets = base.fitter._offsets()
+        self.Q = _orth(self.Xw)
+        self.r0 = self.yw - self.Q @ (self.Q.T @ self.yw)
+        self.rss0 = float(self.r0 @ self.r0)
+        self.log_m = math.log(max(self.m, 2))
+        #: every direction tested in the step (orthonormal bases outside the model's span,
+        #: one group per candidate and searched value) and the candidate each belongs to:
+        #: the family of the min-P bootstrap (:func:`family_p`)
+        self.groups: list[np.ndarray] = []
+        self.owner: list[int] = []
+        self.current = -1
+
+    def lr_whitened(self, Zw: np.ndarray) -> tuple[float, bool]:
+        """Λ of adding whitened columns ``Zw`` to the model; (0, True) when they lie in its
+        span (degenerate). The tested direction joins the step's family."""
+        if Zw.ndim == 1:
+            Zw = Zw[:, None]
+        Zp = Zw - self.Q @ (self.Q.T @ Zw)
+        own = np.sum(Zp * Zp, axis=0)
+        tot = np.sum(Zw * Zw, axis=0)
+        live = own > tot / VIF_MAX
+        if not live.any():
+            return 0.0, True
+        Qz = _orth(Zp[:, live])
+        self._record(Qz)
+        g = Qz.T @ self.r0
+        rss1 = max(self.rss0 - float(g @ g), 1e-300)
+        return self.m * math.log(self.rss0 / rss1), bool((~live).any())
+
+    def _record(self, Qz: np.ndarray) -> None:
+        if self.current >= 0 and Qz.shape[1]:
+            self.groups.append(Qz)
+            self.owner.append(self.current)
+
+    def lr_blocks(self, Z: np.ndarray) -> tuple[float, bool]:
+        return self.lr_whitened(self.lik.whiten(np.asarray(Z, float).reshape(self.wd.nb, -1)))
+
+    def nested_in(self, Z: np.ndarray) -> list[str]:
+        """Labels of the model's terms whose columns lie in the span of the block-level
+        columns ``Z`` (to 1/VIF_MAX of their whitened variance)."""
+        Qz = _orth(self.lik.whiten(np.asarray(Z, float).reshape(self.wd.nb, -1)))
+        out = []
+        for s in self.base.specs:
+            if s.key == "bias":
+                continue
+            a, b = self.offsets[s.label]
+            A = self.Xw[:, a:b]
+            tot = float(np.sum(A * A))
+            if not tot > 0:
+                continue
+            R = A - Qz @ (Qz.T @ A)
+            if float(np.sum(R * R)) < tot / VIF_MAX:
+                out.append(s.label)
+        return out
+
+    def lr_swap(self, Z: np.ndarray, replaced: list[str]) -> float:
+        """Λ of the model with the terms ``replaced`` taken out and columns ``Z`` put in
+        (can be negative: the swap fits worse)."""
+        keep = np.ones(self.Xw.shape[1], bool)
+        for lab in replaced:
+            a, b = self.offsets[lab]
+            keep[a:b] = False
+        A = np.column_stack([self.Xw[:, keep], self.lik.whiten(Z.reshape(self.wd.nb, -1))])
+        Q = _orth(A)
+        # the direction the swap adds beyond the model (the block nests the replaced terms)
+        D = Q - self.Q @ (self.Q.T @ Q)
+        self._record(_orth(D))
+        r = self.yw - Q @ (Q.T @ self.yw)
+        return self.m * math.log(self.rss0 / max(float(r @ r), 1e-300))
+
+    def lr_drop(self, label: str) -> float:
+        """Λ of the model's term ``label`` (the model against the model without it)."""
+        a, b = self.offsets[label]
+        keep = np.ones(self.Xw.shape[1], bool)
+        keep[a:b] = False
+        Q = _orth(self.Xw[:, keep])
+        r = self.yw - Q @ (Q.T @ self.yw)
+        return self.m * math.log(max(float(r @ r), 1e-300) / max(self.rss0, 1e-300))
+
+
+def _orth(A: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of the column space of A (zero and dependent columns dropped)."""
+    if A.ndim == 1:
+        A = A[:, None]
+    if A.shape[1] == 0:
+        return np.zeros((A.shape[0], 0))
+    s = np.sqrt(np.sum(A * A, axis=0))
+    ok = s > 1e-12 * max(float(s.max()), 1e-300)
+    if not ok.any():
+        return np.zeros((A.shape[0], 0))
+    Q, R = np.linalg.qr(A[:, ok] / s[ok])
+    d = np.abs(np.diag(R))
+    return Q[:, d > 1e-7 * max(float(d.max()), 1e-300)]
+
+
+def _n_nonlinear(spec: TermSpec) -> int:
+    return len(spec.effect.nonlinear)
+
+
+def score_candidate(sc: Screen, spec: TermSpec, replaces: list[str] | None = None,
+                    index: int = -1) -> Candidate:
+    """Λ (profiled over a searched parameter) and ΔBIC of one candidate; every direction it
+    tests joins the step's family (``index``: the candidate's place in the step), whose
+    bootstrap gives the p-values (:func:`family_p`)."""
+    c = Candidate(term=spec.label, effect=describe(spec), spec=spec, klass=term_class(spec),
+                  replaces="; ".join(replaces) if replaces else None)
+    by_label = {s.label: s for s in sc.base.specs}
+    k_rep = sum(by_label[r].n_coef + _n_nonlinear(by_label[r]) for r in (replaces or []))
+    c.df = spec.n_coef - (k_rep if replaces else 0)
+    c.n_params = spec.n_coef + _n_nonlinear(spec)
+    sc.current = index
+    try:
+        if not spec.effect.nonlinear:
+            Z = sc.design.block(spec, None)
+            if not replaces and Z.shape[1] > 1:
+                # a block that contains a model term (a custom form of one of its
+                # components) replaces it: the model with both is degenerate
+                replaces = sc.nested_in(Z)
+                if replaces:
+                    c.replaces = "; ".join(replaces)
+                    k_rep = sum(by_label[r].n_coef + _n_nonlinear(by_label[r])
+                                for r in replaces)
+                    c.df = spec.n_coef - k_rep
+            if replaces:
+                lr, deg = sc.lr_swap(Z, replaces), False
+            else:
+                lr, deg = sc.lr_blocks(Z)
+            if deg and lr <= 0:
+                c.degenerate = "its regressor lies in the span of the model's terms"
+                return c
+            c.lr = max(lr, 0.0)
+        else:
+            lr, theta, V, rng = _search(sc, spec, replaces)
+            c.theta = theta
+            c.tv = V
+            c.lr = max(lr, 0.0)
+            (pname, (lo, hi)), = rng.items()
+            unit = spec.effect.nonlinear[0].unit
+            c.searched = f"{pname} over {lo:.3g}–{hi:.3g} {unit}"
+            if not math.isfinite(lr):
+                c.degenerate = "its regressor lies in the span of the model's terms"
+                return c
+    except (InputError, ValueError, KeyError, np.linalg.LinAlgError, FloatingPointError) as e:
+        c.error = f"could not be evaluated: {e}"
+        return c
+    c.dbic = -c.lr + (c.n_params - (k_rep if replaces else 0)) * sc.log_m
+    return c
+
+
+def _search(sc: Screen, spec: TermSpec, replaces: list[str] | None
+            ) -> tuple[float, dict, float, dict]:
+    """Profile Λ over a term's nonlinear parameter: (max Λ, θ at the max, total variation
+    of √Λ along the search, the searched range)."""
+    wd = sc.wd
+    rng = nonlinear_bounds(spec, wd.duration_s, wd.resolution_s, wd.refs)
+    (pname, (lo, hi)), = rng.items()
+    kind = spec.effect.nonlinear[0].kind
+
+    def lr_at(v: float) -> float:
+        Z = sc.design.block(spec, {pname: float(v)})
+        if replaces:
+            return sc.lr_swap(Z, replaces)
+        lr, deg = sc.lr_blocks(Z)
+        return lr if not (deg and lr <= 0) else 0.0
+
+    if kind == "freq":
+        hi = min(hi, 0.5 / max(sc.lik.grid.delta_s, wd.resolution_s))
+        if not hi > lo:
+            raise ValueError("no frequency to search below the likelihood's Nyquist frequency")
+        f, vals = _freq_curve(sc, lo, hi)
+        i = int(np.argmax(vals))
+        T = wd.duration_s
+        a, b = max(lo, f[i] - 0.5 / T), min(hi, f[i] + 0.5 / T)
+        r = optimize.minimize_scalar(lambda v: -lr_at(v), bounds=(a, b), method="bounded",
+                                     options={"xatol": 1e-3 / T, "maxiter": 12})
+        best, bv = (float(r.x), -float(r.fun))
+        if vals[i] > bv:
+            best, bv = float(f[i]), float(vals[i])
+            bv = lr_at(best)
+        return bv, {pname: best}, total_variation(list(vals)), {pname: (lo, hi)}
+    n = TAU_POINTS if spec.key != "hyst" else max(6, TAU_POINTS // 2)
+    grid = np.exp(np.linspace(math.log(lo), math.log(hi), n))
+    vals = [lr_at(v) for v in grid]
+    i = int(np.argmax(vals))
+    a = math.log(grid[max(i - 1, 0)])
+    b = math.log(grid[min(i + 1, n - 1)])
+    r = optimize.minimize_scalar(lambda u: -lr_at(math.exp(u)), bounds=(a, b),
+                                 method="bounded", options={"xatol": 0.01, "maxiter": 12})
+    best, bv = math.exp(float(r.x)), -float(r.fun)
+    if vals[i] >= bv:
+        best, bv = float(grid[i]), float(vals[i])
+    allv = np.concatenate([vals, [bv]])
+    allx = np.concatenate([np.log(grid), [math.log(best)]])
+    order = np.argsort(allx)
+    return bv, {pname: float(best)}, total_variation(list(allv[order])), {pname: (lo, hi)}
+
+
+def _freq_curve(sc: Screen, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """Λ of a sinusoid (cos and sin columns) on a 2×-oversampled Fourier grid over [lo, hi].
+    The working smoother and the averaging are symmetric filters, which scale a sinusoid
+    without shifting its phase; the columns are therefore cos and sin at the likelihood
+    samples' centre times (Λ does not depend on a column's scale)."""
+    T = sc.wd.duration_s
+    nf = int(max(8, math.ceil((hi - lo) * 2.0 * T)))
+    f = np.linspace(lo, hi, nf)
+    tt = sc.lik.grid.t - sc.lik.grid.t[0]
+    W = 2 * np.pi * np.outer(tt, f)
+    S = np.concatenate([np.cos(W), np.sin(W)], axis=1)
+    Sw = sc.lik.whiten_samples(S)
+    Zp = Sw - sc.Q @ (sc.Q.T @ Sw)
+    C, Sn = Zp[:, :nf], Zp[:, nf:]
+    g1, g2 = C.T @ sc.r0, Sn.T @ sc.r0
+    a11 = np.sum(C * C, axis=0)
+    a22 = np.sum(Sn * Sn, axis=0)
+    a12 = np.sum(C * Sn, axis=0)
+    det = a11 * a22 - a12 * a12
+    ok = det > 1e-12 * np.maximum(a11 * a22, 1e-300)
+    # orthonormal pairs (Gram–Schmidt per frequency) for the min-P family
+    n1 = np.sqrt(np.maximum(a11, 1e-300))
+    q1 = C / n1
+    s2 = Sn - q1 * np.sum(q1 * Sn, axis=0)
+    n2 = np.sqrt(np.maximum(np.sum(s2 * s2, axis=0), 1e-300))
+    q2 = s2 / n2
+    for j in np.flatnonzero(ok):
+        sc._record(np.column_stack([q1[:, j], q2[:, j]]))
+    gain = np.zeros(nf)
+    gain[ok] = (a22[ok] * g1[ok] ** 2 - 2 * a12[ok] * g1[ok] * g2[ok]
+                + a11[ok] * g2[ok] ** 2) / det[ok]
+    rss1 = np.maximum(sc.rss0 - gain, 1e-300)
+    return f, sc.m * np.log(sc.rss0 / rss1)
+
+
+#: seed of the min-P bootstrap's draws (the verdict is reproducible)
+MC_SEED = 952
+
+
+def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
+    """Local and family-wise p-values of the step's candidates.
+
+    Every direction the step tested (each candidate at each searched value: a group of
+    orthonormal columns outside the model's span, :attr:`Screen.groups`) has a likelihood
+    ratio Λ_g = m·ln(RSS₀/RSS_g) and a local p-value P(χ²_{k_g} > Λ_g). A candidate's local p
+    is its smallest. Under "nothing missing" the whitened residual is white noise projected
+    off the model's span, so the distribution of the smallest local p over the whole family
+    is simulated exactly by drawing such noise (:data:`MC_DRAWS` draws, fixed seed); a
+    candidate's family-wise p is the fraction of draws whose smallest p is at most its own
+    (Westfall & Young 1993, single-step min-P). This is the look-elsewhere correction for
+    the candidates and their searched time constants, frequencies and widths at once, with
+    their correlations. Returns (ln local p, family-wise p) per candidate (NaN: untested)."""
+    local = np.full(n_cand, np.nan)
+    p_fw = np.full(n_cand, np.nan)
+    if not sc.groups:
+        return local, p_fw
+    sizes = np.array([g.shape[1] for g in sc.groups])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    owner = np.array(sc.owner)
+    Q = np.concatenate(sc.groups, axis=1)
+    m = sc.m
+
+    def min_logp(R: np.ndarray, rss0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        G = Q.T @ R
+        gain = np.add.reduceat(G * G, starts, axis=0)
+        lam = m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
+        return lam, rss0
+
+    lam_obs, _ = min_logp(sc.r0[:, None], np.array([sc.rss0]))
+    lam_obs = lam_obs[:, 0]
+    logp_obs = np.array([float(sps.chi2.logsf(v, k)) for v, k in zip(lam_obs, sizes)])
+    for i in range(n_cand):
+        sel = owner == i
+        if sel.any():
+            local[i] = float(np.min(logp_obs[sel]))
+    rng = np.random.default_rng(MC_SEED)
+    E = rng.standard_normal((m, draws))
+    E -= sc.Q @ (sc.Q.T @ E)
+    rss0 = np.sum(E * E, axis=0)
+    lam, _ = min_logp(E, rss0)
+    sim = np.full(draws, 0.0)
+    for k in np.unique(sizes):
+        top = np.max(lam[sizes == k], axis=0)
+        sim = np.minimum(sim, sps.chi2.logsf(top, k))
+    sim.sort()
+    for i in range(n_cand):
+        if math.isfinite(local[i]):
+            n_le = int(np.searchsorted(sim, local[i] + 1e-12, side="right"))
+            p_fw[i] = (1.0 + n_le) / (draws + 1.0)
+    return local, p_fw
+
+
+# ============================================================================ a step
+def step_candidates(wd: WorkData, base: FitResult, candidates=None) -> list[tuple[TermSpec,
+                                                                                  list[str]]]:
+    """The moves of one step: (term, labels of the model terms it replaces)."""
+    if candidates is None:
+        cands = candidate_terms(wd.frame, base.specs)
+        if not getattr(wd, "power_on", False):
+            cands = [c for c in cands if c.key != "warmup"]
+        moves = [(c, []) for c in cands]
+        moves += [(s, rep) for s, rep in block_candidates(wd.frame, base.specs)]
+        return moves
+    specs = resolve_terms(parse_terms(candidates), wd.frame)
+    have = {s.label for s in base.specs}
+    return [(s, []) for s in specs if s.label not in have]
+
+
+def _prior_key(c: Candidate, used: set[str]):
+    new = len(set(c.spec.channels) - used) if c.spec is not None else 0
+    return (CLASS_ORDER.get(c.klass, 9), new,
+            FORM_ORDER.get(c.spec.key if c.spec else "", 5), c.log_p)
+
+
+def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float = ALPHA,
+               progress=None) -> tuple[list[Candidate], Candidate | None]:
+    """Score every move of the step against ``base``; return them (most significant first)
+    and the chosen missing effect (None when no move passes at the family-wise ``alpha``)."""
+    sc = Screen(wd, base)
+    moves = step_candidates(wd, base, candidates)
+    out: list[Candidate] = []
+    for i, (spec, rep) in enumerate(moves):
+        if progress:
+            progress(i, len(moves), spec.label)
+        out.append(score_candidate(sc, spec, rep or None, index=i))
+    sc.current = -1
+    local, p_fw = family_p(sc, len(out))
+    tested = []
+    for i, c in enumerate(out):
+        if c.degenerate is None and c.error is None and math.isfinite(local[i]):
+            c.log_p = float(local[i])
+            c.p_fw = float(p_fw[i])
+            tested.append(c)
+        else:
+            c.log_p = math.nan
+    n_c = max(1, len(tested))
+    for c in out:
+        c.trials = n_c
+    for c in tested:
+        c.significant = c.p_family <= alpha
+    out.sort(key=lambda c: (c.log_p if math.isfinite(c.log_p) else math.inf))
+    used = {ch for s in base.specs for ch in s.channels}
+    sig = [c for c in tested if c.significant]
+    chosen = None
+    if sig:
+        best_bic = min(c.dbic for c in sig)
+        tied = [c for c in sig if c.dbic <= best_bic + BIC_TIE]
+        for c in sorted(tied, key=lambda c: _prior_key(c, used)):
+            try:
+                chosen = refit(wd, base, c)
+            except AnalysisError as e:  # a degenerate model: not proposed
+                c.degenerate = str(e)
+                c.significant = False
+                chosen = None
+                continue
+            break
+        if chosen is not None:
+            chosen.equivalents = [c.term for c in tied if c is not chosen]
+            if chosen.equivalents:
+                other = next(c for c in tied if c is not chosen)
+                chosen.advice = separation_advice(chosen, other)
+    if chosen is None and candidates is None:
+        pair = pair_step(wd, base, sc, tested, alpha)
+        if pair is not None:
+            chosen = pair
+    return out, chosen
+
+
+def refit(wd: WorkData, base: FitResult, c: Candidate) -> Candidate:
+    """Fit the model with the candidate (its nonlinear parameters re-optimised from the
+    screen's, the noise re-estimated): the held-out gain, the coefficient's z, Λ with the
+    noise re-estimated under both models; and the model term it replaces, if the data no
+    longer support one beside it."""
+    base_specs = [s for s in base.specs if s.key != "bias"]
+    gone = set((c.replaces or "").split("; ")) - {""}
+    specs = [s for s in base_specs if s.label not in gone] + [c.spec]
+    th0 = {k: v for k, v in base.thetas.items() if k not in gone}
+    if c.theta:
+        th0[c.term] = dict(c.theta)
+    r = fit_model(wd, specs, thetas0=th0, new_terms=[c.spec], light=True,
+                  noise_start=base.noise)
+    if not gone:
+        rep = replaced_term(wd, r, c)
+        if rep is not None:
+            label, _ = rep
+            specs2 = [s for s in specs if s.label != label]
+            th2 = {k: v for k, v in r.thetas.items() if k != label}
+            r = fit_model(wd, specs2, thetas0=th2, light=True, noise_start=r.noise)
+            c.replaces = label
+    _attach(c, base, r)
+    return c
+
+
+def _attach(c: Candidate, base: FitResult, r: FitResult) -> None:
+    c._fit = r
+    c.rms_fit = r.rms_fit
+    c.rms_holdout = r.rms_holdout
+    if math.isfinite(base.rms_holdout) and base.rms_holdout > 0:
+        c.improvement_pct = 100.0 * (base.rms_holdout - r.rms_holdout) / base.rms_holdout
+    c.lr_full = 2.0 * (r.loglik - base.loglik)
+    own = [cf for cf in r.coefficients if cf.term == c.term and cf.kind == "linear"]
+    if own:
+        c.z = max((cf.z for cf in own), key=lambda z: abs(z) if math.isfinite(z) else -1)
+    c.coefficients = [cf.to_dict() for cf in r.coefficients if cf.term == c.term]
+
+
+def replaced_term(wd: WorkData, r: FitResult, c: Candidate) -> tuple[str, float] | None:
+    """A model term that the data no longer support beside the new one: of the terms that
+    act through the same channel (or are its plain form), the one whose removal improves
+    the BIC most, if by more than :data:`BIC_TIE`. Returns (label, ΔBIC) or None."""
+    if c.spec is None:
+        return None
+    chans = set(c.spec.channels)
+    plain = UNLAGGED.get(c.spec.key)
+    sc = Screen(wd, r)
+    best = None
+    for s in r.specs:
+        if s.key == "bias" or s.label == c.term:
+            continue
+        if not (chans & set(s.channels)) and s.key != plain:
+            continue
+        lr = sc.lr_drop(s.label)
+        k = s.n_coef + _n_nonlinear(s)
+        dbic = lr - k * sc.log_m
+        if dbic < -BIC_TIE and (best is None or dbic < best[1]):
+            best = (s.label, dbic)
+    return best
+
+
+def pair_step(wd: WorkData, base: FitResult, sc: Screen, tested: list[Candidate],
+              alpha: float) -> Candidate | None:
+    """Two effects that hide each other: the :data:`PAIR_POOL` best single candidates
+    (by Λ) fitted in pairs, each pair tested at the family-wise α over every pair of the
+    step's candidates (Bonferroni), the searched parameters' look-elsewhere taken as the
+    sum of the members' total variations. The pair's more significant member is named,
+    with the other to test next."""
+    pool = [c for c in sorted(tested, key=lambda c: -c.lr) if c.replaces is None
+            and c.spec is not None][:PAIR_POOL]
+    n = len(tested)
+    n_pairs = max(1, n * (n - 1) // 2)
+    best = None
+    for i, a in enumerate(pool):
+        for b in pool[i + 1:]:
+            if set(a.spec.channels) == set(b.spec.channels) and a.spec.key == b.spec.key:
+                continue
+            try:
+                Za = sc.design.block(a.spec, a.theta or None)
+                Zb = sc.design.block(b.spec, b.theta or None)
+            except (InputError, ValueError, KeyError):
+                continue
+            lr, deg = sc.lr_blocks(np.column_stack([Za, Zb]))
+            if deg:
+                continue
+            V = 0.0
+            for m_ in (a, b):
+                V += m_.tv
+            lp = davies_log_p(lr, a.df + b.df, V)
+            if best is None or lp < best[0]:
+                best = (lp, lr, a, b)
+    if best is None:
+        return None
+    lp, lr, a, b = best
+    p_fw = min(1.0, math.exp(min(0.0, lp + math.log(n_pairs))))
+    if p_fw > alpha:
+        return None
+    lead, other = (a, b) if a.log_p <= b.log_p else (b, a)
+    try:
+        c = refit(wd, base, lead)
+    except AnalysisError:
+        return None
+    c.pair = (other.term, lr, p_fw)
+    c.significant = True
+    c.note = (f"alone it does not pass (family-wise p = {_fmt_p(lead.p_family)}), but with "
+              f"{other.term} the pair does: Λ = {lr:.1f}, family-wise p = {_fmt_p(p_fw)} over "
+              f"{n_pairs} pairs; the next step tests {other.term}")
+    return c
+
+
+def separation_advice(a: Candidate, b: Candidate) -> str:
+    from .fit import _advice
+
+    ka = a.spec.key if a.spec else ""
+    kb = b.spec.key if b.spec else ""
+    return _advice(ka, kb)
+
+
+def removal(wd: WorkData, base: FitResult) -> Removal | None:
+    """The model term whose removal improves the BIC most, if by more than
+    :data:`BIC_TIE` (the data favour the model without it)."""
+    sc = Screen(wd, base)
+    best = None
+    for s in base.specs:
+        if s.key == "bias":
+            continue
+        lr = sc.lr_drop(s.label)
+        k = s.n_coef + _n_nonlinear(s)
+        dbic = lr - k * sc.log_m
+        if dbic < -BIC_TIE and (best is None or dbic < best.dbic):
+            best = Removal(s.label, lr, k, dbic)
+    return best
+
+
+def residual_whiteness(base: FitResult) -> Whiteness:
+    """Ljung–Box test of the model's whitened residual (the standardised innovations under
+    its noise model)."""
+    sc_lik = base.noise.lik
+    X = base.fitter.X(base.thetas)
+    e = sc_lik.whiten(base.wd.y - X @ np.array([cf.value for cf in base.coefficients
+                                                  if cf.kind == "linear"]))
+    return ljung_box(e, WHITE_LAGS, fitted=base.noise.n_free)
+
+
+def stimulus_note(c: Candidate, frame) -> str | None:
+    """A sinusoid whose period is that of a logged stimulus: say so."""
+    if c.spec is None or c.spec.key != "sin" or "f_Hz" not in c.theta:
+        return None
+    ms = period_matches(frame, float(c.theta["f_Hz"]))
+    if not ms:
+        return None
+    names = ", ".join(f"{n} (R² {r2:.2f})" for n, r2 in ms[:3])
+    return (f"its period {1.0 / c.theta['f_Hz']:.4g} s is also that of the logged stimulus "
+            f"{names}, but no term of that channel explains it as well")
+
+
+__all__ = ["ALPHA", "BIC_TIE", "Candidate", "PAIR_POOL", "Removal", "Screen", "TAU_POINTS",
+           "WHITE_LAGS", "Whiteness", "davies_log_p", "judge_step", "ljung_box", "refit",
+           "removal", "residual_whiteness", "score_candidate", "total_variation"]

@@ -17,9 +17,10 @@ ALPHA = 0.01
 #: factor below e ≈ 2.7 is "not worth more than a bare mention"); also the margin by which
 #: the BIC must favour dropping a term before the verdict names it for removal
 BIC_TIE = 2.0
-#: a design column with R² ≥ 1 − 1/VIF_MAX on the others is degenerate: its coefficient is
-#: fixed by rounding, not by the data (never proposed; ``model fit`` refuses it)
-VIF_MAX = 1e6
+#: a design column with R² ≥ 1 − 1/VIF_MAX on the others is degenerate: less than 10⁻⁸ of its
+#: variance is its own, so its coefficient is fixed by rounding and the smoother's edges, not
+#: by the data (never proposed; ``model fit`` refuses it)
+VIF_MAX = 1e8
 #: draws of the min-P parametric bootstrap that gives family-wise p-values (Monte Carlo
 #: standard error 0.003 at p = 0.01)
 MC_DRAWS = 1000

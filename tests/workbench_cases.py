@@ -28,6 +28,7 @@ class Case:
     true_terms: list[str]
     missing: list[set[str]]  # per missing effect: the keys that name it
     extra_ok: set[str] = field(default_factory=set)  # keys that may also be added
+    white: float = 0.3  # the white noise N, (deg/h)·√s
 
 
 def flicker(n: int, rng) -> np.ndarray:
@@ -94,7 +95,10 @@ def case(name: str, seed: int = 1) -> Case:
         return Case(make_log(rate, 1.0, temps={"T_case": Tc}), ["T(T_case)"],
                     ["coil:lag(temp.T_case, 1500)", "coilrate:ddt(lag(temp.T_case, 1500))",
                      "hyst(T_case)"],
-                    [{"dTlagdt", "dchanlag"}, {"hyst"}], extra_ok={"Tlag", "chanlag"})
+                    # beside T of the case, the coil's level names its rate exactly: the coil
+                    # lags the case, so d(coil)/dt = (T_case − coil)/τ
+                    [{"dTlagdt", "dchanlag", "Tlag", "chanlag"}, {"hyst"}],
+                    extra_ok={"Tlag", "chanlag"})
     if name == "hmag2":  # effect proportional to |H|²
         n = int(6 * HOUR)
         seq = np.arange(n) // 180
@@ -129,7 +133,7 @@ def case(name: str, seed: int = 1) -> Case:
                 + noise(n, rng, N=0.1, B=0.002))
         log = make_log(rate, 1.0, temps={"T_case": T}, extra={"gx": gx, "gy": gy})
         return Case(log, ["T(T_case)"], ["T(T_case)", "g(gx)", "g(gy)", "gprod(gx,gy)"],
-                    [{"g"}, {"g"}, {"gprod", "chanprod"}])
+                    [{"g"}, {"g"}, {"gprod", "chanprod"}], white=0.1)
     if name == "tumble":  # IA turned through the meridian: earth rate, not g-sensitivity
         n = int(6 * HOUR)
         t = np.arange(n) * 1.0
@@ -159,14 +163,21 @@ CASES = ["warmup", "hyhz", "lagcoil", "hmag2", "rh", "gxgy", "tumble", "null"]
 def user_loop(wd, base: list[str], max_steps: int = 5):
     """diagnose → add the named effect (replacing what it replaces) → repeat. Returns
     (list of (Diagnosis, added TermSpec or None), final term specs)."""
-    from gyrotest.envmodel.diagnose import diagnose
+    from gyrotest.envmodel.workbench import diagnose
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
 
     specs = resolve_terms(parse_terms(base), wd.frame)
     steps = []
+    removed: set[str] = set()
     for _ in range(max_steps):
         d = diagnose(wd, specs, path_steps=1)
         if not d.found:
+            if d.remove is not None and d.remove.term not in removed:
+                # "the data do not support X: remove it" -- the user removes it
+                removed.add(d.remove.term)
+                specs = [s for s in specs if s.label != d.remove.term]
+                steps.append((d, None))
+                continue
             steps.append((d, None))
             break
         top = d.found[0]

@@ -1,9 +1,9 @@
 """Where a model fails: stretches of large residual, described by what the channels did.
 
 Rule: the block residual is smoothed with a centred moving mean over w blocks (w ≈ 1 min,
-at least 3 blocks); σ is the noise floor of the log (fixed;
-:mod:`gyrotest.envmodel.floor`) at the working resolution (or, without one, 1.4826·MAD of
-the smoothed series); an excursion is a run where
+at least 3 blocks); σ is the RMS that the white and flicker part of the fitted noise model
+leaves at the working resolution (:func:`gyrotest.envmodel.floor.floor_rms`; or, without one,
+1.4826·MAD of the smoothed series); an excursion is a run where
 |smoothed residual| > k·σ (k = 4 on the command line), runs closer than 3·w blocks are merged. Each
 excursion is described from the channels over the same time: temperature ramp up/down or
 turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,
@@ -131,7 +131,10 @@ def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
     chronological, at most ``max_items`` (the largest)."""
     from .fit import Excursion
 
-    floor = res.floor.rms_dph if res.floor is not None else None
+    # the white and flicker part of the fitted noise at the working resolution: a random walk
+    # the noise model took on may be an effect the model lacks, and a step or a transient it
+    # absorbed is exactly what the excursions should show
+    floor = res.floor.white_flicker_rms if res.floor is not None else None
     runs, rs, sig = excursion_runs(res.resid, res.resolution_s, k_sigma, floor)
     if not runs:
         return []

@@ -39,7 +39,15 @@ import numpy as np
 
 from ..errors import AnalysisError
 from . import stats as st
-from .likelihood import NoiseFit, NoiseParams, fit_noise, fixed_noise, gls, lik_grid
+from .likelihood import (
+    NoiseFit,
+    NoiseParams,
+    fit_noise,
+    fixed_noise,
+    gls,
+    lik_grid,
+    white_level,
+)
 from .model import EnvModel, ModelTerm
 from .terms import (
     TermSpec,
@@ -145,7 +153,7 @@ class FitResult:
     vif: dict[str, float]
     warnings: list[str]
     noise: NoiseFit  # the gyro's noise model under which the coefficients were fitted
-    loglik: float  # Gaussian log-likelihood (differenced likelihood samples, σ² profiled)
+    loglik: float  # Gaussian log-likelihood of the differenced likelihood samples
     rms_raw: float  # RMS of the mean-removed block means (no model)
     floor: st.NoiseFloor | None = None
     adev_tau: np.ndarray | None = None
@@ -327,7 +335,10 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     yhat = X @ beta
     resid = wd.y - yhat
     nb = wd.nb
-    loglik, s2 = lik.profile(rss_w)
+    # the noise level of the noise model (profiled, or set by the white noise measured on
+    # the full band, or by the reference run)
+    s2 = nf.sigma2
+    loglik = lik.loglik(rss_w, s2)
     # ---- uncertainties: GLS on the Gauss–Newton Jacobian (linear columns plus ∂ŷ/∂θ)
     Jn, nl_names = fitter.jacobian(thetas, beta)
     J = np.column_stack([X, Jn]) if Jn.shape[1] else X
@@ -436,7 +447,10 @@ def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None
         A = lk.whiten_diffs(dxy, (X.shape[1] + 1,))
         return gls(A[:, :-1], A[:, -1])[1]
 
-    return fit_noise(wd, grid, rss, start=start.logits if start is not None else None)
+    if not hasattr(wd, "_white_level"):
+        wd._white_level = white_level(wd)
+    return fit_noise(wd, grid, rss, start=start.logits if start is not None else None,
+                     white=wd._white_level or None)
 
 
 def bias_variance(p: NoiseParams, duration_s: float) -> float:
@@ -586,7 +600,7 @@ def noise_floor(p: NoiseParams, wd: WorkData) -> st.NoiseFloor:
     basis = ((p.basis or ("the noise model fitted by maximum likelihood with this model "
                           "(white, flicker and random-walk rate noise)"))
              + f"; its RMS at T_eff = {t_eff:.3g} s over {wd.duration_s:.0f} s")
-    return st.NoiseFloor(rms, N, plateau, (t_eff, wd.duration_s), basis, random_walk_K=K)
+    return st.NoiseFloor(rms, N, plateau, t_eff, wd.duration_s, basis, random_walk_K=K)
 
 
 def finish(res: FitResult, k_sigma: float = 4.0) -> None:

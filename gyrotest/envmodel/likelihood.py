@@ -213,9 +213,9 @@ class NoiseParams:
                 "rw": (self.K / 60.0) ** 2}
 
     def to_dict(self) -> dict:
-        return {"N_deg_per_sqrt_h": self.N, "B_deg_per_h": self.B,
-                "K_deg_per_h_per_sqrt_h": self.K, "loglik": self.loglik,
-                "from_reference": self.fixed, "basis": self.basis}
+        return {"N_deg_per_sqrt_h": float(self.N), "B_deg_per_h": float(self.B),
+                "K_deg_per_h_per_sqrt_h": float(self.K), "loglik": float(self.loglik),
+                "from_reference": bool(self.fixed), "basis": self.basis}
 
     def text(self) -> str:
         return (f"N = {self.N:.3g} deg/√h, B = {self.B:.3g} deg/h, "
@@ -301,6 +301,11 @@ class Likelihood:
     @property
     def m(self) -> int:
         return self.grid.m
+
+    def loglik(self, rss: float, sigma2: float) -> float:
+        """Gaussian log-likelihood of a whitened residual sum of squares at noise level σ²."""
+        s2 = max(float(sigma2), 1e-300)
+        return -0.5 * (self.m * math.log(2 * math.pi * s2) + self.logdet + rss / s2)
 
     def profile(self, rss: float) -> tuple[float, float]:
         """(log-likelihood with σ² profiled, σ̂²) for a whitened residual sum of squares."""
@@ -391,11 +396,16 @@ def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
 
 
 def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
-              maxiter: int = 60) -> NoiseFit:
-    """Maximum-likelihood noise shape (white/flicker/random-walk shares of the differenced
-    variance; the level σ² profiled) for the model whose whitened residual sum of squares at
-    a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside). Nelder–Mead over
-    the two logits of the shares from ``start`` (logits) and two standard starts."""
+              maxiter: int = 60, white: float | None = None) -> NoiseFit:
+    """Maximum-likelihood noise model for the model whose whitened residual sum of squares at
+    a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside): Nelder–Mead over
+    the two logits of the white/flicker/random-walk shares of the differenced variance, from
+    ``start`` (logits) or two standard starts.
+
+    ``white``: the white-noise parameter N² ((deg/h)²·s) measured on the full band of the
+    log (:func:`white_level`); the level of the other two then follows from their shares.
+    Without it, the level σ² is profiled and all three come from the likelihood's band
+    alone, where a large effect the model lacks can take the place of the white noise."""
     acov = acov_for(wd, grid)
     if grid.m < MIN_DIFFS:
         raise AnalysisError(f"{wd.info.get('source', 'log')}: only {grid.m} samples of "
@@ -410,7 +420,11 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
         sh = _shares(u)
         lk = Likelihood.build(grid, shape_gamma(acov, sh))
         rss = resid_fn(lk)
-        ll, s2 = lk.profile(rss)
+        if white:
+            s2 = white * float(acov["white"][0]) / max(sh[0], 1e-300)
+            ll = lk.loglik(rss, s2)
+        else:
+            ll, s2 = lk.profile(rss)
         memo[key] = (ll, lk, s2)
         return -ll
 
@@ -433,8 +447,19 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
     sh = _shares(best.x)
     gam0 = {k: float(acov[k][0]) for k, _ in COMPONENTS}
     p = params_from_shares(sh, s2, gam0)
-    p.loglik = ll
+    p.loglik = float(ll)
     return NoiseFit(p, sh, lk, acov, s2, logits=np.asarray(best.x, float))
+
+
+def white_level(wd) -> float:
+    """The white-noise parameter N² ((deg/h)²·s) of a prepared log from its full band: the
+    robust scale of the fine-grid rate's first differences, σ_d²/2·dt (white noise dominates
+    the sample-to-sample changes; slow effects and steps do not move a median). Where the
+    whole band is quantised to one level (no difference at all) it is 0: not measured."""
+    from .workdata import _white_sigma
+
+    s = _white_sigma(wd.frame)
+    return float(s * s * wd.frame.dt) if math.isfinite(s) else 0.0
 
 
 def fixed_noise(wd, grid: LikGrid, params: NoiseParams) -> NoiseFit:
@@ -467,7 +492,7 @@ def reference_noise(ref_log, wd, axis: str | None = None) -> NoiseParams:
         yw = lk.whiten(ref.y)
         return float(yw @ yw)
 
-    nf = fit_noise(ref, grid, rss)
+    nf = fit_noise(ref, grid, rss, white=white_level(ref) or None)
     p = nf.params
     return NoiseParams(p.N, p.B, p.K, loglik=math.nan, fixed=True,
                        basis=f"the noise model of the static reference run {ref_log.source} "
@@ -476,4 +501,4 @@ def reference_noise(ref_log, wd, axis: str | None = None) -> NoiseParams:
 
 __all__ = ["COMPONENTS", "LikGrid", "Likelihood", "NL_MAX", "NoiseFit", "NoiseParams",
            "acov_for", "component_acov", "component_psd", "fit_noise", "fixed_noise", "gls",
-           "lik_grid", "reference_noise", "shape_gamma"]
+           "lik_grid", "reference_noise", "shape_gamma", "white_level"]

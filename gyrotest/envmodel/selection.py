@@ -71,6 +71,11 @@ from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_te
 FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,
               "chanprod": 6, "Tlag": 0, "dTlagdt": 1, "Tlag2": 2, "Hsq": 2, "Hmag2": 2,
               "Hprod": 3, "T2": 2, "T3": 4, "g2": 2, "gprod": 3}
+#: multi-coefficient blocks over every field axis (tried after the single terms)
+BLOCK_KEYS = ("Hvec", "Hquad")
+#: products of two channels (interactions: tried before their main effects only when no
+#: main effect passes)
+INTERACTION_KEYS = ("Hprod", "gprod", "chanprod")
 #: the plain form of a lagged term (a lag that replaces its plain form is the same sensor)
 UNLAGGED = {"Tlag": "T", "Tlag2": "T2", "dTlagdt": "dTdt", "chanlag": "chan",
             "dchanlag": "dchan"}
@@ -86,12 +91,13 @@ class Candidate:
     spec: TermSpec | None
     klass: str = "library"
     replaces: str | None = None
-    lr: float = math.nan  # Λ = 2Δℓ at the model's noise shape
+    lr: float = math.nan  # Λ = 2Δℓ, the noise shape re-estimated under both models
     df: int = 0  # coefficients added (net of those replaced)
     searched: str | None = None  # the nonlinear parameter searched and its range
     log_p: float = math.nan  # ln of its own (local) p-value, at the best searched value
     p_fw: float = math.nan  # family-wise p-value (min-P parametric bootstrap)
     tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
+    p_fw_full: float = math.nan  # the bootstrap p of the re-estimated-shape Λ (a diagnostic)
     trials: int = 1  # candidates in the family of the step
     dbic: float = math.nan  # BIC of the model with it minus the model's
     theta: dict = field(default_factory=dict)
@@ -101,7 +107,8 @@ class Candidate:
     equivalents: list[str] = field(default_factory=list)
     pair: tuple[str, float, float] | None = None  # (other member, pair Λ, pair p_fw)
     note: str | None = None
-    lr_full: float = math.nan  # Λ with the noise re-estimated under both models
+    lr_fixed: float = math.nan  # Λ at the model's own noise shape (the screen)
+    lr_refit: float = math.nan  # 2Δℓ of the refitted models (θ and noise optimised)
     rms_fit: float = math.nan
     rms_holdout: float = math.nan
     improvement_pct: float = math.nan  # held-out RMS gain of the refitted model, %
@@ -162,7 +169,7 @@ class Candidate:
                 "significant": self.significant, "degenerate": self.degenerate,
                 "equivalents": self.equivalents, "separate_by": self.advice,
                 "pair": list(self.pair) if self.pair else None, "note": self.note,
-                "lr_noise_reestimated": self.lr_full, "rms_fit_dph": self.rms_fit,
+                "lr_at_model_noise_shape": self.lr_fixed, "lr_refitted": self.lr_refit, "rms_fit_dph": self.rms_fit,
                 "rms_holdout_dph": self.rms_holdout, "improvement_pct": self.improvement_pct,
                 "z": self.z, "coefficients": self.coefficients, "evidence": self.evidence,
                 "error": self.error}
@@ -215,12 +222,28 @@ class Whiteness:
 
 
 # ============================================================================ statistics
+def chi2_logsf(u, k):
+    """ln P(χ²_k > u), finite far into the tail: scipy's value where it is finite, else the
+    leading term of the asymptotic series (k/2 − 1)·ln(u/2) − u/2 − ln Γ(k/2)
+    (Abramowitz & Stegun 6.5.32), accurate to ln(1 + O(k/u))."""
+    u = np.asarray(u, float)
+    k = np.asarray(k, float)
+    out = np.asarray(sps.chi2.logsf(u, k), float)
+    bad = ~np.isfinite(out) & (u > 0)
+    if np.any(bad):
+        ub = np.broadcast_to(u, out.shape)[bad]
+        kb = np.broadcast_to(k, out.shape)[bad]
+        out = out.copy()
+        out[bad] = ((kb / 2 - 1) * np.log(ub / 2) - ub / 2 - special.gammaln(kb / 2))
+    return out if out.ndim else float(out)
+
+
 def davies_log_p(u: float, s: int, V: float) -> float:
     """ln of Davies' (1987) upper bound on P(sup_θ Λ(θ) > u) for a χ²_s process with total
     variation V of √Λ over the searched range; V = 0: the plain χ²_s tail."""
     u = max(float(u), 0.0)
     s = max(int(s), 1)
-    a = float(sps.chi2.logsf(u, s))
+    a = float(chi2_logsf(u, s))
     if not V > 0 or u <= 0:
         return a
     b = (math.log(V) + 0.5 * (s - 1) * math.log(u) - 0.5 * u - 0.5 * s * math.log(2.0)
@@ -267,6 +290,7 @@ class Screen:
         self.r0 = self.yw - self.Q @ (self.Q.T @ self.yw)
         self.rss0 = float(self.r0 @ self.r0)
         self.log_m = math.log(max(self.m, 2))
+        self._grid: list[tuple] | None = None
         #: every direction tested in the step (orthonormal bases outside the model's span,
         #: one group per candidate and searched value) and the candidate each belongs to:
         #: the family of the min-P bootstrap (:func:`family_p`)
@@ -290,6 +314,80 @@ class Screen:
         g = Qz.T @ self.r0
         rss1 = max(self.rss0 - float(g @ g), 1e-300)
         return self.m * math.log(self.rss0 / rss1), bool((~live).any())
+
+    def shapes(self) -> list[tuple]:
+        """The noise shapes over which :meth:`lr_full` profiles the likelihood: the model's
+        own maximum-likelihood shape and a grid of lower and higher flicker and random-walk
+        shares around it, down to none (logits of :func:`gyrotest.envmodel.likelihood.fit_noise`).
+        Each entry: (likelihood, noise level σ² or None for profiled, whitened model design,
+        whitened y, ℓ of the model)."""
+        if self._grid is not None:
+            return self._grid
+        from .likelihood import Likelihood, _shares, shape_gamma
+
+        nf = self.base.noise
+        self._grid = []
+        if nf.n_free == 0 or nf.logits is None:
+            return self._grid
+        u0 = np.asarray(nf.logits, float)
+        steps = (1.0, 0.0, -1.5, -3.0, -6.0, -10.0, -30.0)
+        white = getattr(self.wd, "_white_level", 0.0) or None
+        X = self.base.fitter.X(self.base.thetas)
+        for a in steps:
+            for b in steps:
+                u = np.clip(u0 + [a, b], -18.0, 18.0)
+                sh = _shares(u)
+                lk = Likelihood.build(self.lik.grid, shape_gamma(nf.acov, sh))
+                s2 = (white * float(nf.acov["white"][0]) / max(sh[0], 1e-300)
+                      if white else None)
+                Xw = lk.whiten(X)
+                yw = lk.whiten(self.wd.y)
+                Q = _orth(Xw)
+                r = yw - Q @ (Q.T @ yw)
+                ll = _ll(lk, float(r @ r), s2)
+                self._grid.append((lk, s2, Q, r, ll))
+        return self._grid
+
+    def lr_full(self, Z: np.ndarray) -> float:
+        """Λ of adding block-level columns ``Z`` with the noise shape re-estimated under both
+        models (profiled over :meth:`shapes`): 2·(max ℓ with Z − max ℓ without). A missing
+        effect that the model's noise model had absorbed (a slow effect as random walk)
+        regains its full likelihood; without a shape grid (a noise model fixed from a
+        reference run) it is the fixed-shape Λ."""
+        grid = self.shapes()
+        if not grid:
+            return self.lr_blocks(Z)[0]
+        Z = np.asarray(Z, float).reshape(self.wd.nb, -1)
+        best0 = max(g[4] for g in grid)
+        best1 = -math.inf
+        cur, self.current = self.current, -1
+        for lk, s2, Q, r, _ in grid:
+            Zw = lk.whiten(Z)
+            Zp = Zw - Q @ (Q.T @ Zw)
+            own = np.sum(Zp * Zp, axis=0)
+            tot = np.sum(Zw * Zw, axis=0)
+            live = own > tot / VIF_MAX
+            if not live.any():
+                continue
+            Qz = _orth(Zp[:, live])
+            g = Qz.T @ r
+            best1 = max(best1, _ll(lk, float(r @ r) - float(g @ g), s2))
+        self.current = cur
+        return max(0.0, 2.0 * (best1 - best0)) if math.isfinite(best1) else 0.0
+
+    def not_recording(self):
+        """Context in which tested directions do not join the family (a refinement)."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def cm():
+            cur, self.current = self.current, -1
+            try:
+                yield
+            finally:
+                self.current = cur
+
+        return cm()
 
     def _record(self, Qz: np.ndarray) -> None:
         if self.current >= 0 and Qz.shape[1]:
@@ -340,6 +438,13 @@ class Screen:
         Q = _orth(self.Xw[:, keep])
         r = self.yw - Q @ (Q.T @ self.yw)
         return self.m * math.log(max(float(r @ r), 1e-300) / max(self.rss0, 1e-300))
+
+
+def _ll(lk, rss: float, s2: float | None) -> float:
+    """ℓ of a whitened residual sum of squares at noise level σ² (None: profiled)."""
+    if s2 is None:
+        return lk.profile(rss)[0]
+    return lk.loglik(rss, s2)
 
 
 def _orth(A: np.ndarray) -> np.ndarray:
@@ -427,6 +532,8 @@ def _search(sc: Screen, spec: TermSpec, replaces: list[str] | None
         lr, deg = sc.lr_blocks(Z)
         return lr if not (deg and lr <= 0) else 0.0
 
+    # the grid is the tested family (its directions join the min-P bootstrap and its
+    # largest Λ is the statistic); the refinement between grid points only estimates θ
     if kind == "freq":
         hi = min(hi, 0.5 / max(sc.lik.grid.delta_s, wd.resolution_s))
         if not hi > lo:
@@ -434,38 +541,34 @@ def _search(sc: Screen, spec: TermSpec, replaces: list[str] | None
         f, vals = _freq_curve(sc, lo, hi)
         i = int(np.argmax(vals))
         T = wd.duration_s
-        a, b = max(lo, f[i] - 0.5 / T), min(hi, f[i] + 0.5 / T)
-        r = optimize.minimize_scalar(lambda v: -lr_at(v), bounds=(a, b), method="bounded",
-                                     options={"xatol": 1e-3 / T, "maxiter": 12})
-        best, bv = (float(r.x), -float(r.fun))
-        if vals[i] > bv:
-            best, bv = float(f[i]), float(vals[i])
-            bv = lr_at(best)
-        return bv, {pname: best}, total_variation(list(vals)), {pname: (lo, hi)}
+        a, b = max(lo, f[i] - 0.25 / T), min(hi, f[i] + 0.25 / T)
+        with sc.not_recording():
+            r = optimize.minimize_scalar(lambda v: -lr_at(v), bounds=(a, b),
+                                         method="bounded",
+                                         options={"xatol": 1e-3 / T, "maxiter": 12})
+        best = float(r.x) if -float(r.fun) > vals[i] else float(f[i])
+        return (float(vals[i]), {pname: best}, total_variation(list(vals)),
+                {pname: (lo, hi)})
     n = TAU_POINTS if spec.key != "hyst" else max(6, TAU_POINTS // 2)
     grid = np.exp(np.linspace(math.log(lo), math.log(hi), n))
     vals = [lr_at(v) for v in grid]
     i = int(np.argmax(vals))
     a = math.log(grid[max(i - 1, 0)])
     b = math.log(grid[min(i + 1, n - 1)])
-    r = optimize.minimize_scalar(lambda u: -lr_at(math.exp(u)), bounds=(a, b),
-                                 method="bounded", options={"xatol": 0.01, "maxiter": 12})
-    best, bv = math.exp(float(r.x)), -float(r.fun)
-    if vals[i] >= bv:
-        best, bv = float(grid[i]), float(vals[i])
-    allv = np.concatenate([vals, [bv]])
-    allx = np.concatenate([np.log(grid), [math.log(best)]])
-    order = np.argsort(allx)
-    return bv, {pname: float(best)}, total_variation(list(allv[order])), {pname: (lo, hi)}
+    with sc.not_recording():
+        r = optimize.minimize_scalar(lambda u: -lr_at(math.exp(u)), bounds=(a, b),
+                                     method="bounded", options={"xatol": 0.01, "maxiter": 12})
+    best = math.exp(float(r.x)) if -float(r.fun) > vals[i] else float(grid[i])
+    return float(vals[i]), {pname: float(best)}, total_variation(vals), {pname: (lo, hi)}
 
 
 def _freq_curve(sc: Screen, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
-    """Λ of a sinusoid (cos and sin columns) on a 2×-oversampled Fourier grid over [lo, hi].
+    """Λ of a sinusoid (cos and sin columns) on a 4×-oversampled Fourier grid over [lo, hi].
     The working smoother and the averaging are symmetric filters, which scale a sinusoid
     without shifting its phase; the columns are therefore cos and sin at the likelihood
     samples' centre times (Λ does not depend on a column's scale)."""
     T = sc.wd.duration_s
-    nf = int(max(8, math.ceil((hi - lo) * 2.0 * T)))
+    nf = int(max(8, math.ceil((hi - lo) * 4.0 * T)))
     f = np.linspace(lo, hi, nf)
     tt = sc.lik.grid.t - sc.lik.grid.t[0]
     W = 2 * np.pi * np.outer(tt, f)
@@ -496,6 +599,52 @@ def _freq_curve(sc: Screen, lo: float, hi: float) -> tuple[np.ndarray, np.ndarra
 
 #: seed of the min-P bootstrap's draws (the verdict is reproducible)
 MC_SEED = 952
+
+
+def _columns(sc: Screen, c: Candidate) -> np.ndarray | None:
+    """The candidate's block-level columns at its best searched value (a swap: its columns
+    beside the model, whose span nests the replaced terms); None for a pair."""
+    if c.spec is None:
+        return None
+    return sc.design.block(c.spec, c.theta or None)
+
+
+def _n_replaced(sc: Screen, c: Candidate) -> int:
+    by_label = {s.label: s for s in sc.base.specs}
+    return sum(by_label[r].n_coef + _n_nonlinear(by_label[r])
+               for r in (c.replaces or "").split("; ") if r in by_label)
+
+
+def family_null(sc: Screen, draws: int = MC_DRAWS) -> np.ndarray:
+    """The null distribution of the step's smallest local ln p (sorted), by the min-P
+    parametric bootstrap of :func:`family_p`."""
+    if not sc.groups:
+        return np.zeros(0)
+    sizes = np.array([g.shape[1] for g in sc.groups])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    Q = np.concatenate(sc.groups, axis=1)
+    m = sc.m
+    rng = np.random.default_rng(MC_SEED)
+    E = rng.standard_normal((m, draws))
+    E -= sc.Q @ (sc.Q.T @ E)
+    rss0 = np.sum(E * E, axis=0)
+    G = Q.T @ E
+    gain = np.add.reduceat(G * G, starts, axis=0)
+    lam = m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
+    sim = np.full(draws, 0.0)
+    for k in np.unique(sizes):
+        top = np.max(lam[sizes == k], axis=0)
+        sim = np.minimum(sim, chi2_logsf(top, k))
+    sim.sort()
+    return sim
+
+
+def _p_from_null(sim: np.ndarray, log_p: float) -> float:
+    """Family-wise p of a local ln p against the sorted null minima (:func:`family_null`)."""
+    if not len(sim) or not math.isfinite(log_p):
+        return math.nan
+    n_le = int(np.searchsorted(sim, log_p + 1e-12, side="right"))
+    return (1.0 + n_le) / (len(sim) + 1.0)
 
 
 def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
@@ -529,25 +678,14 @@ def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray
 
     lam_obs, _ = min_logp(sc.r0[:, None], np.array([sc.rss0]))
     lam_obs = lam_obs[:, 0]
-    logp_obs = np.array([float(sps.chi2.logsf(v, k)) for v, k in zip(lam_obs, sizes)])
+    logp_obs = np.array([float(chi2_logsf(v, k)) for v, k in zip(lam_obs, sizes)])
     for i in range(n_cand):
         sel = owner == i
         if sel.any():
             local[i] = float(np.min(logp_obs[sel]))
-    rng = np.random.default_rng(MC_SEED)
-    E = rng.standard_normal((m, draws))
-    E -= sc.Q @ (sc.Q.T @ E)
-    rss0 = np.sum(E * E, axis=0)
-    lam, _ = min_logp(E, rss0)
-    sim = np.full(draws, 0.0)
-    for k in np.unique(sizes):
-        top = np.max(lam[sizes == k], axis=0)
-        sim = np.minimum(sim, sps.chi2.logsf(top, k))
-    sim.sort()
+    sim = family_null(sc, draws)
     for i in range(n_cand):
-        if math.isfinite(local[i]):
-            n_le = int(np.searchsorted(sim, local[i] + 1e-12, side="right"))
-            p_fw[i] = (1.0 + n_le) / (draws + 1.0)
+        p_fw[i] = _p_from_null(sim, local[i])
     return local, p_fw
 
 
@@ -565,6 +703,16 @@ def step_candidates(wd: WorkData, base: FitResult, candidates=None) -> list[tupl
     specs = resolve_terms(parse_terms(candidates), wd.frame)
     have = {s.label for s in base.specs}
     return [(s, []) for s in specs if s.label not in have]
+
+
+def _second_tier(c: Candidate, used: set[str]) -> bool:
+    """A move tried after the main effects: a field block, or an interaction of channels
+    the model does not use yet."""
+    if c.spec is None:
+        return False
+    if c.spec.key in BLOCK_KEYS:
+        return True
+    return c.spec.key in INTERACTION_KEYS and not (set(c.spec.channels) & used)
 
 
 def _prior_key(c: Candidate, used: set[str]):
@@ -594,6 +742,22 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             tested.append(c)
         else:
             c.log_p = math.nan
+    # the likelihood ratio with the noise shape re-estimated under both models ranks the
+    # candidates that pass (a missing effect the model's noise model absorbed regains its
+    # full weight); the test itself is the fixed-shape statistic the bootstrap calibrates
+    if tested:
+        sim = family_null(sc)
+        for c in tested:
+            lr = c.lr
+            try:
+                Z = _columns(sc, c)
+                if Z is not None:
+                    lr = max(lr, sc.lr_full(Z))
+            except (InputError, ValueError, KeyError, np.linalg.LinAlgError):
+                pass
+            c.lr_fixed, c.lr = c.lr, lr
+            c.p_fw_full = _p_from_null(sim, float(chi2_logsf(lr, max(c.df, 1))))
+            c.dbic = -lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
     n_c = max(1, len(tested))
     for c in out:
         c.trials = n_c
@@ -602,6 +766,12 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     out.sort(key=lambda c: (c.log_p if math.isfinite(c.log_p) else math.inf))
     used = {ch for s in base.specs for ch in s.channels}
     sig = [c for c in tested if c.significant]
+    # main effects first: a field block (several coefficients at once), or a product of two
+    # channels neither of which the model uses yet (weak heredity: Chipman 1996), only when
+    # no main effect passes
+    singles = [c for c in sig if not _second_tier(c, used)]
+    if singles:
+        sig = singles
     chosen = None
     if sig:
         best_bic = min(c.dbic for c in sig)
@@ -658,7 +828,7 @@ def _attach(c: Candidate, base: FitResult, r: FitResult) -> None:
     c.rms_holdout = r.rms_holdout
     if math.isfinite(base.rms_holdout) and base.rms_holdout > 0:
         c.improvement_pct = 100.0 * (base.rms_holdout - r.rms_holdout) / base.rms_holdout
-    c.lr_full = 2.0 * (r.loglik - base.loglik)
+    c.lr_refit = 2.0 * (r.loglik - base.loglik)
     own = [cf for cf in r.coefficients if cf.term == c.term and cf.kind == "linear"]
     if own:
         c.z = max((cf.z for cf in own), key=lambda z: abs(z) if math.isfinite(z) else -1)

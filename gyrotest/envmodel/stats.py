@@ -124,12 +124,13 @@ def oadev(rate: np.ndarray, tau0: float, taus: np.ndarray | None = None,
 
 @dataclass
 class NoiseFloor:
-    """The residual RMS expected from noise alone at the working resolution."""
+    """The residual RMS the gyro's noise alone leaves at the working resolution."""
 
-    rms_dph: float  # predicted RMS of block-mean residuals
+    rms_dph: float  # predicted RMS of block-mean residuals (white, flicker, random walk)
     white_N: float  # (deg/h)·sqrt(s): σ²(τ) = N²/τ
     flicker_B: float  # deg/h: Allan plateau of the flicker part
-    tau_range_s: tuple[float, float]
+    t_eff_s: float  # averaging time of the working filter
+    duration_s: float  # record length
     basis: str
     random_walk_K: float = 0.0  # (deg/h)/sqrt(s): σ²(τ) = K²τ/3
 
@@ -137,8 +138,15 @@ class NoiseFloor:
     def arw_deg_rt_h(self) -> float:
         return self.white_N / 60.0
 
+    @property
+    def white_flicker_rms(self) -> float:
+        """The RMS of the white and flicker part alone (:func:`.floor.floor_rms`)."""
+        from .floor import floor_rms
+
+        return floor_rms(self.white_N, self.flicker_B, 0.0, self.t_eff_s, self.duration_s)
+
     def to_dict(self) -> dict:
         return {"rms_dph": self.rms_dph, "white_N_dph_rts": self.white_N,
                 "arw_deg_per_rt_h": self.arw_deg_rt_h, "flicker_plateau_dph": self.flicker_B,
                 "random_walk_K_dph_per_rts": self.random_walk_K,
-                "tau_range_s": list(self.tau_range_s), "basis": self.basis}
+                "t_eff_s": self.t_eff_s, "duration_s": self.duration_s, "basis": self.basis}

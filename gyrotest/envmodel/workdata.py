@@ -336,6 +336,11 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
     mf = max(1, int(round(fine_dt / log.tau0)))
     fine_dt = mf * log.tau0
     frame = frame_from_log(log, axis=axis, dt=fine_dt if mf > 1 else None)
+    # every term is built from the channels' best estimate of their nodes: the sensors' own
+    # noise filtered out (:mod:`gyrotest.envmodel.sensors`)
+    from .sensors import denoise_frame
+
+    sensor_noise = denoise_frame(frame)
     if smoothing_s is None:
         W, wnote = choose_smoothing(frame, dur)
     else:
@@ -376,7 +381,8 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
     info = {"source": log.source, "axis": axis, "samples": log.n, "tau0_s": log.tau0,
             "duration_s": log.duration_s, "start": log.timing.start,
             "segments": len(log.segments), "fine_dt_s": fine_dt, "blocks": nb,
-            "smoothing_window_s": W, "channel_ranges": channel_ranges(log), **details}
+            "smoothing_window_s": W, "channel_ranges": channel_ranges(log),
+            "sensor_noise": {k: v.to_dict() for k, v in sensor_noise.items()}, **details}
     if provenance:
         info.update(provenance)
     wd = WorkData(frame=frame, block=block, counts=counts, t=np.zeros(nb), y=np.zeros(nb),

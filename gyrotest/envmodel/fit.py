@@ -658,6 +658,11 @@ _ADVICE = {
     frozenset({"dTdt", "hyst"}): "add dwells between heating and cooling so the branch and the "
     "rate decouple",
     frozenset({"T", "dTdt"}): "hold set-points long enough for dT/dt to return to zero",
+    frozenset({"Tlag", "dTlagdt"}): "none needed beside T of the same sensor: a lagged node's "
+    "level and its rate are then the same model (T_node = T − τ·dT_node/dt); keep the one "
+    "whose coefficient you want to read (Tlag: the node's own D_T)",
+    frozenset({"chanlag", "dchanlag"}): "none needed beside the channel's own level: a lagged "
+    "node's level and its rate are then the same model; keep the one you want to read",
 }
 
 

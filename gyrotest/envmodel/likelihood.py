@@ -396,7 +396,7 @@ def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
 
 
 def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
-              maxiter: int = 60, white: float | None = None) -> NoiseFit:
+              maxiter: int = 40, white: float | None = None) -> NoiseFit:
     """Maximum-likelihood noise model for the model whose whitened residual sum of squares at
     a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside): Nelder–Mead over
     the two logits of the white/flicker/random-walk shares of the differenced variance, from
@@ -435,7 +435,7 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
     for x0 in starts:
         r = optimize.minimize(nll, x0, method="Nelder-Mead",
                               bounds=[(-18.0, 18.0), (-18.0, 18.0)],
-                              options={"xatol": 0.05, "fatol": 0.02, "maxiter": maxiter,
+                              options={"xatol": 0.1, "fatol": 0.05, "maxiter": maxiter,
                                        "initial_simplex": [x0, x0 + [1.0, 0.0],
                                                            x0 + [0.0, 1.0]]})
         if best is None or r.fun < best.fun:

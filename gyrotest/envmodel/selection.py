@@ -330,7 +330,7 @@ class Screen:
         if nf.n_free == 0 or nf.logits is None:
             return self._grid
         u0 = np.asarray(nf.logits, float)
-        steps = (1.0, 0.0, -1.5, -3.0, -6.0, -10.0, -30.0)
+        steps = (0.5, 0.0, -2.0, -5.0, -30.0)
         white = getattr(self.wd, "_white_level", 0.0) or None
         X = self.base.fitter.X(self.base.thetas)
         for a in steps:
@@ -615,78 +615,99 @@ def _n_replaced(sc: Screen, c: Candidate) -> int:
                for r in (c.replaces or "").split("; ") if r in by_label)
 
 
-def family_null(sc: Screen, draws: int = MC_DRAWS) -> np.ndarray:
-    """The null distribution of the step's smallest local ln p (sorted), by the min-P
-    parametric bootstrap of :func:`family_p`."""
-    if not sc.groups:
-        return np.zeros(0)
+def _group_lr(sc: Screen, R: np.ndarray, rss0: np.ndarray) -> np.ndarray:
+    """Λ of every tested direction (rows) for whitened residuals ``R`` (columns), σ²
+    profiled: m·ln(RSS₀/(RSS₀ − ‖Q_gᵀR‖²))."""
     sizes = np.array([g.shape[1] for g in sc.groups])
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     Q = np.concatenate(sc.groups, axis=1)
-    m = sc.m
+    G = Q.T @ R
+    gain = np.add.reduceat(G * G, starts, axis=0)
+    return sc.m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
+
+
+def _candidate_stats(sc: Screen, lam: np.ndarray, n_cand: int) -> np.ndarray:
+    """Each candidate's search-corrected ln p for each column of ``lam`` (groups × draws):
+    Davies' (1987) bound from its largest Λ over its searched values and the total variation
+    of √Λ along them (a candidate without a search: its χ² tail). NaN rows: untested."""
+    sizes = np.array([g.shape[1] for g in sc.groups])
+    owner = np.array(sc.owner)
+    out = np.full((n_cand, lam.shape[1]), np.nan)
+    for i in range(n_cand):
+        rows = np.flatnonzero(owner == i)
+        if not len(rows):
+            continue
+        L = lam[rows]
+        k = int(np.max(sizes[rows]))
+        top = np.max(L, axis=0)
+        if len(rows) > 1:
+            V = np.sum(np.abs(np.diff(np.sqrt(np.maximum(L, 0.0)), axis=0)), axis=0)
+        else:
+            V = np.zeros(L.shape[1])
+        out[i] = _davies_vec(top, k, V)
+    return out
+
+
+def _davies_vec(u: np.ndarray, s: int, V: np.ndarray) -> np.ndarray:
+    """Vectorised :func:`davies_log_p` (ln of the bound, at most 0)."""
+    u = np.maximum(np.asarray(u, float), 0.0)
+    a = np.asarray(chi2_logsf(u, s), float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = (np.log(V) + 0.5 * (s - 1) * np.log(np.maximum(u, 1e-300)) - 0.5 * u
+             - 0.5 * s * math.log(2.0) - float(special.gammaln(0.5 * s)))
+    b = np.where((V > 0) & (u > 0), b, -np.inf)
+    return np.minimum(0.0, np.logaddexp(a, b))
+
+
+def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
+    """Each candidate's own p-value and its family-wise p-value over the step.
+
+    Every direction the step tested (each candidate at each searched value: orthonormal
+    columns outside the model's span, :attr:`Screen.groups`) has a likelihood ratio
+    Λ_g = m·ln(RSS₀/RSS_g). A candidate's own p-value corrects for its own search: Davies'
+    (1987) bound P(χ²_k > u) + V·u^{(k−1)/2}·e^{−u/2}·2^{−k/2}/Γ(k/2) with u its largest Λ
+    and V the total variation of √Λ over its searched time constants, frequencies or widths
+    (no search: the χ²_k tail). So every candidate carries the same weight, whatever the
+    size of its search. The family-wise p-value corrects for the step's candidates with
+    their correlations: under "nothing missing" the whitened residual is white noise
+    projected off the model's span, so drawing such noise (:data:`MC_DRAWS` draws, fixed
+    seed) and computing every candidate's own p on each draw gives the distribution of the
+    step's smallest own p; a candidate's family-wise p is the fraction of draws at or below
+    its own (Westfall & Young 1993, single-step min-P). Returns (ln own p, family-wise p)
+    per candidate (NaN: untested)."""
+    local = np.full(n_cand, np.nan)
+    p_fw = np.full(n_cand, np.nan)
+    if not sc.groups:
+        return local, p_fw
+    obs = _candidate_stats(sc, _group_lr(sc, sc.r0[:, None], np.array([sc.rss0])), n_cand)
+    local = obs[:, 0]
+    sim = family_null(sc, n_cand, draws)
+    for i in range(n_cand):
+        p_fw[i] = _p_from_null(sim, local[i])
+    return local, p_fw
+
+
+def family_null(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> np.ndarray:
+    """The null distribution (sorted) of the step's smallest candidate ln p (the min-P
+    parametric bootstrap of :func:`family_p`)."""
+    if not sc.groups:
+        return np.zeros(0)
     rng = np.random.default_rng(MC_SEED)
-    E = rng.standard_normal((m, draws))
+    E = rng.standard_normal((sc.m, draws))
     E -= sc.Q @ (sc.Q.T @ E)
     rss0 = np.sum(E * E, axis=0)
-    G = Q.T @ E
-    gain = np.add.reduceat(G * G, starts, axis=0)
-    lam = m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
-    sim = np.full(draws, 0.0)
-    for k in np.unique(sizes):
-        top = np.max(lam[sizes == k], axis=0)
-        sim = np.minimum(sim, chi2_logsf(top, k))
+    stats_ = _candidate_stats(sc, _group_lr(sc, E, rss0), n_cand)
+    sim = np.nanmin(stats_, axis=0)
     sim.sort()
     return sim
 
 
 def _p_from_null(sim: np.ndarray, log_p: float) -> float:
-    """Family-wise p of a local ln p against the sorted null minima (:func:`family_null`)."""
+    """Family-wise p of a candidate ln p against the sorted null minima (:func:`family_null`)."""
     if not len(sim) or not math.isfinite(log_p):
         return math.nan
     n_le = int(np.searchsorted(sim, log_p + 1e-12, side="right"))
     return (1.0 + n_le) / (len(sim) + 1.0)
-
-
-def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
-    """Local and family-wise p-values of the step's candidates.
-
-    Every direction the step tested (each candidate at each searched value: a group of
-    orthonormal columns outside the model's span, :attr:`Screen.groups`) has a likelihood
-    ratio Λ_g = m·ln(RSS₀/RSS_g) and a local p-value P(χ²_{k_g} > Λ_g). A candidate's local p
-    is its smallest. Under "nothing missing" the whitened residual is white noise projected
-    off the model's span, so the distribution of the smallest local p over the whole family
-    is simulated exactly by drawing such noise (:data:`MC_DRAWS` draws, fixed seed); a
-    candidate's family-wise p is the fraction of draws whose smallest p is at most its own
-    (Westfall & Young 1993, single-step min-P). This is the look-elsewhere correction for
-    the candidates and their searched time constants, frequencies and widths at once, with
-    their correlations. Returns (ln local p, family-wise p) per candidate (NaN: untested)."""
-    local = np.full(n_cand, np.nan)
-    p_fw = np.full(n_cand, np.nan)
-    if not sc.groups:
-        return local, p_fw
-    sizes = np.array([g.shape[1] for g in sc.groups])
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    owner = np.array(sc.owner)
-    Q = np.concatenate(sc.groups, axis=1)
-    m = sc.m
-
-    def min_logp(R: np.ndarray, rss0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        G = Q.T @ R
-        gain = np.add.reduceat(G * G, starts, axis=0)
-        lam = m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
-        return lam, rss0
-
-    lam_obs, _ = min_logp(sc.r0[:, None], np.array([sc.rss0]))
-    lam_obs = lam_obs[:, 0]
-    logp_obs = np.array([float(chi2_logsf(v, k)) for v, k in zip(lam_obs, sizes)])
-    for i in range(n_cand):
-        sel = owner == i
-        if sel.any():
-            local[i] = float(np.min(logp_obs[sel]))
-    sim = family_null(sc, draws)
-    for i in range(n_cand):
-        p_fw[i] = _p_from_null(sim, local[i])
-    return local, p_fw
 
 
 # ============================================================================ a step
@@ -745,9 +766,10 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     # the likelihood ratio with the noise shape re-estimated under both models ranks the
     # candidates that pass (a missing effect the model's noise model absorbed regains its
     # full weight); the test itself is the fixed-shape statistic the bootstrap calibrates
-    if tested:
-        sim = family_null(sc)
-        for c in tested:
+    passing = [c for c in tested if c.p_family <= alpha]
+    if passing:
+        sim = family_null(sc, len(out))
+        for c in passing:
             lr = c.lr
             try:
                 Z = _columns(sc, c)
@@ -756,7 +778,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             except (InputError, ValueError, KeyError, np.linalg.LinAlgError):
                 pass
             c.lr_fixed, c.lr = c.lr, lr
-            c.p_fw_full = _p_from_null(sim, float(chi2_logsf(lr, max(c.df, 1))))
+            c.p_fw_full = _p_from_null(sim, davies_log_p(lr, max(c.df, 1), c.tv))
             c.dbic = -lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
     n_c = max(1, len(tested))
     for c in out:

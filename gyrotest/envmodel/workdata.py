@@ -98,9 +98,10 @@ class WorkData:
         if x.ndim == 1:
             return np.bincount(ids, weights=x if every else x[sel],
                                minlength=self.nb) / self.counts
-        return np.column_stack([np.bincount(ids, weights=x[:, j] if every else x[sel, j],
-                                            minlength=self.nb)
-                                / self.counts for j in range(x.shape[1])])
+        # the selected samples' block ids never decrease (blocks are consecutive runs of the
+        # fine grid): one reduceat over the starts of the blocks sums every column at once
+        xs = x if every else x[sel]
+        return np.add.reduceat(xs, self._starts, axis=0) / self.counts[:, None]
 
     def smooth(self, x: np.ndarray) -> np.ndarray:
         """The working smoother S_W on the fine grid (columns of a 2-D array separately)."""
@@ -115,6 +116,14 @@ class WorkData:
         if not hasattr(self, "_sel_cache"):
             self._sel_cache = self.block >= 0
         return self._sel_cache
+
+    @property
+    def _starts(self) -> np.ndarray:
+        """Index (among the selected samples) of the first sample of each block."""
+        if not hasattr(self, "_starts_cache"):
+            ids, _ = self._ids
+            self._starts_cache = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+        return self._starts_cache
 
     @property
     def _ids(self) -> tuple[np.ndarray, bool]:

@@ -772,10 +772,10 @@ def markdown(s: dict, *, title: str = "") -> str:
 
 # ============================================================================ campaign
 def _job(args: tuple) -> dict:
-    seed, kind, max_hours, max_steps, loop, reference, null, path_steps = args
+    seed, kind, max_hours, max_steps, loop, reference, null, path_steps, real = args
     t0 = time.perf_counter()
     try:
-        case = ws.make_case(seed, kind, max_hours=max_hours, null=null)
+        case = ws.make_case(seed, kind, max_hours=max_hours, null=null, real=real)
     except Exception as e:  # noqa: BLE001 - a simulator bug must not stop the campaign
         return {"seed": seed, "kind": kind or "?", "status": "crash", "crash_stage": "simulate",
                 "error": _fmt_err(e), "traceback": traceback.format_exc(limit=6),
@@ -790,12 +790,13 @@ def _job(args: tuple) -> dict:
 def run_campaign(seeds: list[int], *, kinds: list[str] | None = None, jobs: int = 1,
                  max_hours: float | None = None, max_steps: int = MAX_STEPS, loop: bool = True,
                  progress: bool = True, reference: bool = False, nulls: bool = False,
-                 path_steps: int = 1) -> list[dict]:
+                 path_steps: int = 1, real: bool | None = None) -> list[dict]:
     """Run every seed (in a multiprocessing Pool when ``jobs`` > 1); rows in seed order.
     ``nulls``: every case has nothing missing (false alarms only); ``path_steps``: see
-    :func:`run_case`."""
+    :func:`run_case`; ``real``: every case on real gyro noise (True), none (False), or the
+    simulator's 15 % (None)."""
     tasks = [(s, case_kind(s, kinds), max_hours, max_steps, loop, reference, nulls,
-              path_steps) for s in seeds]
+              path_steps, real) for s in seeds]
     rows: list[dict] = []
     t0 = time.perf_counter()
 
@@ -879,6 +880,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--reference", action="store_true",
                     help="give every case a static reference run of the same simulated gyro "
                          "(the floor then comes from it, as with --reference LOG)")
+    ap.add_argument("--real-noise", action="store_true",
+                    help="every case on a segment of a real gyro record (ADIS16405 x/y/z, "
+                         "XSens MTi-G x) instead of the simulator's 15 %%")
     ap.add_argument("--nulls", action="store_true",
                     help="null cases only (nothing missing): a larger sample of false alarms")
     ap.add_argument("--validate", action="store_true",
@@ -911,7 +915,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     rows = run_campaign(seeds, kinds=kinds, jobs=a.jobs, max_hours=max_hours,
                         max_steps=a.max_steps, loop=not a.validate, reference=a.reference,
-                        nulls=a.nulls, path_steps=a.path_steps)
+                        nulls=a.nulls, path_steps=a.path_steps,
+                        real=True if a.real_noise else None)
     wall = time.perf_counter() - t0
     s = summarise(rows)
     rng = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) else \
@@ -924,6 +929,7 @@ def main(argv: list[str] | None = None) -> int:
     print(markdown(s, title=f"Seeds {rng}" + (f", kinds {','.join(kinds)}" if kinds else "")
                    + (f", <= {max_hours:g} h" if max_hours else "")
                    + (", null cases only" if a.nulls else "")
+                   + (", real gyro noise only" if a.real_noise else "")
                    + f", {a.jobs} job(s), wall {wall:.0f} s"
                    + (" (validate: true model only)" if a.validate else "")
                    + f"; gyrotest {state.get('head', '?')}, envmodel "

@@ -242,44 +242,61 @@ def flicker(rng: np.random.Generator, n: int, B: float, dt: float = 1.0) -> np.n
     return x - x.mean()
 
 
-@functools.lru_cache(maxsize=1)
-def _real_noise_record() -> np.ndarray | None:
-    """The ADIS16405 rates averaged to 1 s, each axis mean-removed, deg/h: shape (3, n)."""
-    if not REAL_NOISE.exists():
+#: the real gyro records a real-noise case draws from: (label, file, column, to deg/h)
+REAL_RECORDS = (
+    ("ADIS16405 x", "adis16405_imu1.csv.gz", "gyro_x_dps", 3600.0),
+    ("ADIS16405 y", "adis16405_imu1.csv.gz", "gyro_y_dps", 3600.0),
+    ("ADIS16405 z", "adis16405_imu1.csv.gz", "gyro_z_dps", 3600.0),
+    ("XSens MTi-G x", "cont_imu1.csv.gz", "gyro_x_rps", 3600.0 * 180.0 / math.pi),
+)
+#: length of each real record used at 1 s (h), a little under the whole record
+REAL_HOURS = (2.7, 2.7, 2.7, 1.35)
+
+
+@functools.lru_cache(maxsize=4)
+def _real_file(name: str) -> pd.DataFrame | None:
+    p = REAL_NOISE.parent / name
+    return pd.read_csv(p) if p.exists() else None
+
+
+@functools.lru_cache(maxsize=8)
+def _real_record(i: int) -> np.ndarray | None:
+    """Real record ``i`` of :data:`REAL_RECORDS`: rates averaged to 1 s, mean removed, deg/h."""
+    _, fname, col, scale = REAL_RECORDS[i]
+    d = _real_file(fname)
+    if d is None:
         return None
-    d = pd.read_csv(REAL_NOISE)
-    cols = ["gyro_x_dps", "gyro_y_dps", "gyro_z_dps"]
     dt = float(np.median(np.diff(d["time"].to_numpy()[:1000])))
     m = max(1, int(round(1.0 / dt)))
     n = len(d) // m
-    out = []
-    for c in cols:
-        v = d[c].to_numpy(float)[:n * m].reshape(n, m).mean(axis=1) * 3600.0
-        out.append(v - v.mean())
-    return np.array(out)
+    v = d[col].to_numpy(float)[:n * m].reshape(n, m).mean(axis=1) * scale
+    return v - v.mean()
 
 
 def real_noise_available() -> bool:
     return REAL_NOISE.exists()
 
 
-def make_noise(rng: np.random.Generator, n: int, real: bool) -> tuple[np.ndarray, dict]:
-    """Gyro noise (deg/h at 1 s) and its description (see the module docstring)."""
+def make_noise(rng: np.random.Generator, n: int, real: bool, source: int = 0
+               ) -> tuple[np.ndarray, dict]:
+    """Gyro noise (deg/h at 1 s) and its description (see the module docstring); a real-noise
+    case takes a segment of :data:`REAL_RECORDS` [``source``]."""
     N = loguniform(rng, 0.005, 0.05)
     sigma = 60.0 * N
     if real:
-        rec = _real_noise_record()
+        label, fname = REAL_RECORDS[source][:2]
+        rec = _real_record(source)
         if rec is None:
-            return np.zeros(n), {"type": "real", "missing": str(REAL_NOISE)}
-        axis = int(rng.integers(0, 3))
-        start = int(rng.integers(0, rec.shape[1] - n + 1))
-        seg = rec[axis, start:start + n].copy()
+            return np.zeros(n), {"type": "real", "missing": fname}
+        start = int(rng.integers(0, len(rec) - n + 1))
+        seg = rec[start:start + n].copy()
         seg -= seg.mean()
         s1 = float(np.std(np.diff(seg)) / math.sqrt(2.0))
         scale = sigma / s1
-        return seg * scale, {"type": "real", "source": REAL_NOISE.name,
-                             "axis": "xyz"[axis], "start_s": start, "scale": scale,
-                             "N_equiv": N, "white_sigma_1s_dph": sigma}
+        return seg * scale, {"type": "real", "source": fname, "record": label,
+                             "axis": label.split()[-1], "record_index": source,
+                             "start_s": start, "scale": scale, "N_equiv": N,
+                             "white_sigma_1s_dph": sigma}
     x = rng.normal(scale=sigma, size=n)
     desc = {"type": "synthetic", "N": N, "white_sigma_1s_dph": sigma}
     if rng.random() < 0.7:
@@ -303,11 +320,10 @@ def reference_noise(noise: dict, n_case: int, seed: int, n_ref: int = 7200
     next axis of the same IMU scaled to the same white noise."""
     rng = np.random.default_rng(10_000_000 + seed)
     if noise.get("type") == "real":
-        rec = _real_noise_record()
-        if rec is None or "axis" not in noise:
+        src = int(noise.get("record_index", "xyz".index(noise.get("axis", "x"))))
+        x = _real_record(src)
+        if x is None:
             return None
-        ax = "xyz".index(noise["axis"])
-        x = rec[ax]
         a, b = int(noise["start_s"]), int(noise["start_s"]) + n_case
         seg = x[:a] if a >= len(x) - b else x[b:]
         if len(seg) >= 1200:
@@ -315,7 +331,7 @@ def reference_noise(noise: dict, n_case: int, seed: int, n_ref: int = 7200
             return seg * float(noise["scale"])
         # the case used (nearly) the whole record: a neighbouring axis of the same IMU (the
         # same MEMS part) stands in for a second run, scaled to the same white noise
-        y = rec[(ax + 1) % 3]
+        y = _real_record((src + 1) % 3 if src < 3 else src)
         start = int(rng.integers(0, max(1, len(y) - n_ref)))
         seg = y[start:start + n_ref] - y[start:start + n_ref].mean()
         s1 = float(np.std(np.diff(seg)) / math.sqrt(2.0))
@@ -891,20 +907,24 @@ def _id(name: str) -> str:
 
 # ============================================================================ the case
 def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = None,
-              null: bool = False) -> Case:
+              null: bool = False, real: bool | None = None) -> Case:
     """Simulate one case (see the module docstring). ``kind`` one of :data:`KINDS` (default:
     drawn from the seed); ``max_hours`` caps the record length (the quick campaign);
     ``null`` forces a case with nothing missing (the same run, noise and number of present
-    effects as the seed would draw otherwise: a larger sample of false alarms)."""
+    effects as the seed would draw otherwise: a larger sample of false alarms); ``real``
+    forces real gyro noise (True) or synthetic noise (False) instead of the drawn 15 %."""
     rng = np.random.default_rng([int(seed), 20261124])
     if kind is None:
         kind = str(rng.choice(KINDS, p=KIND_WEIGHTS))
     elif kind not in KINDS:
         raise ValueError(f"unknown kind {kind!r} (kinds: {', '.join(KINDS)})")
-    real = rng.random() < 0.15
+    drawn_real = rng.random() < 0.15
+    real = drawn_real if real is None else real
     hours = rng.uniform(2.0, 10.0 if kind != "helmholtz" else 6.0)
+    source = 0
     if real:
-        hours = min(hours, 2.7)
+        source = int(rng.integers(0, len(REAL_RECORDS)))
+        hours = min(hours, REAL_HOURS[source])
     if max_hours:
         hours = min(hours, max_hours)
     n = int(hours * 3600)
@@ -912,7 +932,7 @@ def make_case(seed: int, kind: str | None = None, *, max_hours: float | None = N
     _BUILDERS[kind](run)
     if rng.random() < 0.3 and kind != "climate":
         run.add_extra(str(rng.choice(["humidity", "pressure", "vibration"])), effect=False)
-    noise, ndesc = make_noise(rng, n, real)
+    noise, ndesc = make_noise(rng, n, real, source)
     case = Case(seed=int(seed), kind=kind, df=None, profile={}, base_terms=[], truth=[],
                 noise=ndesc, description="; ".join(run.desc))
     if ndesc.get("missing"):

@@ -33,7 +33,9 @@ def test_thermal_fit_recovers_paper_coefficients_from_chamber_run(simdir):
     th = thermal_fit(wd)
     for name in ("w0", "w1", "w2", "w_dV"):
         c = th.coef(name)
-        assert abs(c.value - truth[name]) <= 0.05 * abs(truth[name]), (name, c.value)
+        # within 3 of its own standard errors (GLS under the fitted noise model) and 15 %
+        assert abs(c.value - truth[name]) <= max(3 * c.stderr, 0.15 * abs(truth[name])), \
+            (name, c.value, c.stderr)
     assert th.ieee_coefficients[0].name == "D_T"
     assert "heating_minus_cooling_dph" in th.hysteresis
     assert abs(th.hysteresis["z"]) < 4  # no hysteresis simulated

@@ -142,9 +142,11 @@ def test_collinearity_warning_on_monotone_ramp():
     assert res.condition_number > 100
 
 
-def test_hac_errors_honest_against_monte_carlo():
-    """Naive OLS errors on 10^5 autocorrelated samples are far too small; the HAC errors of the
-    block-mean fit match the Monte-Carlo spread of the estimates."""
+def test_gls_errors_against_monte_carlo_under_markov_noise():
+    """Naive OLS errors on 10^5 autocorrelated samples are far too small; the GLS errors under
+    the fitted noise model are never too small against the Monte-Carlo spread of the
+    estimates. First-order Markov noise (300 s) is not one of the noise model's terms: the
+    flicker/random-walk mixture that stands in for it over-covers (ratio ≤ 2)."""
     n, tau0 = 100_000, 0.1
     t = np.arange(n) * tau0
     T = 25 + 5 * np.sin(2 * np.pi * t / 5400.0)
@@ -168,7 +170,7 @@ def test_hac_errors_honest_against_monte_carlo():
     mc = float(np.std(vals, ddof=1))
     assert abs(np.mean(vals) - 0.1) < 3 * mc / math.sqrt(len(vals))
     assert np.mean(naive) / mc < 0.1  # wrong by more than an order of magnitude
-    assert 0.6 < np.mean(hac) / mc < 1.6
+    assert 0.8 < np.mean(hac) / mc < 2.0
 
 
 def test_too_few_blocks_names_the_terms():
@@ -205,8 +207,8 @@ def test_excursions_describe_what_happened():
     res = fit_model(wd, "T,dTdt,Hx")  # supply term missing
     assert res.excursions, "a missing 0.3 deg/h supply step should show"
     assert any("supply change" in e.description for e in res.excursions)
-    res2 = fit_model(wd, "T,Hx,V")  # rate term missing: excursions on the ramps
-    assert any("ramp" in e.description for e in res2.excursions)
+    res2 = fit_model(wd, "T,Hx,V")  # rate term missing: the residual fails with the temperature
+    assert any("temperature" in e.description for e in res2.excursions)
 
 
 def test_history_records_steps(tmp_path, wd_rate):

@@ -44,7 +44,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
 
     From a Helmholtz-coil sequence (levels stepped one axis at a time; plateaus and axes are
     detected automatically) or a continuous magnetometer log. Coefficients in deg/h per
-    100 µT with HAC 1σ; cross-checks: the paper's reversal estimate K = |dw(+max) −
+    100 µT with 1σ (GLS under the gyro's noise model); cross-checks: the paper's reversal estimate K = |dw(+max) −
     dw(−max)|/(2·max/100 µT) (K = Δω/6 for ±300 µT) and the up/down sweep hysteresis.
 
     \b
@@ -82,7 +82,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
     c = console()
     c.print(f"[bold]mag-fit[/bold]: {escape(g.source)}, {len(mg.plateaus)} plateau(s) detected")
     t = Table(title="magnetic sensitivity, deg/h per 100 µT")
-    for col, just in (("axis", "left"), ("w ± 1σ (HAC)", "right"), ("reversal K (signed)", "right"),
+    for col, just in (("axis", "left"), ("w ± 1σ", "right"), ("reversal K (signed)", "right"),
                       ("up − down, deg/h", "right"), ("hysteresis", "left")):
         t.add_column(col, justify=just)
     for co in mg.coefficients:

@@ -117,7 +117,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
                 f"ΔT from t0 = {th.t0_c:g} °C")
         for n in th.notes:
             note(n)
-        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ HAC)",
+        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ)",
                             th.coefficients))
         c.print(_coef_table("IEEE 952 E terms", th.ieee_coefficients))
         h = th.hysteresis

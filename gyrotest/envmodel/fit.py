@@ -373,7 +373,13 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             if mt.spec.label == s.label:
                 mt.theta_stderr[pname] = float(se[p_lin + i])
     names = [c.name for c in coefs]
-    cond, vif, corr = st.collinearity(Xw, names[:p_lin])
+    # collinearity of the whitened design (what the GLS coefficients see); the bias is not
+    # in it (whitening takes differences), so it is left out of the condition number
+    live = [j for j in range(p_lin) if j not in ib]
+    cond, vif_l, corr_l = st.collinearity(Xw[:, live], [names[j] for j in live])
+    vif = vif_l
+    corr = np.full((p_lin, p_lin), np.nan)
+    corr[np.ix_(live, live)] = corr_l
     degenerate(vif, corr, names[:p_lin], wd)
     # ---- held-out validation (the same noise shape, each fold's coefficients by GLS)
     chunk, buf, cv_desc = cv_layout(wd, folds)

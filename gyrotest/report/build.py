@@ -714,7 +714,7 @@ def expand_uncertainties(sheet: Sheet, k: float) -> None:
     lab = f"± U (k = {k:g})"
 
     def fix(t: str) -> str:
-        return (t.replace("± 1σ HAC", f"{lab}, HAC standard errors").replace("± 1σ", lab)
+        return (t.replace("± 1σ HAC", f"{lab}, GLS standard errors").replace("± 1σ", lab)
                 .replace("±: 1σ", f"±: U, k = {k:g}"))
 
     def nums(block):

@@ -68,7 +68,7 @@ class EnvironmentSections:
                                             sec.number, u))
             sec.add(_check_table(items, f"IEEE 952 E terms (ΔT from t0 = "
                                         f"{fmt_number(ch['t0_degC'])} °C, sensor "
-                                        f"{ch['sensor']}; ± 1σ HAC)"))
+                                        f"{ch['sensor']}; ± 1σ)"))
             rows = []
             am_lab = {"w0": "offset w0", "w1": "linear w1", "w2": "quadratic w2",
                       "w_dV": "temperature-rate w_ΔV"}
@@ -184,7 +184,7 @@ class EnvironmentSections:
         for k in ("wx", "wy", "wz"):
             self.coef.setdefault(k, None)
         sec.add(_check_table(items, "Δω(H) = w0 + w_x·H_x/H0 + w_y·H_y/H0 + w_z·H_z/H0, H0 = "
-                                    "100 µT (± 1σ HAC)"))
+                                    "100 µT (± 1σ)"))
         rows = []
         for ax_ in "xyz":
             rv = r.get("reversal_K", {}).get(ax_)

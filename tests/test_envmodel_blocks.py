@@ -5,8 +5,6 @@ through the user loop."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 from test_envmodel_helpers import make_log

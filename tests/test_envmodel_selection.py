@@ -11,7 +11,8 @@ from scipy import stats
 from test_envmodel_helpers import colored_noise, lag, make_log
 
 from gyrotest.envmodel import diagnose, fit_model, prepare
-from gyrotest.envmodel.selection import chi2_logsf, judge_step, ljung_box
+from gyrotest.envmodel.lookelsewhere import chi2_logsf, ljung_box
+from gyrotest.envmodel.selection import judge_step
 from gyrotest.envmodel.sensors import quantisation_step, wiener
 from gyrotest.errors import AnalysisError
 

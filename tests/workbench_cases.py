@@ -163,8 +163,8 @@ CASES = ["warmup", "hyhz", "lagcoil", "hmag2", "rh", "gxgy", "tumble", "null"]
 def user_loop(wd, base: list[str], max_steps: int = 5):
     """diagnose → add the named effect (replacing what it replaces) → repeat. Returns
     (list of (Diagnosis, added TermSpec or None), final term specs)."""
-    from gyrotest.envmodel.workbench import diagnose
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
+    from gyrotest.envmodel.workbench import diagnose
 
     specs = resolve_terms(parse_terms(base), wd.frame)
     steps = []

@@ -51,8 +51,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize, special
-from scipy import stats as sps
+from scipy import optimize
 
 from ..errors import AnalysisError, InputError
 from ..workbench_rules import (  # noqa: E402  (the decision constants, one source)
@@ -64,6 +63,15 @@ from ..workbench_rules import (  # noqa: E402  (the decision constants, one sour
     WHITE_LAGS,
 )
 from .fit import VIF_MAX, FitResult, WorkData, fit_model
+from .lookelsewhere import (
+    Whiteness,
+    davies_log_p,
+    family_null,
+    family_p,
+    ljung_box,
+    p_from_null,
+    total_variation,
+)
 from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
 
@@ -201,75 +209,6 @@ class Removal:
     def to_dict(self) -> dict:
         return {"term": self.term, "lr": self.lr, "df": self.df, "delta_bic": self.dbic,
                 "text": self.text}
-
-
-@dataclass
-class Whiteness:
-    """Ljung–Box test of the whitened residual (standardised innovations)."""
-
-    q: float
-    lags: int
-    dof: int
-    p: float
-
-    @property
-    def consistent(self) -> bool:
-        return not (self.p < ALPHA)
-
-    def to_dict(self) -> dict:
-        return {"ljung_box_q": self.q, "lags": self.lags, "dof": self.dof, "p": self.p,
-                "consistent": self.consistent}
-
-
-# ============================================================================ statistics
-def chi2_logsf(u, k):
-    """ln P(χ²_k > u), finite far into the tail: scipy's value where it is finite, else the
-    leading term of the asymptotic series (k/2 − 1)·ln(u/2) − u/2 − ln Γ(k/2)
-    (Abramowitz & Stegun 6.5.32), accurate to ln(1 + O(k/u))."""
-    u = np.asarray(u, float)
-    k = np.asarray(k, float)
-    out = np.asarray(sps.chi2.logsf(u, k), float)
-    bad = ~np.isfinite(out) & (u > 0)
-    if np.any(bad):
-        ub = np.broadcast_to(u, out.shape)[bad]
-        kb = np.broadcast_to(k, out.shape)[bad]
-        out = out.copy()
-        out[bad] = ((kb / 2 - 1) * np.log(ub / 2) - ub / 2 - special.gammaln(kb / 2))
-    return out if out.ndim else float(out)
-
-
-def davies_log_p(u: float, s: int, V: float) -> float:
-    """ln of Davies' (1987) upper bound on P(sup_θ Λ(θ) > u) for a χ²_s process with total
-    variation V of √Λ over the searched range; V = 0: the plain χ²_s tail."""
-    u = max(float(u), 0.0)
-    s = max(int(s), 1)
-    a = float(chi2_logsf(u, s))
-    if not V > 0 or u <= 0:
-        return a
-    b = (math.log(V) + 0.5 * (s - 1) * math.log(u) - 0.5 * u - 0.5 * s * math.log(2.0)
-         - float(special.gammaln(0.5 * s)))
-    return float(min(0.0, np.logaddexp(a, b)))
-
-
-def total_variation(vals: list[float]) -> float:
-    """Total variation of √Λ along a searched grid (the V of :func:`davies_log_p`)."""
-    r = np.sqrt(np.maximum(np.asarray(vals, float), 0.0))
-    return float(np.sum(np.abs(np.diff(r)))) if len(r) > 1 else 0.0
-
-
-def ljung_box(e: np.ndarray, lags: int = WHITE_LAGS, fitted: int = 2) -> Whiteness:
-    """Ljung & Box (1978): Q = m(m+2)·Σ_{k≤h} ρ_k²/(m−k) ~ χ²_{h−fitted} for white e."""
-    e = np.asarray(e, float)
-    m = len(e)
-    h = int(max(1, min(lags, m // 5)))
-    e = e - e.mean()
-    d = float(e @ e)
-    if m < 10 or d <= 0:
-        return Whiteness(math.nan, h, 0, math.nan)
-    rho = np.array([float(e[k:] @ e[:-k]) / d for k in range(1, h + 1)])
-    q = float(m * (m + 2) * np.sum(rho ** 2 / (m - np.arange(1, h + 1))))
-    dof = max(1, h - fitted)
-    return Whiteness(q, h, dof, float(sps.chi2.sf(q, dof)))
 
 
 # ============================================================================ the screen
@@ -597,10 +536,6 @@ def _freq_curve(sc: Screen, lo: float, hi: float) -> tuple[np.ndarray, np.ndarra
     return f, sc.m * np.log(sc.rss0 / rss1)
 
 
-#: seed of the min-P bootstrap's draws (the verdict is reproducible)
-MC_SEED = 952
-
-
 def _columns(sc: Screen, c: Candidate) -> np.ndarray | None:
     """The candidate's block-level columns at its best searched value (a swap: its columns
     beside the model, whose span nests the replaced terms); None for a pair."""
@@ -613,101 +548,6 @@ def _n_replaced(sc: Screen, c: Candidate) -> int:
     by_label = {s.label: s for s in sc.base.specs}
     return sum(by_label[r].n_coef + _n_nonlinear(by_label[r])
                for r in (c.replaces or "").split("; ") if r in by_label)
-
-
-def _group_lr(sc: Screen, R: np.ndarray, rss0: np.ndarray) -> np.ndarray:
-    """Λ of every tested direction (rows) for whitened residuals ``R`` (columns), σ²
-    profiled: m·ln(RSS₀/(RSS₀ − ‖Q_gᵀR‖²))."""
-    sizes = np.array([g.shape[1] for g in sc.groups])
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    Q = np.concatenate(sc.groups, axis=1)
-    G = Q.T @ R
-    gain = np.add.reduceat(G * G, starts, axis=0)
-    return sc.m * np.log(rss0 / np.maximum(rss0 - gain, 1e-300 * rss0))
-
-
-def _candidate_stats(sc: Screen, lam: np.ndarray, n_cand: int) -> np.ndarray:
-    """Each candidate's search-corrected ln p for each column of ``lam`` (groups × draws):
-    Davies' (1987) bound from its largest Λ over its searched values and the total variation
-    of √Λ along them (a candidate without a search: its χ² tail). NaN rows: untested."""
-    sizes = np.array([g.shape[1] for g in sc.groups])
-    owner = np.array(sc.owner)
-    out = np.full((n_cand, lam.shape[1]), np.nan)
-    for i in range(n_cand):
-        rows = np.flatnonzero(owner == i)
-        if not len(rows):
-            continue
-        L = lam[rows]
-        k = int(np.max(sizes[rows]))
-        top = np.max(L, axis=0)
-        if len(rows) > 1:
-            V = np.sum(np.abs(np.diff(np.sqrt(np.maximum(L, 0.0)), axis=0)), axis=0)
-        else:
-            V = np.zeros(L.shape[1])
-        out[i] = _davies_vec(top, k, V)
-    return out
-
-
-def _davies_vec(u: np.ndarray, s: int, V: np.ndarray) -> np.ndarray:
-    """Vectorised :func:`davies_log_p` (ln of the bound, at most 0)."""
-    u = np.maximum(np.asarray(u, float), 0.0)
-    a = np.asarray(chi2_logsf(u, s), float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        b = (np.log(V) + 0.5 * (s - 1) * np.log(np.maximum(u, 1e-300)) - 0.5 * u
-             - 0.5 * s * math.log(2.0) - float(special.gammaln(0.5 * s)))
-    b = np.where((V > 0) & (u > 0), b, -np.inf)
-    return np.minimum(0.0, np.logaddexp(a, b))
-
-
-def family_p(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
-    """Each candidate's own p-value and its family-wise p-value over the step.
-
-    Every direction the step tested (each candidate at each searched value: orthonormal
-    columns outside the model's span, :attr:`Screen.groups`) has a likelihood ratio
-    Λ_g = m·ln(RSS₀/RSS_g). A candidate's own p-value corrects for its own search: Davies'
-    (1987) bound P(χ²_k > u) + V·u^{(k−1)/2}·e^{−u/2}·2^{−k/2}/Γ(k/2) with u its largest Λ
-    and V the total variation of √Λ over its searched time constants, frequencies or widths
-    (no search: the χ²_k tail). So every candidate carries the same weight, whatever the
-    size of its search. The family-wise p-value corrects for the step's candidates with
-    their correlations: under "nothing missing" the whitened residual is white noise
-    projected off the model's span, so drawing such noise (:data:`MC_DRAWS` draws, fixed
-    seed) and computing every candidate's own p on each draw gives the distribution of the
-    step's smallest own p; a candidate's family-wise p is the fraction of draws at or below
-    its own (Westfall & Young 1993, single-step min-P). Returns (ln own p, family-wise p)
-    per candidate (NaN: untested)."""
-    local = np.full(n_cand, np.nan)
-    p_fw = np.full(n_cand, np.nan)
-    if not sc.groups:
-        return local, p_fw
-    obs = _candidate_stats(sc, _group_lr(sc, sc.r0[:, None], np.array([sc.rss0])), n_cand)
-    local = obs[:, 0]
-    sim = family_null(sc, n_cand, draws)
-    for i in range(n_cand):
-        p_fw[i] = _p_from_null(sim, local[i])
-    return local, p_fw
-
-
-def family_null(sc: Screen, n_cand: int, draws: int = MC_DRAWS) -> np.ndarray:
-    """The null distribution (sorted) of the step's smallest candidate ln p (the min-P
-    parametric bootstrap of :func:`family_p`)."""
-    if not sc.groups:
-        return np.zeros(0)
-    rng = np.random.default_rng(MC_SEED)
-    E = rng.standard_normal((sc.m, draws))
-    E -= sc.Q @ (sc.Q.T @ E)
-    rss0 = np.sum(E * E, axis=0)
-    stats_ = _candidate_stats(sc, _group_lr(sc, E, rss0), n_cand)
-    sim = np.nanmin(stats_, axis=0)
-    sim.sort()
-    return sim
-
-
-def _p_from_null(sim: np.ndarray, log_p: float) -> float:
-    """Family-wise p of a candidate ln p against the sorted null minima (:func:`family_null`)."""
-    if not len(sim) or not math.isfinite(log_p):
-        return math.nan
-    n_le = int(np.searchsorted(sim, log_p + 1e-12, side="right"))
-    return (1.0 + n_le) / (len(sim) + 1.0)
 
 
 # ============================================================================ a step
@@ -778,7 +618,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             except (InputError, ValueError, KeyError, np.linalg.LinAlgError):
                 pass
             c.lr_fixed, c.lr = c.lr, lr
-            c.p_fw_full = _p_from_null(sim, davies_log_p(lr, max(c.df, 1), c.tv))
+            c.p_fw_full = p_from_null(sim, davies_log_p(lr, max(c.df, 1), c.tv))
             c.dbic = -lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
     n_c = max(1, len(tested))
     for c in out:
@@ -976,5 +816,4 @@ def stimulus_note(c: Candidate, frame) -> str | None:
 
 
 __all__ = ["ALPHA", "BIC_TIE", "Candidate", "PAIR_POOL", "Removal", "Screen", "TAU_POINTS",
-           "WHITE_LAGS", "Whiteness", "davies_log_p", "judge_step", "ljung_box", "refit",
-           "removal", "residual_whiteness", "score_candidate", "total_variation"]
+           "judge_step", "refit", "removal", "residual_whiteness", "score_candidate"]

@@ -17,13 +17,13 @@ from dataclasses import dataclass, field
 
 from .fit import FitResult, WorkData, fit_model
 from .likelihood import NoiseParams
+from .lookelsewhere import Whiteness
 from .prepare import prepare_log
 from .selection import (
     ALPHA,
     BIC_TIE,
     Candidate,
     Removal,
-    Whiteness,
     _fmt_p,
     judge_step,
     removal,

@@ -324,8 +324,22 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
         if nf.n_free:
             nf = model_noise(wd, grid, fitter, thetas, start=nf)
     fitter.lik = nf.lik
-    lik = nf.lik
     X = fitter.X(thetas)
+    if nf.n_free and getattr(wd, "sensor_noise", None):
+        # the noise the terms carry from their sensors joins the noise model (errors in
+        # variables): a model whose residual holds a noisy thermometer's noise times a large
+        # coefficient is not then "missing" whatever averages that noise out
+        from .sensors import eiv_acov
+
+        b0, _, _ = gls(nf.lik.whiten(X), nf.lik.whiten(wd.y))
+        offs0 = fitter._offsets()
+        beta_by = {s.label: b0[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
+        E, E_parts = eiv_acov(wd, grid, specs, thetas, beta_by, len(nf.acov["white"]))
+        if np.any(E > 0):
+            nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
+            nf.extra_parts = E_parts
+            fitter.lik = nf.lik
+    lik = nf.lik
     Xw = lik.whiten(X)
     yw = lik.whiten(wd.y)
     beta, rss_w, _ = gls(Xw, yw)
@@ -337,7 +351,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     nb = wd.nb
     # the noise level of the noise model (profiled, or set by the white noise measured on
     # the full band, or by the reference run)
-    s2 = nf.sigma2
+    s2 = nf.scale
     loglik = lik.loglik(rss_w, s2)
     # ---- uncertainties: GLS on the Gauss–Newton Jacobian (linear columns plus ∂ŷ/∂θ)
     Jn, nl_names = fitter.jacobian(thetas, beta)
@@ -437,8 +451,8 @@ UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk
 from ..workbench_rules import VIF_MAX  # noqa: E402  (degenerate design bound)
 
 
-def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None = None
-                ) -> NoiseFit:
+def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None = None,
+                extra: np.ndarray | None = None) -> NoiseFit:
     """The noise model of a term set at fixed nonlinear parameters: fixed from a reference run
     (``wd.noise_ref``), else maximum likelihood with β by GLS inside
     (:func:`gyrotest.envmodel.likelihood.fit_noise`)."""
@@ -456,7 +470,7 @@ def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None
     if not hasattr(wd, "_white_level"):
         wd._white_level = white_level(wd)
     return fit_noise(wd, grid, rss, start=start.logits if start is not None else None,
-                     white=wd._white_level or None)
+                     white=wd._white_level or None, extra=extra)
 
 
 def bias_variance(p: NoiseParams, duration_s: float) -> float:

@@ -357,6 +357,17 @@ class NoiseFit:
     n_free: int = 2
     #: the optimiser's logits of the shares (a warm start for a related model)
     logits: np.ndarray | None = None
+    #: autocovariance of the sensors' noise through the model's terms (absolute), or None;
+    #: and each channel's part of it
+    extra: np.ndarray | None = None
+    extra_parts: dict = field(default_factory=dict)
+    #: the noise level the likelihood's covariance is scaled by: σ² (the covariance is
+    #: σ²·shape), or 1 when it holds the absolute covariance (with ``extra``)
+    level: float | None = None
+
+    @property
+    def scale(self) -> float:
+        return self.sigma2 if self.level is None else self.level
 
     @property
     def grid(self) -> LikGrid:
@@ -396,7 +407,8 @@ def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
 
 
 def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
-              maxiter: int = 40, white: float | None = None) -> NoiseFit:
+              maxiter: int = 40, white: float | None = None,
+              extra: np.ndarray | None = None) -> NoiseFit:
     """Maximum-likelihood noise model for the model whose whitened residual sum of squares at
     a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside): Nelder–Mead over
     the two logits of the white/flicker/random-walk shares of the differenced variance, from
@@ -405,7 +417,11 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
     ``white``: the white-noise parameter N² ((deg/h)²·s) measured on the full band of the
     log (:func:`white_level`); the level of the other two then follows from their shares.
     Without it, the level σ² is profiled and all three come from the likelihood's band
-    alone, where a large effect the model lacks can take the place of the white noise."""
+    alone, where a large effect the model lacks can take the place of the white noise.
+    ``extra``: an autocovariance added to the gyro's (the noise the model's terms carry from
+    their sensors, :func:`gyrotest.envmodel.sensors.eiv_acov`); used with ``white``."""
+    if extra is not None and not (white and np.any(extra)):
+        extra = None
     acov = acov_for(wd, grid)
     if grid.m < MIN_DIFFS:
         raise AnalysisError(f"{wd.info.get('source', 'log')}: only {grid.m} samples of "
@@ -418,6 +434,15 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
         if key in memo:
             return -memo[key][0]
         sh = _shares(u)
+        if extra is not None:
+            s2 = white * float(acov["white"][0]) / max(sh[0], 1e-300)
+            g = s2 * shape_gamma(acov, sh)
+            n = min(len(g), len(extra))
+            g[:n] += extra[:n]
+            lk = Likelihood.build(grid, g)
+            ll = lk.loglik(resid_fn(lk), 1.0)
+            memo[key] = (ll, lk, s2)
+            return -ll
         lk = Likelihood.build(grid, shape_gamma(acov, sh))
         rss = resid_fn(lk)
         if white:
@@ -448,7 +473,10 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
     gam0 = {k: float(acov[k][0]) for k, _ in COMPONENTS}
     p = params_from_shares(sh, s2, gam0)
     p.loglik = float(ll)
-    return NoiseFit(p, sh, lk, acov, s2, logits=np.asarray(best.x, float))
+    nf = NoiseFit(p, sh, lk, acov, s2, logits=np.asarray(best.x, float), extra=extra)
+    if extra is not None:
+        nf.level = 1.0  # the likelihood holds the absolute covariance
+    return nf
 
 
 def white_level(wd) -> float:

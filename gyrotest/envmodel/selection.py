@@ -106,6 +106,9 @@ class Candidate:
     p_fw: float = math.nan  # family-wise p-value (min-P parametric bootstrap)
     tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
     p_fw_full: float = math.nan  # the bootstrap p of the re-estimated-shape Λ (a diagnostic)
+    #: (Λ the sensors' noise alone would give a better reading of the same nodes, its sd):
+    #: set when the candidate's gain is no larger (errors in variables)
+    sensor_limited: tuple[float, float] | None = None
     trials: int = 1  # candidates in the family of the step
     dbic: float = math.nan  # BIC of the model with it minus the model's
     theta: dict = field(default_factory=dict)
@@ -276,9 +279,16 @@ class Screen:
             for b in steps:
                 u = np.clip(u0 + [a, b], -18.0, 18.0)
                 sh = _shares(u)
-                lk = Likelihood.build(self.lik.grid, shape_gamma(nf.acov, sh))
                 s2 = (white * float(nf.acov["white"][0]) / max(sh[0], 1e-300)
                       if white else None)
+                if nf.extra is not None and s2 is not None:
+                    # the sensors' noise through the model's terms stays as the model has it
+                    g = s2 * shape_gamma(nf.acov, sh)
+                    k = min(len(g), len(nf.extra))
+                    g[:k] += nf.extra[:k]
+                    lk, s2 = Likelihood.build(self.lik.grid, g), 1.0
+                else:
+                    lk = Likelihood.build(self.lik.grid, shape_gamma(nf.acov, sh))
                 Xw = lk.whiten(X)
                 yw = lk.whiten(self.wd.y)
                 Q = _orth(Xw)
@@ -566,6 +576,51 @@ def step_candidates(wd: WorkData, base: FitResult, candidates=None) -> list[tupl
     return [(s, []) for s in specs if s.label not in have]
 
 
+def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] | None:
+    """Errors in variables: the model's terms carry their sensors' noise (the noise model's
+    ``extra_parts``, :func:`gyrotest.envmodel.sensors.eiv_acov`). A candidate reading a
+    channel of the same group (temperature or extra) as a noisy channel of the model could be
+    a better reading of the same nodes rather than a new effect; taking that noise E out of
+    the residual would give a likelihood ratio of about tr(Σ⁻¹E) with variance
+    2·tr((Σ⁻¹E)²) (a Gaussian quadratic form). The candidate is sensor-limited when its Λ is
+    within the one-sided 1 − α quantile of that (normal approximation). Returns (expected Λ,
+    its sd) then, else None."""
+    from .sensors import term_channels
+
+    parts = getattr(sc.base.noise, "extra_parts", None) or {}
+    if not parts or c.spec is None:
+        return None
+    fr = sc.wd.frame
+    group = {"temperature": set(fr.temperature), "extra": set(fr.extra)}
+    mine = term_channels(c.spec)
+    E = None
+    for ch, acov in parts.items():
+        g = "temperature" if ch in fr.temperature else "extra"
+        if mine & group[g]:
+            E = acov if E is None else E + acov
+    if E is None or not E[0] > 0:
+        return None
+    from scipy import stats as sps
+    from scipy.linalg import cho_solve, toeplitz
+
+    tr1 = tr2 = 0.0
+    lk = sc.lik
+    for a, b in lk.grid.runs:
+        n = b - a - 1
+        if n < 1:
+            continue
+        L = lk._factor(n)
+        A = cho_solve((L, True), toeplitz(E[:n]))
+        tr1 += float(np.trace(A))
+        tr2 += float(np.sum(A * A.T))
+    if not tr1 > 0:
+        return None
+    sd = math.sqrt(2.0 * max(tr2, 0.0))
+    lam = c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr
+    z = float(sps.norm.isf(alpha))
+    return (tr1, sd) if lam <= tr1 + z * sd else None
+
+
 def _second_tier(c: Candidate, used: set[str]) -> bool:
     """A move tried after the main effects: a field block, or an interaction of channels
     the model does not use yet."""
@@ -628,6 +683,17 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     out.sort(key=lambda c: (c.log_p if math.isfinite(c.log_p) else math.inf))
     used = {ch for s in base.specs for ch in s.channels}
     sig = [c for c in tested if c.significant]
+    # a gain the model's own sensor noise could give (a better reading of the same nodes,
+    # by another sensor of the group or a lag or rate of the same one) is not a new effect
+    for c in sig:
+        lim = sensor_limit(sc, c, alpha)
+        if lim is not None:
+            c.sensor_limited = lim
+            c.significant = False
+            c.note = (f"its gain (Λ = {c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr:.1f}) "
+                      f"is within what a noise-free reading of the model's own sensors would "
+                      f"give (Λ ≈ {lim[0]:.1f} ± {lim[1]:.1f}): limited by the sensors")
+    sig = [c for c in sig if c.significant]
     # main effects first: a field block (several coefficients at once), or a product of two
     # channels neither of which the model uses yet (weak heredity: Chipman 1996), only when
     # no main effect passes

@@ -20,14 +20,14 @@ least q²/12 for a channel quantised in steps of q. Ŝ_x is the periodogram of t
 (mirror-extended, linear trend removed and restored) averaged over log-spaced frequency bins.
 Where the node's own variation dominates (slow temperature changes) G ≈ 1 and the reading is
 kept; where the sensor noise dominates, it is removed. The filter is symmetric, so it adds no
-lag. Channels whose changes are steps (coil currents, supply steps, tilt positions) are not
-filtered: their high frequencies are the stimulus.
+lag. The coil currents or magnetometer and the supply are not filtered: their steps are
+the stimulus, and their sensors' noise is small beside them.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,11 +38,28 @@ BINS_PER_DECADE = 8
 @dataclass
 class SensorNoise:
     """A channel's measurement noise: white σ (per sample of the grid), the quantisation step
-    (0 when not quantised), and the frequency above which the sensor noise dominates."""
+    (0 when not quantised), and the frequency above which the sensor noise dominates; with
+    the Wiener gains applied per segment (to filter simulated noise the same way)."""
 
     sigma: float
     step: float
     crossover_hz: float
+    gains: list = field(default_factory=list, repr=False)  # [(start, stop, G)] per segment
+
+    @property
+    def variance(self) -> float:
+        """Variance per sample of the white noise model: σ², at least q²/12."""
+        return max(self.sigma * self.sigma, self.step * self.step / 12.0)
+
+    def filtered(self, e: np.ndarray) -> np.ndarray:
+        """White noise ``e`` (one value per grid sample) through the channel's Wiener gains:
+        what of the sensor's noise is left in the filtered channel."""
+        out = np.zeros_like(e)
+        for a, b, G in self.gains:
+            seg = e[a:b]
+            ext = np.concatenate([seg, seg[::-1]])
+            out[a:b] = np.fft.irfft(np.fft.rfft(ext) * G, len(ext))[:b - a]
+        return out
 
     def to_dict(self) -> dict:
         return {"white_sigma": self.sigma, "quantisation_step": self.step,
@@ -87,6 +104,7 @@ def wiener(x: np.ndarray, dt: float, bounds: list[tuple[int, int]] | None = None
     q = quantisation_step(x)
     s2 = max(sig * sig, q * q / 12.0)
     cross = []
+    gains = []
     if not s2 > 0 or not np.all(np.isfinite(x)):
         return out, SensorNoise(sig, q, math.inf)
     for a, b in bounds:
@@ -107,10 +125,11 @@ def wiener(x: np.ndarray, dt: float, bounds: list[tuple[int, int]] | None = None
         G = np.clip(1.0 - Se / np.maximum(S, 1e-300), 0.0, 1.0)
         G[0] = 1.0
         out[a:b] = np.fft.irfft(F * G, len(ext))[:n] + trend
+        gains.append((a, b, G))
         below = np.flatnonzero(G < 0.5)
         if len(below):
             cross.append(float(f[below[0]]))
-    return out, SensorNoise(sig, q, min(cross) if cross else math.inf)
+    return out, SensorNoise(sig, q, min(cross) if cross else math.inf, gains)
 
 
 def _bin_average(f: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -145,13 +164,15 @@ def stepped(x: np.ndarray) -> bool:
 
 
 def denoise_frame(frame) -> dict[str, SensorNoise]:
-    """Replace the temperature and extra channels of an EnvFrame by their Wiener estimates
-    (stepped channels are kept as read); returns the noise found per channel."""
+    """Replace the temperature and extra channels of an EnvFrame by their Wiener estimates;
+    returns the noise found per channel. A stepped channel (a tilt table, a vibration switched
+    on and off) keeps its steps: their spectrum stands above the sensor noise up to high
+    frequencies, where the gain stays 1."""
     found: dict[str, SensorNoise] = {}
     for group in (frame.temperature, frame.extra):
         for name in list(group):
             v = np.asarray(group[name], float)
-            if v.shape != frame.t.shape or not np.all(np.isfinite(v)) or stepped(v):
+            if v.shape != frame.t.shape or not np.all(np.isfinite(v)):
                 continue
             xh, noise = wiener(v, frame.dt, frame.bounds)
             group[name] = xh
@@ -159,5 +180,81 @@ def denoise_frame(frame) -> dict[str, SensorNoise]:
     return found
 
 
-__all__ = ["SensorNoise", "denoise_frame", "quantisation_step", "stepped", "white_sigma",
+#: realisations of the sensors' noise simulated for the errors-in-variables noise term
+EIV_DRAWS = 8
+
+
+def term_channels(spec) -> set[str]:
+    """The logged channels a term reads (its own, or those its expression names)."""
+    chans = set(spec.channels)
+    if spec.key == "custom" and spec.expr:
+        from .expr import parse_expression
+
+        try:
+            chans |= {c.name for c in parse_expression(spec.expr).channels}
+        except Exception:  # noqa: BLE001 - an expression already parsed by the fit
+            pass
+    return chans
+
+
+def eiv_acov(wd, grid, specs, thetas: dict, beta: dict, nlag: int,
+             seed: int = 1953) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Autocovariance (lags 0 … nlag − 1) of the differenced likelihood samples of the noise
+    the model's terms carry from their sensors: for each logged channel with a measured noise
+    (:attr:`WorkData.sensor_noise`), :data:`EIV_DRAWS` realisations of its white noise are
+    passed through its Wiener gains, added to the channel, and every term that reads it is
+    rebuilt; Σ β_j·Δx_j is a realisation of what that sensor puts into the residual (errors
+    in variables, Fuller 1987). The sample autocovariances (biased, so positive definite)
+    are averaged over the realisations and summed over the channels. Returns (the sum, each
+    channel's part); zeros when no term reads a noisy channel."""
+    import dataclasses
+
+    out = np.zeros(nlag)
+    parts: dict[str, np.ndarray] = {}
+    noise = getattr(wd, "sensor_noise", None) or {}
+    if not noise or not grid.runs:
+        return out, parts
+    rng = np.random.default_rng(seed)
+    fr = wd.frame
+    for ch, sn in noise.items():
+        terms = [s for s in specs if s.key != "bias" and ch in term_channels(s)
+                 and abs(beta.get(s.label, np.zeros(1))).sum() > 0]
+        if not terms or not sn.gains or not sn.variance > 0:
+            continue
+        group = "temperature" if ch in fr.temperature else "extra"
+        base = getattr(fr, group)[ch]
+        ref = {s.label: _block_on(wd, fr, s, thetas.get(s.label)) for s in terms}
+        acc = np.zeros(nlag)
+        count = 0
+        for _ in range(EIV_DRAWS):
+            e = sn.filtered(rng.normal(0.0, math.sqrt(sn.variance), fr.n))
+            fr2 = dataclasses.replace(fr, **{group: {**getattr(fr, group), ch: base + e}})
+            d = np.zeros(wd.nb)
+            for s in terms:
+                dx = _block_on(wd, fr2, s, thetas.get(s.label)) - ref[s.label]
+                d += dx @ np.asarray(beta[s.label], float)
+            for run in grid.diffs(grid.means(d)):
+                L = min(nlag, len(run))
+                full = np.correlate(run, run, mode="full")[len(run) - 1:len(run) - 1 + L]
+                acc[:L] += full
+                count += len(run)
+        if count:
+            parts[ch] = acc / count
+            out += parts[ch]
+    return out, parts
+
+
+def _block_on(wd, frame, spec, theta) -> np.ndarray:
+    """A term's block-level regressor built on ``frame`` (the working smoother and block
+    means of :class:`gyrotest.envmodel.varpro.Design`)."""
+    from .terms import build_term
+
+    if spec.effect.prefiltered:
+        x = build_term(frame, spec, theta or {}, wd.refs)
+    else:
+        x = wd.smooth(build_term(frame, spec, theta or {}, wd.refs, to_be_smoothed=True))
+    return wd.bmean(x).reshape(wd.nb, -1)
+
+
+__all__ = ["EIV_DRAWS", "SensorNoise", "eiv_acov", "term_channels", "denoise_frame", "quantisation_step", "stepped", "white_sigma",
            "wiener"]

@@ -82,6 +82,9 @@ class WorkData:
     noise_ref: Any = None
     #: the log starts at the gyro's power-on (a warm-up transient is a candidate effect)
     power_on: bool = False
+    #: each filtered channel's measurement noise ({name: SensorNoise},
+    #: :mod:`gyrotest.envmodel.sensors`)
+    sensor_noise: dict = field(default_factory=dict)
 
     @property
     def nb(self) -> int:
@@ -397,7 +400,7 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
     wd = WorkData(frame=frame, block=block, counts=counts, t=np.zeros(nb), y=np.zeros(nb),
                   resolution_s=tb, resolution_note=why + "; " + wnote + "; the same smoother "
                   "is applied to the gyro rate and to every regressor", refs=refs, axis=axis,
-                  info=info, log=log)
+                  info=info, log=log, sensor_noise=sensor_noise)
     wd.t = wd.bmean(frame.t)
     wd.y = wd.bmean(wd.smooth(frame.rate))
     tm = details.get("tau_min_s")

@@ -89,7 +89,7 @@ def read(data, profile=None, *, sample_interval=None, unit: str | None = None,
     >>> rate = np.random.default_rng(1).normal(0.0, 0.01, 36000)
     >>> log = gyrotest.read(rate, sample_interval=0.1, unit="deg/s")
     >>> log.tau0, log.n, round(float(log.rate.std()), 1)     # rate in deg/h
-    (0.1, 36000, 36.0)
+    (0.1, 36000, 35.7)
     """
     opts = split_read_options(dict(options), "read")
     return read_log_from(data, profile=profile, opts=opts, sample_interval=sample_interval,
@@ -284,20 +284,20 @@ def allan(data, *, dev: str = "oadev", taus: str | Sequence[float] = "10/decade"
     ...                          "gyro": {"noise": {"N": 0.01, "B": 0.02}}}, seed=1)
     >>> res = gyrotest.allan(sim, terms="N,B")
     >>> print(res.term("N").text())
-    N = 0.009989 ± 7.5e-05 deg/sqrt(h)
-    >>> res.to_frame()[["tau_s", "sigma_dph"]].head(3)
+    N = 0.009997 ± 3.2e-05 deg/sqrt(h)
+    >>> res.to_frame()[["tau_s", "sigma_dph"]].head(3).round(3)  # N·60/√τ = 1.897 at 0.1 s
        tau_s  sigma_dph
-    0    0.1   0.189...
-    1    0.2   0.134...
-    2    0.3   0.109...
+    0    0.1      1.897
+    1    0.2      1.344
+    2    0.3      1.098
 
     A numpy array (as AllanTools takes it), rates in deg/s sampled at 100 Hz:
 
     >>> import numpy as np
     >>> x = np.random.default_rng(2).normal(0.0, 0.005, 60000)
     >>> res = gyrotest.allan(x, sample_interval=0.01, unit="deg/s", terms="N", taus="decade")
-    >>> print(res.term("N").text())      # 0.005 deg/s · √0.01 s · 60 = 0.003 deg/√h
-    N = 0.002... deg/sqrt(h)
+    >>> print(res.term("N").text())   # 0.005 deg/s = 18 deg/h; 18 · √0.01 s / 60 = 0.03 deg/√h
+    N = 0.02993 ± 8.9e-05 deg/sqrt(h)
     """
     opts = split_read_options(dict(read_options), "allan")
     kw = allan_settings(dev=dev, taus=taus, stop_ratio=stop_ratio, terms=terms, axis=axis,
@@ -383,8 +383,8 @@ def bias(data, *, skip: float | str = 0, axis: str | None = None,
     ...                          "site": {"latitude_deg": 48.137, "ia": "up"}}, seed=3)
     >>> res = gyrotest.bias(sim)
     >>> row = res.to_frame().iloc[0]
-    >>> round(row.earth_rate_ia_dph, 4), round(row.bias_dph, 2), round(row.sigma_dph, 3)
-    (11.2017, 0.5, 0.01)
+    >>> print(f"{row.earth_rate_ia_dph:.4f} {row.bias_dph:.2f} ± {row.sigma_dph:.3f} deg/h")
+    11.2017 0.50 ± 0.011 deg/h
     """
     opts = split_read_options(dict(read_options), "bias")
     from ..bias import parse_positions
@@ -508,8 +508,8 @@ def scale_factor(data=None, *, table=None, settle: float | str = "0s",
     ...     seed=4)
     >>> res = gyrotest.scale_factor(sim)
     >>> d = res.to_dict()
-    >>> len(res.to_frame()), round(d["scale_factor"], 6)
-    (7, 1.0)
+    >>> len(res.to_frame()), d["scale_factor_unit"], round(d["scale_factor_dimensionless"], 4)
+    (7, '1', 1.0)
     """
     from .. import scalefactor as sfm
 

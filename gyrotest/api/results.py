@@ -347,14 +347,18 @@ class ScaleFactorResult(Result):
         return _frame(self.core.to_dict()["points"])
 
     def summary(self) -> list[str]:
-        d = self.core.to_dict()
-        out = []
-        for k in ("scale_factor", "linearity_max_ppm_fs", "asymmetry_ppm"):
-            v = d.get(k)
-            if isinstance(v, (int, float)):
-                out.append(f"{k} = {v:.9g}" + (f" {self.core.sf_unit}" if k == "scale_factor"
-                                               else ""))
-        return out or [f"{len(d.get('points', []))} plateaus"]
+        d = self.to_dict()
+        u = d.get("scale_factor_unit") or ""
+        key = next((k for k in d if k.startswith("scale_factor_") and isinstance(d[k], float)
+                    and not any(w in k for w in ("sigma", "model", "error", "nominal"))), None)
+        out = [f"{len(d.get('points', []))} plateaus"]
+        if key:
+            sig = d.get(key.replace("scale_factor_", "scale_factor_sigma_"))
+            out.append(f"scale factor {d[key]:.9g}" + (f" ± {sig:.2g}" if sig else "")
+                       + f" {u}".rstrip())
+        if isinstance(d.get("scale_factor_error_ppm"), float):
+            out.append(f"scale-factor error {d['scale_factor_error_ppm']:.4g} ppm")
+        return out
 
     def _figure(self):
         from ..scalefactor.plot import figure_scale_factor
@@ -363,14 +367,12 @@ class ScaleFactorResult(Result):
 
     def _draw(self, ax) -> None:
         df = self.to_frame()
-        x = next((c for c in df.columns if c.startswith("input") and c.endswith("dps")),
-                 None) or next(c for c in df.columns if c.endswith("dps"))
-        y = next((c for c in df.columns if c.startswith("residual")), None)
-        if y is None:
-            y = next(c for c in df.columns if c.startswith("output"))
-        ax.plot(df[x], df[y], "o", ms=4)
-        ax.set_xlabel(x)
-        ax.set_ylabel(y)
+        y = "model_residual_ppm_fs" if "model_residual_ppm_fs" in df else "linearity_ppm_fs"
+        ax.errorbar(df["input_rate_dph"] / 3600.0, df[y], yerr=df["stderr_ppm_fs"], fmt="o",
+                    ms=4, capsize=2)
+        ax.axhline(0, color="0.6", lw=0.8)
+        ax.set_xlabel("input rate, deg/s")
+        ax.set_ylabel(y.replace("_ppm_fs", ", ppm of full scale").replace("_", " "))
 
 
 # ============================================================================== workbench

@@ -135,10 +135,10 @@ def thermal_fit(data=None, *, setpoints=None, t0: float = 21.0, sensor: str | No
     >>> import gyrotest
     >>> res = gyrotest.thermal_fit(setpoints="sample_data/thermostat.csv", t0=21)
     >>> print(res.to_frame()[["name", "value", "unit"]].round(4).to_string(index=False))
-    name   value          unit
-      w0  0.9991          deg/h
-      w1 -0.0877  (deg/h)/degC
-      w2  0.0033 (deg/h)/degC^2
+    name   value           unit
+      w0  1.3055          deg/h
+      w1 -0.1173   deg/(h·degC)
+      w2  0.0036 deg/(h·degC^2)
     """
     opts = split_read_options(dict(read_options), "thermal_fit")
     from ..envmodel.domain import (
@@ -214,9 +214,9 @@ def mag_fit(data, *, with_terms: str | None = None, settle: float | str = "10s",
     ...                        profile="sample_data/magnetic.profile.toml")
     >>> print(res.to_frame()[["name", "value", "sigma"]].round(2).to_string(index=False))
     name  value  sigma
-      Hx   0.0...
-      Hy  -0.59   0.01
-      Hz   0.0...
+      wx  -0.04   0.02
+      wy  -0.59   0.01
+      wz  -0.27   0.03
     """
     opts = split_read_options(dict(read_options), "mag_fit")
     from ..envmodel.domain import analyse_mag, mag_terms
@@ -284,7 +284,7 @@ class Model:
     ['T(T_coil_a_C)', 'dTdt(T_coil_a_C)']
     >>> fit = m.fit("sample_data/thermal.parquet", profile="sample_data/thermal.profile.toml")
     >>> fit.to_frame()["name"].tolist()
-    ['D_T[T_coil_a_C]', 'D_Tdot[T_coil_a_C]']
+    ['bias', 'T(T_coil_a_C)', 'dTdt(T_coil_a_C)']
     """
 
     def __init__(self, terms: str | Sequence[str] = (), *, custom: Sequence[str] = (),

@@ -56,6 +56,9 @@ def _path_of(data) -> str | None:
     """The file a log came from, for the model's provenance (None for frames and arrays)."""
     if isinstance(data, (str, os.PathLike)):
         return os.fspath(data)
+    if is_log(data):
+        src = data.source
+        return "-" if src == "<stdin>" else (src if os.path.isfile(src) else None)
     return None
 
 

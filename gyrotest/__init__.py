@@ -28,7 +28,6 @@ __version__ = "0.1.0"
 _LAZY: dict[str, str] = {
     "read": "api.analyses",
     "allan": "api.analyses",
-    "bias": "api.analyses",
     "scale_factor": "api.analyses",
     "thermal_fit": "api.workbench",
     "mag_fit": "api.workbench",
@@ -58,9 +57,9 @@ __all__ = [
 ]
 
 
-#: public functions that share their name with a subpackage: the subpackage is callable
+#: public functions that share their name with a module: the module is callable
 #: (gyrotest.api._callable), so ``gyrotest.report(...)`` works whatever was imported first
-_CALLABLE_PACKAGES = ("report", "simulate")
+_CALLABLE_PACKAGES = ("bias", "report", "simulate")
 
 
 def __getattr__(name: str):

@@ -1,8 +1,8 @@
-"""Two public functions share their names with subpackages: ``gyrotest.report`` and
-``gyrotest.simulate``. Python's import system binds ``gyrotest.report`` to the subpackage
-whenever any code imports it, so a plain function of that name would be replaced at random.
-Instead each of the two subpackages makes itself callable (:func:`make_callable`, two lines in
-its ``__init__``): ``gyrotest.report(campaign)`` calls :func:`gyrotest.api.campaign.report`,
+"""Three public functions share their names with modules: ``gyrotest.bias``,
+``gyrotest.report`` and ``gyrotest.simulate``. Python's import system binds ``gyrotest.report``
+to the subpackage whenever any code imports it, so a plain function of that name would be
+replaced at random. Instead each of the three modules makes itself callable
+(:func:`make_callable`, two lines at its end): ``gyrotest.report(campaign)`` calls :func:`gyrotest.api.campaign.report`,
 while ``gyrotest.report.build`` and ``import gyrotest.simulate as S`` keep working. (When the
 package layout changes, issue 60, these become plain functions.)
 
@@ -24,9 +24,10 @@ class CallableModule(types.ModuleType):
         return getattr(importlib.import_module(mod), name)(*args, **kwargs)
 
 
-def make_callable(package: str, function: str) -> None:
-    """Make the package ``package`` (a module name) call ``gyrotest.api.campaign.<function>``
-    when called."""
+def make_callable(package: str, function: str, api_module: str = "gyrotest.api.campaign"
+                  ) -> None:
+    """Make the module ``package`` (a module name) call ``<api_module>.<function>`` when
+    called."""
     module = sys.modules[package]
-    module.__api_function__ = ("gyrotest.api.campaign", function)
+    module.__api_function__ = (api_module, function)
     module.__class__ = CallableModule

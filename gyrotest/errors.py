@@ -38,6 +38,8 @@ class GyrotestError(Exception):
         Column name.
     fix : str, optional
         What the user can change; appended to the message after ``"; "``.
+    source : str, optional
+        The older name of ``file``.
 
     Attributes
     ----------

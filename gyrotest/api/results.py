@@ -151,20 +151,56 @@ class AllanResult(Result):
 
     @classmethod
     def concat(cls, results) -> AllanResult:
-        """One result of several (the logs of each, in order)."""
+        """One result of several.
+
+        Parameters
+        ----------
+        results : sequence of AllanResult
+            Results to join, the logs of each in order.
+
+        Returns
+        -------
+        AllanResult
+        """
         return cls([a for r in results for a in (r.logs if isinstance(r, AllanResult) else [r])])
 
     def to_dict(self, *, csv: str | None = None, plot: str | None = None,
                 psd: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest allan --json`` document (``csv``/``plot``/``psd``: files written)."""
+        """The ``gyrotest allan --json`` document.
+
+        Parameters
+        ----------
+        csv, plot, psd : str, optional
+            Files written (the command's ``--csv``, ``--plot``, ``--psd``), listed under
+            ``files``.
+
+        Returns
+        -------
+        dict
+            ``{"analysis": "allan", "logs": [...], "files": {...}}``.
+        """
         from ..noise.analysis import allan_document
 
         return allan_document(self.core, csv=csv, plot=plot, psd=psd)
 
     def term(self, key: str, axis: str | None = None, log: int = 0):
-        """A fitted noise term of the requested model (``"N"``, ``"B"``, ``"K"``, ``"Q"``,
-        ``"R"``, ``"markov"`` ...): its ``value``, ``sigma``, ``upper`` (95 % bound),
-        ``status`` (identified / upper bound) and ``units``; None when it was not fitted."""
+        """A fitted noise term of the requested model.
+
+        Parameters
+        ----------
+        key : str
+            ``"N"``, ``"B"``, ``"K"``, ``"Q"``, ``"R"``, ``"markov"`` ...
+        axis : str, optional
+            Rate axis (default the first).
+        log : int, default 0
+            Index of the log (several logs: ``res.logs``).
+
+        Returns
+        -------
+        FitTerm or None
+            ``value``, ``sigma`` (1σ by parameter), ``upper`` (95 % bound), ``status``
+            (identified / upper bound), ``units``, ``text()``; None when not fitted.
+        """
         a = self.core[log].axis(axis)
         return None if a.fit is None else a.fit.term(key)
 
@@ -336,8 +372,17 @@ class ScaleFactorResult(Result):
 
     def to_dict(self, *, plot: str | None = None, points_file: str | None = None
                 ) -> dict[str, Any]:
-        """The ``gyrotest scale-factor --json`` document (``plot``/``points_file``: files
-        written)."""
+        """The ``gyrotest scale-factor --json`` document.
+
+        Parameters
+        ----------
+        plot, points_file : str, optional
+            Files written (``--plot``, ``--points``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
         from ..scalefactor import scale_factor_document
 
         return scale_factor_document(self.core, plot=plot, points_file=points_file)
@@ -390,12 +435,33 @@ class ThermalResult(Result):
     title = "Thermal drift model (Antonova–Matveev; IEEE 952 D_T, D_Ṫ, D_∇Ṫ)"
 
     def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest thermal-fit --json`` document."""
+        """The ``gyrotest thermal-fit --json`` document.
+
+        Parameters
+        ----------
+        model_file : str, optional
+            The model file written (``-o``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
         return self.core.to_dict(model_file=model_file)
 
     def coef(self, name: str):
-        """A coefficient by name (``"w1"``, ``"D_T"``, ``"D_Tdot"`` ...): ``value``,
-        ``stderr`` (1σ) and ``unit``."""
+        """A coefficient by name.
+
+        Parameters
+        ----------
+        name : str
+            ``"w0"``, ``"w1"``, ``"w2"``, ``"w_dV"``, ``"D_T"``, ``"D_Tdot"``,
+            ``"D_gradTdot"`` ...
+
+        Returns
+        -------
+        Coef
+            ``value``, ``stderr`` (1σ) and ``unit``.
+        """
         for part in (self.core.chamber, self.core.setpoints):
             if part is not None:
                 try:
@@ -461,7 +527,17 @@ class MagResult(Result):
     title = "Magnetic sensitivity (IEEE 952 §5.3.3.2), deg/h per 100 µT"
 
     def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest mag-fit --json`` document."""
+        """The ``gyrotest mag-fit --json`` document.
+
+        Parameters
+        ----------
+        model_file : str, optional
+            The model file written (``-o``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
         from ..envmodel.domain import mag_document
 
         return mag_document(self.core, model_file=model_file)
@@ -511,14 +587,29 @@ class ModelFit(Result):
     title = "Drift model fit"
 
     def to_dict(self, *, written: dict | None = None) -> dict[str, Any]:
-        """The ``gyrotest model fit --json`` document (``written``: files written)."""
+        """The ``gyrotest model fit --json`` document.
+
+        Parameters
+        ----------
+        written : dict, optional
+            The model and history files written (``-o``, ``--session``).
+
+        Returns
+        -------
+        dict
+        """
         from ..envmodel.fit import fit_document
 
         return fit_document(self.core, written=written)
 
     def save(self, path) -> None:
-        """Write the fitted model (.json or .toml) for :func:`gyrotest.compensate` or
-        ``gyrotest compensate --model``."""
+        """Write the fitted model for :func:`gyrotest.compensate` or ``gyrotest compensate``.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A .json or .toml file (written atomically).
+        """
         self.core.model.save(path)
 
     def to_frame(self):
@@ -606,8 +697,17 @@ class CompensationResult(Result):
     title = "Compensation"
 
     def to_dict(self, *, output: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest compensate --json`` document (``output``: the compensated log
-        written, if any)."""
+        """The ``gyrotest compensate --json`` document.
+
+        Parameters
+        ----------
+        output : str, optional
+            The compensated log written (``-o``).
+
+        Returns
+        -------
+        dict
+        """
         d = self.core.to_dict()
         d["output"] = output
         d["model_file"] = self._meta.get("model_file")
@@ -683,7 +783,18 @@ class Report(Result):
         return render_html(self.core)
 
     def to_pdf(self, path) -> int:
-        """Write the sheet as PDF to ``path`` (atomically); returns the number of pages."""
+        """Write the sheet as PDF.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The PDF file (written atomically).
+
+        Returns
+        -------
+        int
+            The number of pages.
+        """
         from ..output import write_rendered
         from ..report.render_pdf import render_pdf
 
@@ -715,9 +826,20 @@ class Simulation(Result):
     title = "Simulated bench log"
 
     def write(self, path, format: str | None = None):
-        """Write the log(s) with the ``.truth.json`` and ``.profile.toml`` beside each
-        (``format``: csv, parquet or feather; default from the suffix); returns the paths
-        written (``.to_dict()`` for JSON)."""
+        """Write the log(s) with the ``.truth.json`` and ``.profile.toml`` beside each.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The log file (several runs: ``<stem>_run1<ext>`` ...).
+        format : {"csv", "parquet", "feather"}, optional
+            Default from the suffix.
+
+        Returns
+        -------
+        WriteResult
+            The paths written (``.to_dict()`` for JSON).
+        """
         from ..errors import InputError
         from ..simulate import write_log
 
@@ -727,8 +849,17 @@ class Simulation(Result):
             raise InputError(f"cannot write {path}: {e.strerror or e}") from None
 
     def to_dict(self, *, written=None) -> dict[str, Any]:
-        """The ``gyrotest simulate --json`` document (``written``: what :meth:`write`
-        returned; without it ``files`` is None)."""
+        """The ``gyrotest simulate --json`` document (without its timings).
+
+        Parameters
+        ----------
+        written : WriteResult, optional
+            What :meth:`write` returned; without it ``files`` is None.
+
+        Returns
+        -------
+        dict
+        """
         res = self.core
         r0 = res.runs[0]
         return {"scenario": res.name, "seed": res.seed, "runs": len(res.runs),
@@ -738,8 +869,18 @@ class Simulation(Result):
                 "truth": res.truth}
 
     def to_frame(self, run: int = 0):
-        """The samples of a run as the log file holds them (column names carry the units:
-        ``t_s``, ``omega_dph``, ``T_case_C`` ...)."""
+        """The samples of a run as the log file holds them.
+
+        Parameters
+        ----------
+        run : int, default 0
+            Index of the run.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column names carry the units: ``t_s``, ``omega_dph``, ``T_case_C`` ...
+        """
         import pandas as pd
 
         return pd.DataFrame(dict(self.core.runs[run].columns))

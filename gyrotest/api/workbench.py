@@ -432,7 +432,8 @@ def compensate(data, model, *, keep_bias: bool = False, profile=None,
 
     and the drift RMS and peak-to-peak at the model's working resolution are compared with
     the reduction the model predicts (its held-out RMS on the fitting run); the Allan
-    deviation before and after shows what changed at every τ.
+    deviation before and after shows what changed at every τ. The terms are the E terms of the
+    IEEE Std 952-1997 §8.3 model equation.
 
     Parameters
     ----------

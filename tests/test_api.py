@@ -167,6 +167,18 @@ def test_api_errors_are_gyrotest_errors(tmp_path):
         gyrotest.bias(x[:3], sample_interval=1, unit="deg/h")
 
 
+def test_readme_python_block_runs(monkeypatch):
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = readme.split("## In Python", 1)[1].split("```python\n", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(ROOT)
+    ns: dict = {}
+    exec(compile(block, "README.md (In Python)", "exec"), ns)
+    assert ns["res"].term("N").status == "identified" and len(ns["bias"].to_frame()) == 2
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
 #: the analysis entry points behind the API: the commands reach them only through it
 ENGINE = ("analyse_allan", "analyse_bias_axes", "reduce_logs", "reduce_table",
           "analyse_thermal", "analyse_mag", "fit_log", "diagnose_log", "make_report",

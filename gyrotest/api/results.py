@@ -496,19 +496,20 @@ class ThermalResult(Result):
         from ..envmodel.plots import setpoint_figures, thermal_figures
 
         th, sp = self.core.chamber, self.core.setpoints
-        figs = (thermal_figures(th) if th else []) + (setpoint_figures(sp) if sp else [])
-        for _, f in figs[1:]:
-            _close(f)
-        return figs[0][1]
+        return _first_figure((thermal_figures(th) if th else [])
+                             + (setpoint_figures(sp) if sp else []))
 
     def _draw(self, ax) -> None:
         _coef_bars(ax, self.to_frame())
 
 
-def _close(fig) -> None:
+def _first_figure(figs):
+    """The first of a command's ``(name, figure)`` list; the others are closed."""
     import matplotlib.pyplot as plt
 
-    plt.close(fig)
+    for _, f in figs[1:]:
+        plt.close(f)
+    return figs[0][1]
 
 
 def _coef_bars(ax, df) -> None:
@@ -569,10 +570,7 @@ class MagResult(Result):
     def _figure(self):
         from ..envmodel.plots import mag_figures
 
-        figs = mag_figures(self.core)
-        for _, f in figs[1:]:
-            _close(f)
-        return figs[0][1]
+        return _first_figure(mag_figures(self.core))
 
     def _draw(self, ax) -> None:
         _coef_bars(ax, self.to_frame())
@@ -631,10 +629,7 @@ class ModelFit(Result):
     def _figure(self):
         from ..envmodel.plots import fit_figures
 
-        figs = fit_figures(self.core)
-        for _, f in figs[1:]:
-            _close(f)
-        return figs[0][1]
+        return _first_figure(fit_figures(self.core))
 
     def _draw(self, ax) -> None:
         _coef_bars(ax, self.to_frame())
@@ -673,10 +668,7 @@ class ModelDiagnosis(Result):
     def _figure(self):
         from ..envmodel.plots import diagnosis_figures
 
-        figs = diagnosis_figures(self.core)
-        for _, f in figs[1:]:
-            _close(f)
-        return figs[0][1]
+        return _first_figure(diagnosis_figures(self.core))
 
     def _draw(self, ax) -> None:
         df = self.to_frame().head(12)
@@ -729,10 +721,7 @@ class CompensationResult(Result):
     def _figure(self):
         from ..envmodel.plots import compensation_figures
 
-        figs = compensation_figures(self.core)
-        for _, f in figs[1:]:
-            _close(f)
-        return figs[0][1]
+        return _first_figure(compensation_figures(self.core))
 
     def _draw(self, ax) -> None:
         df = self.to_frame()

@@ -665,3 +665,9 @@ def analyse_bias(logs: list[GyroLog], *, skip_s: float = 0.0, settle_s: float = 
     elif len(runs) > 1:
         rep = repeatability(runs)
     return BiasAnalysis(runs, rep, multi, parts, 0.0 if has_pos_col else skip_s)
+
+
+# callable: gyrotest.bias(...) is the public API function (gyrotest.api._callable)
+from .api._callable import make_callable  # noqa: E402
+
+make_callable(__name__, "bias", "gyrotest.api.analyses")

@@ -8,11 +8,15 @@ every axis with its quantity and unit, e.g. ``"Allan deviation σ(τ), deg/h"``.
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import matplotlib
 
-matplotlib.use("Agg")  # no display needed; never opens windows
+if "ipykernel" not in sys.modules:
+    # no display needed; never opens windows. In a Jupyter kernel the notebook's own backend
+    # stays, so that the figures of the API's ``.plot()`` show in the notebook
+    matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 

@@ -129,21 +129,18 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     # a single text log is read on a thread while the analysis modules are imported (their
     # numpy/scipy imports take ≈ 0.2 s); errors of either kind surface in the serial order
     early = None if model_path else prefetch_log(logs, ingest_opts)
-    from ..noise.analysis import (
-        STREAM_DEVS,
-        allan_document,
-        analyse_allan,
-        parse_detrend,
-        parse_taus,
-    )
+    from ..api.analyses import allan
+    from ..api.results import AllanResult
+    from ..noise.analysis import STREAM_DEVS, parse_detrend, parse_taus
     from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
     unit = resolve_display_unit(display_unit, ingest_opts)
-    horizon_s = parse_horizon(horizon)
-    rates = [parse_vehicle_rate(v) for v in vehicle_rates]
-    tau_spec = parse_taus(taus)
-    keys = parse_terms(terms)
+    parse_horizon(horizon)
+    for v in vehicle_rates:
+        parse_vehicle_rate(v)
+    parse_taus(taus)
+    parse_terms(terms)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"--confidence must be between 0 and 1, got {confidence}")
     for p in (plot_path, psd_path):
@@ -153,11 +150,11 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
             check_plot_path(p)
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     parse_detrend(detrend)
-    kw = dict(skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,
-              axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
-              detrend=detrend, run_diagnosis=not no_diagnose,
-              impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-              fit_model=not no_fit, ci=ci_kind, outliers=outliers)
+    kw = dict(skip=skip, dev=dev_kind, taus=taus, terms=terms, vehicle_rate=vehicle_rates,
+              axis=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
+              detrend=detrend, diagnose=not no_diagnose,
+              horizon=horizon, bi_cutoff=bi_cutoff, allow_irregular=allow_irregular,
+              fit=not no_fit, ci=ci_kind, outliers=outliers)
     with deviation_progress():  # a bar on a terminal for τ loops longer than 2 s
         if model_path:
             from ..envmodel.model import EnvModel
@@ -165,15 +162,16 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
             env_model = EnvModel.load(model_path)
             glogs = [load_for_terms(p, ingest_opts, env_model.specs, announce=not as_json)
                      for p in logs]
-            results = [analyse_allan(g, env_model=env_model, **kw) for g in glogs]
+            res = allan(glogs, model=env_model, **kw)
         else:
             # long Parquet logs are streamed into θ when no option needs the samples themselves
             stream = (detrend in (None, "none") and outliers == "flag"
                       and parse_duration(skip, what="--skip") <= 0
                       and dev_kind in STREAM_DEVS)
-            results = map_logs(  # one process per log with --jobs (identical results)
-                analyse_allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
-                stream=stream, loaded=early, **kw)
+            res = AllanResult.concat(map_logs(  # one process per log with --jobs (identical)
+                allan, logs, ingest_opts, jobs=jobs, announce=not as_json,
+                stream=stream, loaded=early, **kw))
+    results = res.logs
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)
@@ -187,7 +185,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
         plot_psd(items, psd_path, unit=unit)
     if as_json:
         _warnings(results, as_json)
-        emit_json(allan_document(results, csv=csv_path, plot=plot_path, psd=psd_path))
+        emit_json(res.to_dict(csv=csv_path, plot=plot_path, psd=psd_path))
         return
     for r in results:
         _render(r, unit)

@@ -6,8 +6,8 @@ import os
 
 import click
 
+from ..api.analyses import bias
 from ..bias import parse_positions
-from ..bias_axes import analyse_bias_axes
 from ..errors import InputError
 from ..units import format_duration, parse_duration, parse_rate_dph
 from .common import (
@@ -91,9 +91,9 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
         check_plot_path(plot_path)
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
     glogs = load_logs(logs, ingest_opts, announce=not as_json)
-    res = analyse_bias_axes(glogs, skip_s=skip_s, settle_s=settle_s, axis=axis,
-                            positions=pos_list, earth_rate=not no_earth_rate, outliers=outliers,
-                            warmup_band_dph=band, warmup_block_s=wblock)
+    res = bias(glogs, skip=skip_s, settle=settle_s, axis=axis, positions=pos_list,
+               earth_rate=not no_earth_rate, outliers=outliers, warmup_band=band,
+               warmup_block=wblock)
     if plot_path:
         from ..bias_plot import plot_bias
 

@@ -47,7 +47,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
       gyrotest compensate sample_data/bias_run2.parquet \\
           --profile sample_data/bias_run2.profile.toml --model model.json -o run2_comp.parquet
     """
-    from ..envmodel.compensate import compensate
+    from ..api.workbench import compensate
     from ..envmodel.model import EnvModel
 
     out_path = check_output(output, (".parquet", ".feather", ".arrow"), "output file")
@@ -57,7 +57,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
         check_plot_path(plot_path)
     model = EnvModel.load(model_path)
     g = load_for_terms(log, ingest_opts, model.specs, announce=not as_json)
-    cp = compensate(g, model, keep_bias=keep_bias)
+    cp = compensate(g, model, keep_bias=keep_bias)  # gyrotest.compensate
     if out_path:
         from ..ingest import write_log
 
@@ -69,8 +69,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
     for w in cp.warnings:
         warn(w)
     if as_json:
-        d = cp.to_dict()
-        d["output"] = str(out_path) if out_path else None
+        d = cp.to_dict(output=str(out_path) if out_path else None)
         d["model_file"] = str(model_path)
         emit_json(d)
         return

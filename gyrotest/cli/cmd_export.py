@@ -62,15 +62,14 @@ def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool,
 
     if Path(inp).suffix.lower() == ".json":
         return read_document(inp, "allan")
-    from ..noise.analysis import allan_document, analyse_allan
+    from ..api.analyses import allan
     from ..units import parse_duration
 
     parse_duration(skip, what="--skip")
     g = load_log(inp, ingest_opts, announce=not as_json)
     if log_meta is not None:
         log_meta.update(g.meta)
-    res = analyse_allan(g, skip_s=skip)
-    return Document("allan", allan_document([res]), inp)
+    return Document("allan", allan(g, skip=skip).to_dict(), inp)
 
 
 def _check_suffix(output: str, suffixes: tuple[str, ...], kind: str) -> str:

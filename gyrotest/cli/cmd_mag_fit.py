@@ -53,7 +53,8 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
       gyrotest mag-fit sample_data/magnetic.parquet --profile sample_data/magnetic.profile.toml \\
           --with T -o mag.json
     """
-    from ..envmodel.domain import analyse_mag, mag_document, mag_terms
+    from ..api.workbench import mag_fit
+    from ..envmodel.domain import mag_terms
 
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
@@ -65,9 +66,8 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
     dwell_s = parse_duration(min_dwell, what="--min-dwell")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
     ref = load_reference(reference, ingest_opts, as_json)
-    mg = analyse_mag(g, path=log, with_terms=with_terms, settle_s=settle_s, min_dwell_s=dwell_s,
-                     axis=axis, skip=skip, resolution=resolution, smooth=smooth, folds=folds,
-                     reference=ref)
+    mg = mag_fit(g, with_terms=with_terms, settle=settle_s, min_dwell=dwell_s, axis=axis,
+                 skip=skip, resolution=resolution, smooth=smooth, folds=folds, reference=ref)
     if out_path:
         mg.fit.model.save(out_path)
     if plot_path:
@@ -75,7 +75,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
 
         write_plot(mag_figures(mg), plot_path)
     if as_json:
-        emit_json(mag_document(mg, model_file=str(out_path) if out_path else None))
+        emit_json(mg.to_dict(model_file=str(out_path) if out_path else None))
         return
     from rich.table import Table
 

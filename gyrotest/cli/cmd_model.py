@@ -195,26 +195,9 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
     """The ``--reference`` log, read with the same ingest options (units, gyro output, time);
     the auxiliary channels a profile names (temperatures, fields, ...) are not required of a
     static run. Errors name the option."""
-    if not path:
-        return None
-    import dataclasses
+    from ..api.workbench import read_reference
 
-    from ..ingest import read_log
-    from ..profile import load_profile
-    from .common import ingest_overrides
-
-    aux = ("temperature", "field", "supply", "table_rate", "position", "extra")
-    try:
-        prof = load_profile(opts["profile"]) if opts.get("profile") else None
-        if prof is not None:
-            prof = dataclasses.replace(prof, columns={k: v for k, v in prof.columns.items()
-                                                      if k not in aux})
-        ov = ingest_overrides(opts)
-        ov["columns"] = {k: v for k, v in ov["columns"].items() if k not in aux}
-        return read_log(path, profile=prof, overrides=ov,
-                        nan_policy=opts.get("nan_policy") or "error")
-    except InputError as e:
-        raise InputError(f"--reference: {e}") from None
+    return read_reference(path or None, opts.get("profile"), opts)
 
 
 def noise_line(p) -> str:
@@ -351,11 +334,12 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
           --terms "T(T_coil_a_C),Tlag(T_chamber_C)" --plot fit.png
       gyrotest model fit vib_run.csv --terms T --term "vib:extra.vib_g**2" --json   # your log
     """
-    from ..envmodel.fit import fit_document, fit_log
+    from ..api.workbench import Model
     from ..envmodel.history import append_history, session_paths
-    from ..envmodel.prepare import collect_terms
 
-    specs = collect_terms(terms, custom)
+    model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,
+                  v_ref=v_ref, resolution=resolution, smooth=smooth, folds=folds)
+    specs = model.specs
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
         from ..plotting import check_plot_path
@@ -370,9 +354,8 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
             raise InputError(f"--session {session}: directory {parent} does not exist")
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
     ref = load_reference(reference, ingest_opts, as_json)
-    res = fit_log(g, specs, path=log, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                  resolution=resolution, smooth=smooth, folds=folds, k_sigma=k_sigma,
-                  reference=ref)
+    model.reference = ref
+    res = model.fit(g, k=k_sigma)
     written: dict = {}
     if session:
         from ..envmodel.history import load_history
@@ -383,7 +366,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
         n = len(load_history(hist_file)) + 1 if hist_file.is_file() else 1
         mpath, hpath = session_paths(sp, n, out_path.suffix if out_path else ".json")
         res.model.save(mpath)
-        step = append_history(hpath, res, model_file=mpath.name)
+        step = append_history(hpath, res.core, model_file=mpath.name)
         written.update(model_file=str(mpath), history_file=str(hpath), step=step.step)
     if out_path:
         res.model.save(out_path)
@@ -392,16 +375,16 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
             from ..envmodel.history import history_path_for
 
             hp = history_path_for(out_path)
-            step = append_history(hp, res, model_file=out_path.name)
+            step = append_history(hp, res.core, model_file=out_path.name)
             written.update(history_file=str(hp), step=step.step)
     if plot_path:
         from ..envmodel.plots import fit_figures
 
-        write_plot(fit_figures(res), plot_path)
+        write_plot(fit_figures(res.core), plot_path)
     if as_json:
-        emit_json(fit_document(res, written=written))
+        emit_json(res.to_dict(written=written))
         return
-    render_fit(res)
+    render_fit(res.core)
     if written.get("model_file"):
         extra = (f"; history {written['history_file']} step {written['step']}"
                  if written.get("history_file") else "")
@@ -475,11 +458,12 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
-    from ..envmodel.prepare import collect_terms
+    from ..api.workbench import Model
     from ..envmodel.terms import split_terms
-    from ..envmodel.workbench import diagnose_log
 
-    specs = collect_terms(terms, custom)
+    model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,
+                  v_ref=v_ref, resolution=resolution, smooth=smooth, folds=folds)
+    specs = model.specs
     if plot_path:
         from ..plotting import check_plot_path
 
@@ -488,20 +472,19 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     g = load_for_terms(log, ingest_opts, specs, announce=not as_json)
     ref = load_reference(reference, ingest_opts, as_json)
     with progress("trying candidate terms") as advance:
-        diag = diagnose_log(g, specs, cand, path=log, axis=axis, skip=skip, t_ref=t_ref,
-                            v_ref=v_ref, resolution=resolution, smooth=smooth, alpha=alpha,
-                            folds=folds, reference=ref, path_steps=path_steps,
-                            power_on=power_on,
-                            progress=lambda i, n, label: advance(
-                                1 if i else 0, total=n, description=f"trying {label}"))
+        model.reference = ref
+        model.power_on = power_on
+        diag = model.diagnose(g, candidates=cand, alpha=alpha, path=path_steps,
+                              progress=lambda i, n, label: advance(
+                                  1 if i else 0, total=n, description=f"trying {label}"))
     if plot_path:
         from ..envmodel.plots import diagnosis_figures
 
-        write_plot(diagnosis_figures(diag), plot_path)
+        write_plot(diagnosis_figures(diag.core), plot_path)
     if as_json:
         emit_json(diag.to_dict())
         return
-    render_diagnosis(diag, top=top)
+    render_diagnosis(diag.core, top=top)
     for w in diag.base.warnings:
         warn(w)
 

@@ -89,7 +89,7 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
     htm = _check_out(html_path, (".html", ".htm"), "HTML file")
     md = _check_out(md_path, (".md", ".markdown", ".txt"), "Markdown file")
     camp = load_campaign(campaign)  # validates everything before any analysis
-    from ..report.build import make_report
+    from ..api.campaign import report
 
     figures = bool(pdf or htm or md) and not no_figures
     quiet = settings().quiet
@@ -108,7 +108,7 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
             elif not quiet and not as_json:
                 note(f"report: {name} …")
 
-        sheet = make_report(camp, figures=figures, progress=progress, variant=variant)
+        sheet = report(camp, figures=figures, progress=progress, variant=variant).core
     t1 = time.perf_counter()
     outputs = []
     pdf_bytes = None

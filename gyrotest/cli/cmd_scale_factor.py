@@ -108,6 +108,7 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
       gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
     """
     from .. import scalefactor as sfm
+    from ..api.analyses import scale_factor
 
     if plot_path:
         from ..plotting import check_plot_path
@@ -120,10 +121,10 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     sfm.check_settings(settle_s=settle, trim_end_s=trim_end, min_dwell_s=min_dwell, alpha=alpha,
                        snap_tol=snap_tol, full_scale_dps=full_scale)
     rate_list = sfm.parse_rates(rates)
-    kw = dict(full_scale_dps=full_scale, terms=sfm.parse_term_choice(terms), alpha=alpha,
-              weighted=not unweighted, weighted_line=weighted_line, lock_in=not no_lock_in,
-              periodic=not no_periodic, common_rates=common_rates,
-              require_asymmetry=not no_asymmetry)
+    sfm.parse_term_choice(terms)
+    kw = dict(full_scale=full_scale, terms=terms, alpha=alpha, weighted=not unweighted,
+              weighted_line=weighted_line, lock_in=not no_lock_in, periodic=not no_periodic,
+              common_rates=common_rates, asymmetry=not no_asymmetry)
     loaded = []
     if matrix:
         if table_path or len(logs) != 1:
@@ -133,34 +134,32 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     if table_path:
         if logs:
             raise InputError("give either rate-table logs or --table FILE, not both")
-        result = sfm.reduce_table(table_path, latitude_deg=ingest_opts.get("latitude"),
-                                  ia=ingest_opts.get("ia"),
-                                  scale_factor=ingest_opts.get("scale_factor"), on_note=note,
-                                  **kw)
+        result = scale_factor(table=table_path, latitude=ingest_opts.get("latitude"),
+                              ia=ingest_opts.get("ia"),
+                              scale_factor=ingest_opts.get("scale_factor"), on_note=note, **kw)
     else:
         if not logs:
             raise InputError("no input: give one rate-table log per run, or --table FILE")
         loaded = load_logs(logs, ingest_opts, announce=not as_json)
-        result = sfm.reduce_logs(loaded, settle_s=settle, auto_settle=not fixed_settle,
-                                 trim_end_s=trim_end,
-                                 min_dwell_s=min_dwell, detect=detect, rates_dps=rate_list,
-                                 snap_tol=snap_tol, stderr=stderr_method, **kw)
+        result = scale_factor(loaded, settle=settle, fixed_settle=fixed_settle,
+                              trim_end=trim_end, min_dwell=min_dwell, detect=detect,
+                              rates=rate_list, snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
     if plot_path:
         from ..scalefactor.plot import plot_scale_factor
 
-        plot_scale_factor(result, plot_path, logs=loaded or None)
+        plot_scale_factor(result.core, plot_path, logs=loaded or None)
     if points_path:
-        sfm.write_points_csv(result, points_path)
+        sfm.write_points_csv(result.core, points_path)
     if as_json:
-        emit_json(sfm.scale_factor_document(result, plot=plot_path, points_file=points_path))
+        emit_json(result.to_dict(plot=plot_path, points_file=points_path))
         for n in result.notes:
             if n.startswith(sfm.ASYMMETRY_SKIPPED):
                 warn(n)
         return
     for n in result.notes:
         (warn if ("χ²/dof" in n or "asymmetry not" in n or "lock-in" in n) else note)(n)
-    _render(result, plot_path, points_path)
+    _render(result.core, plot_path, points_path)
 
 
 def _matrix(path, ingest_opts, settle, auto_settle, min_dwell, as_json) -> None:

@@ -6,7 +6,6 @@ import time
 
 import click
 
-from ..errors import InputError
 from ..units import format_duration
 from .common import console, emit_json, fmt_num, json_option, note
 
@@ -39,29 +38,18 @@ def command(scenario, output, fmt, seed, as_json):
       gyrotest simulate sample_data/scenarios/rate_table.toml -o rt.parquet --seed 7
       gyrotest ingest fog.csv --profile fog.profile.toml -o fog.parquet
     """
-    from ..simulate import simulate, write_log
+    from ..api.campaign import simulate
 
     t0 = time.perf_counter()
-    res = simulate(scenario, seed=seed)
+    sim = simulate(scenario, seed=seed)
+    res = sim.core
     t1 = time.perf_counter()
-    try:
-        written = write_log(res, output, fmt=fmt)
-    except OSError as e:
-        raise InputError(f"cannot write {output}: {e.strerror or e}") from None
+    written = sim.write(output, format=fmt)
     t2 = time.perf_counter()
     if as_json:
-        emit_json({
-            "scenario": res.name,
-            "seed": res.seed,
-            "runs": len(res.runs),
-            "samples": [r.n for r in res.runs],
-            "sample_rate_hz": 1.0 / res.runs[0].tau0,
-            "duration_s": res.runs[0].n * res.runs[0].tau0,
-            "files": written.to_dict(),
-            "simulate_s": t1 - t0,
-            "write_s": t2 - t1,
-            "truth": res.truth,
-        })
+        doc = sim.to_dict(written=written)
+        truth = doc.pop("truth")
+        emit_json({**doc, "simulate_s": t1 - t0, "write_s": t2 - t1, "truth": truth})
         return
     r0 = res.runs[0]
     note(f"simulated {sum(r.n for r in res.runs):,} samples "

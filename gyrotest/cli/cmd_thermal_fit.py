@@ -74,12 +74,8 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
           --t0 21 -o thermal.json
       gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t0 21
     """
-    from ..envmodel.domain import (
-        analyse_thermal,
-        check_thermal_input,
-        parse_gradient,
-        thermal_terms,
-    )
+    from ..api.workbench import thermal_fit
+    from ..envmodel.domain import check_thermal_input, parse_gradient, thermal_terms
 
     check_thermal_input(log is not None, setpoints)
     out_path = check_output(output, (".json", ".toml"), "model file")
@@ -97,9 +93,9 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     elif reference:
         raise InputError("--reference needs a chamber log (it sets the noise floor of the "
                          "chamber-run fit)")
-    ta = analyse_thermal(g, path=log, setpoints=setpoints, t0_c=t0, sensor=sensor,
-                         gradient=gradient, weighted=weighted, axis=axis, skip=skip,
-                         resolution=resolution, smooth=smooth, folds=folds, reference=ref)
+    ta = thermal_fit(g, setpoints=setpoints, t0=t0, sensor=sensor, gradient=gradient,
+                     weighted=weighted, axis=axis, skip=skip, resolution=resolution,
+                     smooth=smooth, folds=folds, reference=ref)
     th, sp = ta.chamber, ta.setpoints
     if th and out_path:
         th.am.model.save(out_path)

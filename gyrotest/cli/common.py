@@ -24,6 +24,8 @@ from typing import Any
 
 import click
 
+from ..api._inputs import READ_OPTIONS
+from ..api._inputs import ingest_overrides as _api_ingest_overrides
 from ..errors import InputError
 from ..units import format_number
 
@@ -230,64 +232,40 @@ def pop_ingest_kwargs(kwargs: dict) -> dict:
     return {k: kwargs.pop(k) for k in INGEST_OPTION_NAMES if k in kwargs}
 
 
-def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
-    cols = {
-        "time": opts.get("time_col"),
-        "rate": _split_cols(opts.get("rate_col")),
-        "counts": _split_cols(opts.get("counts_col")),
-        "up": opts.get("up_col"),
-        "down": opts.get("down_col"),
-        "counter": _split_cols(opts.get("counter_col")),
-        "voltage": _split_cols(opts.get("voltage_col")),
-        "delta_angle": _split_cols(opts.get("delta_angle_col")),
-        "angle": _split_cols(opts.get("angle_col")),
-        "temperature": list(opts.get("temp_col") or []) or None,
-        "field": _split_cols(opts.get("field_cols")),
-        "supply": opts.get("supply_col"),
-        "table_rate": opts.get("table_col"),
-        "position": opts.get("position_col"),
-        "topic": opts.get("topic"),
-    }
-    gyro = {
-        "rate_unit": opts.get("rate_unit"),
-        "angle_unit": opts.get("angle_unit"),
-        "output_kind": opts.get("output_kind"),
-        "scale_factor": opts.get("scale_factor"),
-        "offset_v": opts.get("offset"),
-        "counter_bits": opts.get("counter_bits"),
-        "sample_rate_hz": opts.get("sample_rate"),
-        "time_unit": opts.get("time_unit"),
-    }
-    site: dict[str, Any] = {"latitude_deg": opts.get("latitude")}
-    if opts.get("ia"):
-        site["ia"] = opts["ia"]
-    return {"columns": cols, "gyro": gyro, "site": site}
+#: the ingest options as profile overrides: one function for the API and the CLI
+ingest_overrides = _api_ingest_overrides
 
 
 def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False):
     """Read one log with the shared ingest options; prints the column choices as notes.
     ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
     (its angle series only; see that module)."""
-    from ..ingest import read_log
-    from ..profile import load_profile
+    from ..api.analyses import read
 
-    prof = load_profile(opts["profile"]) if opts.get("profile") else None
-    log = None
-    if stream:
-        from ..stream import stream_log
-
-        log = stream_log(path, profile=prof, overrides=ingest_overrides(opts),
-                         nan_policy=opts.get("nan_policy") or "error")
-    if log is None:
+    if not stream or not _parquet(path):  # a streamed log sets its own heap settings
         from ..heap import reuse_freed_memory
 
         reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
-        log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
-                       nan_policy=opts.get("nan_policy") or "error")
+    log = read(path, stream=stream, **api_read_options(opts))
     if announce:
         for msg in log.notes:
             note(f"{log.source}: {msg}")
     return log
+
+
+def _parquet(path: str) -> bool:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(4) == b"PAR1"
+    except OSError:
+        return False
+
+
+def api_read_options(opts: dict) -> dict:
+    """The collected ingest options as keyword arguments of :func:`gyrotest.read`."""
+    out = {api: opts[cli] for api, cli in READ_OPTIONS.items() if opts.get(cli) is not None}
+    out["profile"] = opts.get("profile")
+    return out
 
 
 def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True):

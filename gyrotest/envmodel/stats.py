@@ -72,6 +72,8 @@ def collinearity(X: np.ndarray, names: list[str]) -> tuple[float, dict[str, floa
     order 1/rounding rather than whatever the inverse of a singular matrix happens to give),
     and the correlation matrix of the centred columns."""
     n, k = X.shape
+    if k == 0:
+        return 1.0, {}, np.zeros((0, 0))
     scale = np.sqrt(np.sum(X * X, axis=0))
     scale[scale == 0] = 1.0
     sv = np.linalg.svd(X / scale, compute_uv=False)

@@ -38,3 +38,8 @@ def render_pdf(sheet: Sheet) -> tuple[bytes, int]:
     from .render_pdf import render_pdf as _r
 
     return _r(sheet)
+
+# callable: gyrotest.report(...) is the public API function (gyrotest.api._callable)
+from ..api._callable import make_callable  # noqa: E402
+
+make_callable(__name__, "report")

@@ -221,3 +221,8 @@ __all__ = [
     "simulate",
     "write_log",
 ]
+
+# callable: gyrotest.simulate(...) is the public API function (gyrotest.api._callable)
+from ..api._callable import make_callable  # noqa: E402
+
+make_callable(__name__, "simulate")

@@ -1,0 +1,894 @@
+"""The result objects of the Python API.
+
+Each result holds the analysis object its command renders (``.core``: an
+:class:`~gyrotest.noise.analysis.AllanAnalysis`, a :class:`~gyrotest.bias_axes.BiasAxes`,
+an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attributes
+(``res.axes``, ``res.coefficients``), and adds the same four things to every kind:
+
+* ``to_dict()`` -- the command's ``--json`` document, built by the same function;
+* ``to_frame()`` -- a tidy :class:`pandas.DataFrame`, units in the column names;
+* ``plot(ax=None)`` -- without ``ax`` the figure the command's ``--plot`` writes (a
+  :class:`matplotlib.figure.Figure`); with ``ax`` the main panel drawn on that Axes (returned);
+* ``_repr_html_()`` -- a summary and the frame, for notebooks.
+
+The engine behind a result can change (the workbench's verdict engine is being rebuilt):
+scripts that use these four methods and the documented attributes keep working.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any
+
+
+class Result:
+    """Base class of the API's results (module docstring).
+
+    Attributes
+    ----------
+    core : object
+        The analysis object the command line renders; attributes not found on the result are
+        read from it.
+    """
+
+    __slots__ = ("core", "_meta")
+
+    #: a few words for the HTML summary and ``repr``
+    title = "gyrotest result"
+
+    def __init__(self, core: Any, **meta: Any) -> None:
+        self.core = core
+        self._meta = meta
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name in ("core", "_meta"):
+            raise AttributeError(name)
+        return getattr(self.core, name)
+
+    def __dir__(self) -> list[str]:
+        return sorted(set(super().__dir__()) | set(dir(self.core)))
+
+    # ------------------------------------------------------------------ the four methods
+    def to_dict(self) -> dict[str, Any]:
+        """The command's ``--json`` document (JSON-ready: units in the key names)."""
+        raise NotImplementedError
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """:meth:`to_dict` as JSON text, exactly as the command's ``--json`` prints it."""
+        from ..output import dumps
+
+        return dumps(self.to_dict(), indent=indent)
+
+    def to_frame(self):
+        """A tidy :class:`pandas.DataFrame` of the result, units in the column names."""
+        raise NotImplementedError
+
+    def plot(self, ax=None):
+        """Plot the result.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Draw the main panel on these axes. Without it, the figure the command's ``--plot``
+            writes is made.
+
+        Returns
+        -------
+        matplotlib.figure.Figure or matplotlib.axes.Axes
+            The new figure (``ax`` None) or ``ax``.
+        """
+        if ax is None:
+            return self._figure()
+        self._draw(ax)
+        return ax
+
+    def _figure(self):
+        from ..plotting import new_figure
+
+        fig, ax = new_figure()
+        self._draw(ax)
+        return fig
+
+    def _draw(self, ax) -> None:  # pragma: no cover - every kind has its own
+        raise NotImplementedError
+
+    def summary(self) -> list[str]:
+        """The headline lines (for ``repr`` and notebooks)."""
+        return []
+
+    def __repr__(self) -> str:
+        lines = self.summary()
+        return f"<{type(self).__name__}: " + ("; ".join(lines) if lines else self.title) + ">"
+
+    def _repr_html_(self) -> str:
+        head = f"<strong>{html.escape(self.title)}</strong>"
+        items = "".join(f"<li>{html.escape(s)}</li>" for s in self.summary())
+        try:
+            table = self.to_frame().to_html(max_rows=20, float_format=lambda v: f"{v:.6g}",
+                                            index=False, border=0)
+        except Exception as e:  # a summary without the table is better than no repr
+            table = f"<p>(no table: {html.escape(str(e))})</p>"
+        return f"<div>{head}<ul>{items}</ul>{table}</div>"
+
+
+def _num(x) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return math.nan
+    return v
+
+
+def _frame(rows: list[dict], columns: list[str] | None = None):
+    import pandas as pd
+
+    return pd.DataFrame(rows, columns=columns)
+
+
+# ============================================================================== allan
+class AllanResult(Result):
+    """The Allan analysis of one or more logs (:func:`gyrotest.allan`).
+
+    ``res.logs`` holds one :class:`~gyrotest.noise.analysis.AllanAnalysis` per log; the
+    attributes of the first (``axes``, ``tau0``, ``source`` ...) are read through. Noise
+    terms: :meth:`term`; the deviation table: :meth:`to_frame`; every fitted term:
+    :meth:`terms`.
+    """
+
+    __slots__ = ()
+    title = "Allan analysis"
+
+    @property
+    def logs(self) -> list:
+        """One :class:`~gyrotest.noise.analysis.AllanAnalysis` per log, in the order given."""
+        return self.core
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name in ("core", "_meta"):
+            raise AttributeError(name)
+        return getattr(self.core[0], name)
+
+    @classmethod
+    def concat(cls, results) -> AllanResult:
+        """One result of several.
+
+        Parameters
+        ----------
+        results : sequence of AllanResult
+            Results to join, the logs of each in order.
+
+        Returns
+        -------
+        AllanResult
+        """
+        return cls([a for r in results for a in (r.logs if isinstance(r, AllanResult) else [r])])
+
+    def to_dict(self, *, csv: str | None = None, plot: str | None = None,
+                psd: str | None = None) -> dict[str, Any]:
+        """The ``gyrotest allan --json`` document.
+
+        Parameters
+        ----------
+        csv, plot, psd : str, optional
+            Files written (the command's ``--csv``, ``--plot``, ``--psd``), listed under
+            ``files``.
+
+        Returns
+        -------
+        dict
+            ``{"analysis": "allan", "logs": [...], "files": {...}}``.
+        """
+        from ..noise.analysis import allan_document
+
+        return allan_document(self.core, csv=csv, plot=plot, psd=psd)
+
+    def term(self, key: str, axis: str | None = None, log: int = 0):
+        """A fitted noise term of the requested model.
+
+        Parameters
+        ----------
+        key : str
+            ``"N"``, ``"B"``, ``"K"``, ``"Q"``, ``"R"``, ``"markov"`` ...
+        axis : str, optional
+            Rate axis (default the first).
+        log : int, default 0
+            Index of the log (several logs: ``res.logs``).
+
+        Returns
+        -------
+        FitTerm or None
+            ``value``, ``sigma`` (1σ by parameter), ``upper`` (95 % bound), ``status``
+            (identified / upper bound), ``units``, ``text()``; None when not fitted.
+        """
+        a = self.core[log].axis(axis)
+        return None if a.fit is None else a.fit.term(key)
+
+    def to_frame(self):
+        """The deviation table: one row per log, axis and τ.
+
+        Columns: ``source``, ``axis``, ``deviation``, ``tau_s``, ``m``, ``n``, ``alpha``,
+        ``edf``, ``sigma_lo_dph``, ``sigma_dph``, ``sigma_hi_dph`` (the Stable32 interval at
+        the stated confidence) and, where the noise model was fitted, ``model_dph``,
+        ``residual_ci`` (residual in CI units) and ``fitted``.
+        """
+        rows = []
+        for r in self.core:
+            for a in r.axes:
+                tab = a.table()
+                for i in range(len(tab["tau"])):
+                    row = {"source": r.source, "axis": a.axis, "deviation": a.dev.kind,
+                           "tau_s": float(tab["tau"][i]), "m": int(tab["m"][i]),
+                           "n": int(tab["n"][i]), "alpha": int(tab["alpha"][i]),
+                           "edf": float(tab["edf"][i]),
+                           "sigma_lo_dph": float(tab["sigma_lo"][i]),
+                           "sigma_dph": float(tab["sigma"][i]),
+                           "sigma_hi_dph": float(tab["sigma_hi"][i])}
+                    if "model" in tab:
+                        row.update(model_dph=float(tab["model"][i]),
+                                   residual_ci=float(tab["residual_ci"][i]),
+                                   fitted=bool(tab["fitted"][i]))
+                    rows.append(row)
+        return _frame(rows)
+
+    def terms(self):
+        """Every fitted noise term: one row per log, axis, term and parameter.
+
+        Columns: ``source``, ``axis``, ``term``, ``parameter``, ``value``, ``sigma``
+        (1σ), ``upper_95`` (the bound of a term that is not identified), ``unit``,
+        ``status``.
+        """
+        rows = []
+        for r in self.core:
+            for a in r.axes:
+                if a.fit is None:
+                    continue
+                for t in a.fit.terms:
+                    for p, v in t.params.items():
+                        rows.append({"source": r.source, "axis": a.axis, "term": t.label,
+                                     "parameter": p, "value": _num(v),
+                                     "sigma": _num(t.sigma.get(p)),
+                                     "upper_95": _num(t.upper) if p == t.main else math.nan,
+                                     "unit": t.units.get(p, ""), "status": t.status})
+        return _frame(rows, ["source", "axis", "term", "parameter", "value", "sigma",
+                             "upper_95", "unit", "status"])
+
+    def summary(self) -> list[str]:
+        out = []
+        for r in self.core:
+            for a in r.axes:
+                head = f"{r.source} [{a.axis}]"
+                fit = a.fit
+                if fit is None:
+                    out.append(f"{head}: {len(a.dev.tau)} τ, no noise model")
+                    continue
+                out.append(f"{head}: " + "; ".join(t.text() for t in fit.terms)
+                           + f" (χ²/dof = {fit.chi2_dof:.2f}, p = {fit.p_value:.2g})")
+        return out
+
+    def _items(self):
+        return [(r.source, a) for r in self.core for a in r.axes]
+
+    def _figure(self):
+        from ..noise.plots import figure_allan
+
+        return figure_allan(self._items())
+
+    def _draw(self, ax) -> None:
+        import numpy as np
+
+        for src, a in self._items():
+            tab = a.table()
+            tau, s = np.asarray(tab["tau"]), np.asarray(tab["sigma"])
+            err = [s - np.asarray(tab["sigma_lo"]), np.asarray(tab["sigma_hi"]) - s]
+            line = ax.errorbar(tau, s, yerr=err, fmt="o", ms=3, capsize=2,
+                               label=f"{src} [{a.axis}] {a.dev.kind.upper()}")
+            if "model" in tab:
+                ax.plot(tau, tab["model"], "-", color=line[0].get_color(), lw=1,
+                        label="noise model")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("averaging time τ, s")
+        ax.set_ylabel("deviation σ(τ), deg/h")
+        ax.legend(fontsize=8)
+
+
+# ============================================================================== bias
+class BiasResult(Result):
+    """Bias D_F of one or more static runs (:func:`gyrotest.bias`); ``core`` is a
+    :class:`~gyrotest.bias_axes.BiasAxes` (``per_axis``: one
+    :class:`~gyrotest.bias.BiasAnalysis` per axis with ``runs``, ``repeatability`` and
+    ``multi``)."""
+
+    __slots__ = ()
+    title = "Bias D_F (IEEE 952 §12.11.4.1.1)"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``gyrotest bias --json`` document."""
+        return self.core.to_dict()
+
+    @property
+    def bias_dph(self) -> float:
+        """D_F of the first axis, deg/h: the multi-position fit's, else the first run's."""
+        ba = next(iter(self.core.per_axis.values()))
+        return ba.multi.bias_dph if ba.multi else ba.runs[0].bias_dph
+
+    def to_frame(self):
+        """One row per axis and run: ``axis``, ``run``, ``duration_s``,
+        ``mean_output_dph``, ``earth_rate_ia_dph``, ``bias_dph`` (D_F), ``sigma_dph`` (1σ:
+        the Allan deviation at the record length from the fitted noise model) and
+        ``naive_sigma_dph`` (σ/√n, for comparison)."""
+        rows = []
+        for name, ba in self.core.per_axis.items():
+            for r in ba.runs:
+                rows.append({"axis": name, "run": r.label, "duration_s": r.duration_s,
+                             "mean_output_dph": r.mean_output_dph,
+                             "earth_rate_ia_dph": _num(r.earth_rate_ia_dph),
+                             "bias_dph": _num(r.bias_dph) if not ba.multi else math.nan,
+                             "sigma_dph": r.sigma_dph,
+                             "naive_sigma_dph": r.uncertainty.naive_sigma_dph})
+        return _frame(rows)
+
+    def summary(self) -> list[str]:
+        out = []
+        for name, ba in self.core.per_axis.items():
+            if ba.multi:
+                m = ba.multi
+                out.append(f"axis {name}: multi-position D_F = {m.bias_dph:.6g} ± "
+                           f"{m.bias_sigma_dph:.3g} deg/h")
+                continue
+            for r in ba.runs:
+                out.append(f"axis {name}, {r.label}: D_F = {r.bias_dph:.6g} ± "
+                           f"{r.sigma_dph:.3g} deg/h")
+            if ba.repeatability:
+                rep = ba.repeatability
+                out.append(f"axis {name}: repeatability over {len(rep.runs)} runs: mean "
+                           f"{rep.mean_dph:.6g} deg/h, 1σ {rep.sigma_1_dph:.3g} deg/h")
+        return out
+
+    def _figure(self):
+        from ..bias_plot import figure_bias
+
+        return figure_bias(next(iter(self.core.per_axis.values())))
+
+    def _draw(self, ax) -> None:
+        df = self.to_frame()
+        y = df["bias_dph"].where(df["bias_dph"].notna(), df["mean_output_dph"])
+        ax.errorbar(range(len(df)), y, yerr=df["sigma_dph"], fmt="o", capsize=3)
+        ax.set_xticks(range(len(df)))
+        ax.set_xticklabels([f"{a}: {r.split('/')[-1]}" for a, r in zip(df["axis"], df["run"])],
+                           rotation=30, ha="right", fontsize=8)
+        ax.set_ylabel("bias D_F ± 1σ, deg/h")
+
+
+# ============================================================================== scale factor
+class ScaleFactorResult(Result):
+    """Scale factor, linearity, asymmetry and nonlinearity from rate-table runs
+    (:func:`gyrotest.scale_factor`); ``core`` is a
+    :class:`~gyrotest.scalefactor.analysis.ScaleFactorResult`."""
+
+    __slots__ = ()
+    title = "Scale factor (IEEE 952 §12.9.4)"
+
+    def to_dict(self, *, plot: str | None = None, points_file: str | None = None
+                ) -> dict[str, Any]:
+        """The ``gyrotest scale-factor --json`` document.
+
+        Parameters
+        ----------
+        plot, points_file : str, optional
+            Files written (``--plot``, ``--points``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
+        from ..scalefactor import scale_factor_document
+
+        return scale_factor_document(self.core, plot=plot, points_file=points_file)
+
+    def to_frame(self):
+        """The plateau table (one row per plateau and run), as ``--points`` writes it."""
+        return _frame(self.core.to_dict()["points"])
+
+    def summary(self) -> list[str]:
+        d = self.to_dict()
+        u = d.get("scale_factor_unit") or ""
+        key = next((k for k in d if k.startswith("scale_factor_") and isinstance(d[k], float)
+                    and not any(w in k for w in ("sigma", "model", "error", "nominal"))), None)
+        out = [f"{len(d.get('points', []))} plateaus"]
+        if key:
+            sig = d.get(key.replace("scale_factor_", "scale_factor_sigma_"))
+            out.append(f"scale factor {d[key]:.9g}" + (f" ± {sig:.2g}" if sig else "")
+                       + f" {u}".rstrip())
+        if isinstance(d.get("scale_factor_error_ppm"), float):
+            out.append(f"scale-factor error {d['scale_factor_error_ppm']:.4g} ppm")
+        return out
+
+    def _figure(self):
+        from ..scalefactor.plot import figure_scale_factor
+
+        return figure_scale_factor(self.core, logs=self._meta.get("logs"))
+
+    def _draw(self, ax) -> None:
+        df = self.to_frame()
+        y = "model_residual_ppm_fs" if "model_residual_ppm_fs" in df else "linearity_ppm_fs"
+        ax.errorbar(df["input_rate_dph"] / 3600.0, df[y], yerr=df["stderr_ppm_fs"], fmt="o",
+                    ms=4, capsize=2)
+        ax.axhline(0, color="0.6", lw=0.8)
+        ax.set_xlabel("input rate, deg/s")
+        ax.set_ylabel(y.replace("_ppm_fs", ", ppm of full scale").replace("_", " "))
+
+
+# ============================================================================== workbench
+def _coef_rows(coefs, group: str) -> list[dict]:
+    return [{"group": group, "name": c.name, "value": c.value, "sigma": c.stderr,
+             "unit": c.unit} for c in coefs]
+
+
+class ThermalResult(Result):
+    """The thermal drift model of a chamber run and/or a set-point table
+    (:func:`gyrotest.thermal_fit`); ``core`` is a
+    :class:`~gyrotest.envmodel.domain.ThermalAnalysis` (``chamber``, ``setpoints``)."""
+
+    __slots__ = ()
+    title = "Thermal drift model (Antonova–Matveev; IEEE 952 D_T, D_Ṫ, D_∇Ṫ)"
+
+    def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
+        """The ``gyrotest thermal-fit --json`` document.
+
+        Parameters
+        ----------
+        model_file : str, optional
+            The model file written (``-o``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
+        return self.core.to_dict(model_file=model_file)
+
+    def coef(self, name: str):
+        """A coefficient by name.
+
+        Parameters
+        ----------
+        name : str
+            ``"w0"``, ``"w1"``, ``"w2"``, ``"w_dV"``, ``"D_T"``, ``"D_Tdot"``,
+            ``"D_gradTdot"`` ...
+
+        Returns
+        -------
+        Coef
+            ``value``, ``stderr`` (1σ) and ``unit``.
+        """
+        for part in (self.core.chamber, self.core.setpoints):
+            if part is not None:
+                try:
+                    return part.coef(name)
+                except KeyError:
+                    pass
+        raise KeyError(name)
+
+    @property
+    def model(self):
+        """The fitted chamber-run model (an :class:`~gyrotest.envmodel.model.EnvModel` for
+        :func:`gyrotest.compensate`; ``.save(path)``), or None from set-points alone."""
+        return self.core.chamber.am.model if self.core.chamber else None
+
+    def to_frame(self):
+        """Every coefficient: ``group`` (Antonova–Matveev, IEEE E terms, set-points),
+        ``name``, ``value``, ``sigma`` (1σ, GLS under the noise model for a chamber run), ``unit``."""
+        rows = []
+        th, sp = self.core.chamber, self.core.setpoints
+        if th:
+            rows += _coef_rows(th.coefficients, "Antonova-Matveev")
+            rows += _coef_rows(th.ieee_coefficients, "IEEE E terms")
+        if sp:
+            rows += _coef_rows(sp.coefficients, "set-points")
+        return _frame(rows, ["group", "name", "value", "sigma", "unit"])
+
+    def summary(self) -> list[str]:
+        return [f"{r.group} {r.name} = {r.value:.4g} ± {r.sigma:.2g} {r.unit}"
+                for r in self.to_frame().itertuples()]
+
+    def _figure(self):
+        from ..envmodel.plots import setpoint_figures, thermal_figures
+
+        th, sp = self.core.chamber, self.core.setpoints
+        return _first_figure((thermal_figures(th) if th else [])
+                             + (setpoint_figures(sp) if sp else []))
+
+    def _draw(self, ax) -> None:
+        _coef_bars(ax, self.to_frame())
+
+
+def _first_figure(figs):
+    """The first of a command's ``(name, figure)`` list; the others are closed."""
+    import matplotlib.pyplot as plt
+
+    for _, f in figs[1:]:
+        plt.close(f)
+    return figs[0][1]
+
+
+def _coef_bars(ax, df) -> None:
+    ax.errorbar(df["value"], range(len(df)), xerr=df["sigma"], fmt="o", capsize=3)
+    ax.set_yticks(range(len(df)))
+    ax.set_yticklabels([f"{n} [{u}]" for n, u in zip(df["name"], df["unit"])], fontsize=8)
+    ax.axvline(0, color="0.6", lw=0.8)
+    ax.set_xlabel("coefficient ± 1σ (unit per row)")
+
+
+class MagResult(Result):
+    """Magnetic sensitivities from a Helmholtz-coil run (:func:`gyrotest.mag_fit`);
+    ``core`` is a :class:`~gyrotest.envmodel.domain.MagResult`."""
+
+    __slots__ = ()
+    title = "Magnetic sensitivity (IEEE 952 §5.3.3.2), deg/h per 100 µT"
+
+    def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
+        """The ``gyrotest mag-fit --json`` document.
+
+        Parameters
+        ----------
+        model_file : str, optional
+            The model file written (``-o``), named in the document.
+
+        Returns
+        -------
+        dict
+        """
+        from ..envmodel.domain import mag_document
+
+        return mag_document(self.core, model_file=model_file)
+
+    @property
+    def model(self):
+        """The fitted model (:class:`~gyrotest.envmodel.model.EnvModel`; ``.save(path)``)."""
+        return self.core.fit.model
+
+    def to_frame(self):
+        """One row per field axis: ``name``, ``value`` and ``sigma`` (1σ) in deg/h per
+        100 µT, ``reversal_K_dph_per_100uT`` (signed reversal estimate) and
+        ``up_minus_down_dph`` with its ``up_minus_down_sigma_dph`` (sweep hysteresis)."""
+        rows = []
+        for c in self.core.coefficients:
+            a = c.name[-1]
+            rv = self.core.reversal.get(a) or {}
+            hy = self.core.hysteresis.get(a) or {}
+            rows.append({"name": c.name, "value": c.value, "sigma": c.stderr, "unit": c.unit,
+                         "reversal_K_dph_per_100uT": _num(rv.get("signed_dph_per_100uT")),
+                         "up_minus_down_dph": _num(hy.get("up_minus_down_dph")),
+                         "up_minus_down_sigma_dph": _num(hy.get("stderr_dph"))})
+        return _frame(rows)
+
+    def summary(self) -> list[str]:
+        return [f"{c.name} = {c.value:.4g} ± {c.stderr:.2g} {c.unit}"
+                for c in self.core.coefficients]
+
+    def _figure(self):
+        from ..envmodel.plots import mag_figures
+
+        return _first_figure(mag_figures(self.core))
+
+    def _draw(self, ax) -> None:
+        _coef_bars(ax, self.to_frame())
+
+
+class ModelFit(Result):
+    """A drift model fitted to a log (:meth:`gyrotest.Model.fit`); ``core`` is the
+    workbench's fit result (``coefficients``, ``rms_fit``, ``rms_holdout``, ``floor``,
+    ``excursions``, ``model``)."""
+
+    __slots__ = ()
+    title = "Drift model fit"
+
+    def to_dict(self, *, written: dict | None = None) -> dict[str, Any]:
+        """The ``gyrotest model fit --json`` document.
+
+        Parameters
+        ----------
+        written : dict, optional
+            The model and history files written (``-o``, ``--session``).
+
+        Returns
+        -------
+        dict
+        """
+        from ..envmodel.fit import fit_document
+
+        return fit_document(self.core, written=written)
+
+    def save(self, path) -> None:
+        """Write the fitted model for :func:`gyrotest.compensate` or ``gyrotest compensate``.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            A .json or .toml file (written atomically).
+        """
+        self.core.model.save(path)
+
+    def to_frame(self):
+        """One row per coefficient: ``name``, ``term``, ``value``, ``sigma`` (1σ, GLS under
+        the noise model), ``unit``, ``z``, ``significance``."""
+        return _frame([{"name": c.name, "term": c.term, "value": c.value, "sigma": c.stderr,
+                        "unit": c.unit, "z": c.z, "significance": c.significance}
+                       for c in self.core.coefficients])
+
+    def summary(self) -> list[str]:
+        r = self.core
+        out = [f"terms {' + '.join(r.terms) or '(bias only)'}",
+               f"residual RMS: fit {r.rms_fit:.4g} deg/h, held-out {r.rms_holdout:.4g} deg/h"]
+        out.append(f"noise model: {r.noise.params.text()}; log-likelihood {r.loglik:.1f}")
+        return out
+
+    def _figure(self):
+        from ..envmodel.plots import fit_figures
+
+        return _first_figure(fit_figures(self.core))
+
+    def _draw(self, ax) -> None:
+        _coef_bars(ax, self.to_frame())
+
+
+class ModelDiagnosis(Result):
+    """Which effect the model lacks (:meth:`gyrotest.Model.diagnose`); ``core`` is the
+    workbench's diagnosis (``verdict``, ``candidates`` best first, ``found``, ``path``,
+    ``base``)."""
+
+    __slots__ = ()
+    title = "Model diagnosis"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``gyrotest model diagnose --json`` document."""
+        return self.core.to_dict()
+
+    @property
+    def missing(self) -> str | None:
+        """The term text of the missing effect (None when none was found)."""
+        return self.core.found[0].term if self.core.found else None
+
+    def to_frame(self):
+        """The candidate terms, most significant first: ``term``, ``effect``, ``lr``
+        (likelihood ratio), ``df``, ``p``, ``p_family`` (family-wise), ``delta_bic``,
+        ``significant``."""
+        return _frame([{"term": c.term, "effect": c.effect, "lr": c.lr, "df": c.df, "p": c.p,
+                        "p_family": c.p_family, "delta_bic": c.dbic,
+                        "significant": c.significant}
+                       for c in self.core.candidates],
+                      ["term", "effect", "lr", "df", "p", "p_family", "delta_bic",
+                       "significant"])
+
+    def summary(self) -> list[str]:
+        return [self.core.verdict]
+
+    def _figure(self):
+        from ..envmodel.plots import diagnosis_figures
+
+        return _first_figure(diagnosis_figures(self.core))
+
+    def _draw(self, ax) -> None:
+        import numpy as np
+
+        df = self.to_frame().head(12)
+        ax.barh(range(len(df)), np.maximum(df["lr"].to_numpy(float), 1e-3),
+                color=["#009E73" if s else "#999999" for s in df["significant"]])
+        ax.set_yticks(range(len(df)))
+        ax.set_yticklabels(df["term"], fontsize=8)
+        ax.invert_yaxis()
+        ax.set_xscale("log")
+        ax.set_xlabel("likelihood ratio Λ (log scale)")
+
+
+class CompensationResult(Result):
+    """A drift model applied to another run (:func:`gyrotest.compensate`); ``core`` has
+    the drift before and after (``rms_before_dph``, ``rms_after_dph``, ``factor``), the Allan
+    deviation before and after, and the compensated ``log``."""
+
+    __slots__ = ()
+    title = "Compensation"
+
+    def to_dict(self, *, output: str | None = None) -> dict[str, Any]:
+        """The ``gyrotest compensate --json`` document.
+
+        Parameters
+        ----------
+        output : str, optional
+            The compensated log written (``-o``).
+
+        Returns
+        -------
+        dict
+        """
+        d = self.core.to_dict()
+        d["output"] = output
+        d["model_file"] = self._meta.get("model_file")
+        return d
+
+    def to_frame(self):
+        """The Allan deviation before and after: ``tau_s``, ``sigma_before_dph``,
+        ``sigma_after_dph``."""
+        c = self.core
+        return _frame({"tau_s": list(map(float, c.adev_tau)),
+                       "sigma_before_dph": list(map(float, c.adev_before)),
+                       "sigma_after_dph": list(map(float, c.adev_after))})
+
+    def summary(self) -> list[str]:
+        c = self.core
+        return [f"drift RMS {c.rms_before_dph:.4g} → {c.rms_after_dph:.4g} deg/h "
+                f"(×{c.factor:.3g}; the model predicts ×{c.predicted_factor:.3g})"]
+
+    def _figure(self):
+        from ..envmodel.plots import compensation_figures
+
+        return _first_figure(compensation_figures(self.core))
+
+    def _draw(self, ax) -> None:
+        df = self.to_frame()
+        ax.loglog(df["tau_s"], df["sigma_before_dph"], "o-", ms=3, label="before")
+        ax.loglog(df["tau_s"], df["sigma_after_dph"], "o-", ms=3, label="after")
+        ax.set_xlabel("averaging time τ, s")
+        ax.set_ylabel("Allan deviation, deg/h")
+        ax.legend()
+
+
+# ============================================================================== campaign
+class Report(Result):
+    """The spec sheet of a campaign (:func:`gyrotest.report`); ``core`` is the
+    :class:`~gyrotest.report.sheet.Sheet` (``checks``, ``sections``, ``overall()``)."""
+
+    __slots__ = ()
+    title = "Specification sheet"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``gyrotest report --json`` document."""
+        return self.core.to_dict()
+
+    def to_frame(self):
+        """The compliance checks: ``item``, ``ieee``, ``value``, ``sigma``, ``unit``,
+        ``limit``, ``expanded_uncertainty`` and ``verdict`` under the stated decision
+        rule."""
+        rows = []
+        for c in self.core.checks:
+            m = c.measured
+            rows.append({"item": c.label, "ieee": c.ieee,
+                         "value": _num(m.value) if m else math.nan,
+                         "sigma": _num(m.sigma) if m else math.nan, "unit": c.unit,
+                         "limit": _num(c.limit), "expanded_uncertainty": c.expanded_uncertainty,
+                         "verdict": c.verdict})
+        return _frame(rows, ["item", "ieee", "value", "sigma", "unit", "limit",
+                             "expanded_uncertainty", "verdict"])
+
+    def to_markdown(self) -> str:
+        """The sheet as Markdown (as ``gyrotest report`` prints it)."""
+        from ..report.render_md import render_markdown
+
+        return render_markdown(self.core, None)
+
+    def to_html(self) -> str:
+        """The sheet as one self-contained HTML document."""
+        from ..report.render_html import render_html
+
+        return render_html(self.core)
+
+    def to_pdf(self, path) -> int:
+        """Write the sheet as PDF.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The PDF file (written atomically).
+
+        Returns
+        -------
+        int
+            The number of pages.
+        """
+        from ..output import write_rendered
+        from ..report.render_pdf import render_pdf
+
+        data, pages = render_pdf(self.core)
+        write_rendered(pdf=path, pdf_bytes=data)
+        return pages
+
+    def summary(self) -> list[str]:
+        return [f"{self.core.title}: {self.core.overall()}"]
+
+    def _draw(self, ax) -> None:
+        df = self.to_frame().dropna(subset=["value", "limit"])
+        df = df[df["limit"] > 0]
+        ratio = df["value"].abs() / df["limit"]
+        ax.barh(range(len(df)), ratio, xerr=df["expanded_uncertainty"] / df["limit"],
+                color=["#009E73" if v == "PASS" else "#D55E00" for v in df["verdict"]])
+        ax.axvline(1.0, color="k", lw=1)
+        ax.set_yticks(range(len(df)))
+        ax.set_yticklabels(df["item"], fontsize=8)
+        ax.invert_yaxis()
+        ax.set_xlabel("|measured| / limit (bar: expanded uncertainty U, k = 2)")
+
+
+class Simulation(Result):
+    """A simulated bench log with known truth (:func:`gyrotest.simulate`); ``core`` is a
+    :class:`~gyrotest.simulate.core.SimResult` (``runs``, ``truth``, ``columns``)."""
+
+    __slots__ = ()
+    title = "Simulated bench log"
+
+    def write(self, path, format: str | None = None):
+        """Write the log(s) with the ``.truth.json`` and ``.profile.toml`` beside each.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The log file (several runs: ``<stem>_run1<ext>`` ...).
+        format : {"csv", "parquet", "feather"}, optional
+            Default from the suffix.
+
+        Returns
+        -------
+        WriteResult
+            The paths written (``.to_dict()`` for JSON).
+        """
+        from ..errors import InputError
+        from ..simulate import write_log
+
+        try:
+            return write_log(self.core, path, fmt=format)
+        except OSError as e:
+            raise InputError(f"cannot write {path}: {e.strerror or e}") from None
+
+    def to_dict(self, *, written=None) -> dict[str, Any]:
+        """The ``gyrotest simulate --json`` document (without its timings).
+
+        Parameters
+        ----------
+        written : WriteResult, optional
+            What :meth:`write` returned; without it ``files`` is None.
+
+        Returns
+        -------
+        dict
+        """
+        res = self.core
+        r0 = res.runs[0]
+        return {"scenario": res.name, "seed": res.seed, "runs": len(res.runs),
+                "samples": [r.n for r in res.runs], "sample_rate_hz": 1.0 / r0.tau0,
+                "duration_s": r0.n * r0.tau0,
+                "files": written.to_dict() if written is not None else None,
+                "truth": res.truth}
+
+    def to_frame(self, run: int = 0):
+        """The samples of a run as the log file holds them.
+
+        Parameters
+        ----------
+        run : int, default 0
+            Index of the run.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Column names carry the units: ``t_s``, ``omega_dph``, ``T_case_C`` ...
+        """
+        import pandas as pd
+
+        return pd.DataFrame(dict(self.core.runs[run].columns))
+
+    def summary(self) -> list[str]:
+        r0 = self.core.runs[0]
+        return [f"{self.core.name}: {len(self.core.runs)} run(s) of {r0.n} samples at "
+                f"{1.0 / r0.tau0:g} Hz (seed {self.core.seed})"]
+
+    def _draw(self, ax) -> None:
+        import numpy as np
+
+        r0 = self.core.runs[0]
+        n = max(1, r0.n // 2000)
+        m = r0.n // n * n
+        t = np.asarray(r0.t[:m]).reshape(-1, n).mean(axis=1)
+        y = np.asarray(r0.rate_dph[:m]).reshape(-1, n).mean(axis=1)
+        ax.plot(t, y, lw=0.8)
+        ax.set_xlabel("time, s")
+        ax.set_ylabel(f"rate ({n}-sample means), deg/h")

@@ -120,6 +120,9 @@ SPURIOUS = 0.1
 #: "indistinguishable in this log" is 0.995 between fitted contributions)
 EQUIV_R = 0.99
 TRUE_AT_FLOOR = 1.2
+#: an added term that explains at least this much of the injected truth (floor units) is a
+#: part of it (harness measure)
+PART = 0.5
 OBSERVABLE = 1.0
 
 
@@ -505,6 +508,26 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
             t["named_data_equiv"] = bool(rs and max(rs) >= EQUIV_R)
         row["unmatched_added"] = [a["label"] for a in added if not any(
             names_effect(a["key"], a["channels"], e.accept) for e in case.missing)]
+        # an added term that names no missing effect is still justified when it is an exact
+        # equivalent of one in this log (|r| >= EQUIV_R outside the base model) or a part of
+        # the truth (it explains >= PART floor of the injected signal: a component of a
+        # rotated field sensitivity, a node read through another sensor)
+        unjust = []
+        for a in added:
+            if a["label"] not in row["unmatched_added"]:
+                continue
+            r_eq = 0.0
+            if a["label"] in contrib:
+                xu = _resid(contrib[a["label"]], X_base)
+                for e in case.missing:
+                    r_eq = max(r_eq, _corr(xu, _resid(mags[e.name]["block"], X_base)))
+                if comb is not None:
+                    r_eq = max(r_eq, _corr(xu, comb))
+            a["equiv_r"] = r_eq
+            red = a.get("truth_reduction_floor")
+            if not (r_eq >= EQUIV_R or (red is not None and red >= PART)):
+                unjust.append(a["label"])
+        row["unjustified_added"] = unjust
         row["spurious_added"] = [a["label"] for a in added
                                  if a["truth_reduction_floor"] is not None
                                  and a["truth_reduction_floor"] < SPURIOUS]
@@ -588,6 +611,9 @@ def summarise(rows: list[dict]) -> dict:
                                                  for e in strong), len(strong)),
             "named_data_equiv_strong_unique": _frac(sum(e.get("named_data_equiv", False)
                                                         for e in strong_u), len(strong_u)),
+            "unjustified_cases": _frac(sum(bool(r.get("unjustified_added")) for r in ok
+                                           if not r["null"]),
+                                       sum(not r["null"] for r in ok)),
             "false_alarms": _frac(sum(r["alarm"] for r in nulls), len(nulls)),
             "false_alarms_synthetic": _frac(
                 sum(r["alarm"] for r in nulls if r["noise"].get("type") != "real"),
@@ -727,6 +753,8 @@ def markdown(s: dict, *, title: str = "") -> str:
         f"{_pct(o['floor_ok'])} |",
         f"| printed noise floor within {FLOOR_FACTOR:g}x of the injected floor | "
         f"{_pct(o['floor_vs_injected_ok'])} |",
+        f"| cases (not nulls) with an added term that is neither true nor an exact equivalent "
+        f"nor a part of the truth (>= {PART:g} floor) | {_pct(o['unjustified_cases'])} |",
         f"| \"possible missing effect\" on null cases (not an alarm) | "
         f"{_pct(o['possible_on_nulls'])} |",
         f"| loops stopped by the step limit | {o['step_limit']} |",

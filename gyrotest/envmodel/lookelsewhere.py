@@ -45,18 +45,27 @@ class Whiteness:
 
 
 def chi2_logsf(u, k):
-    """ln P(χ²_k > u), finite far into the tail: scipy's value where it is finite, else the
-    leading term of the asymptotic series (k/2 − 1)·ln(u/2) − u/2 − ln Γ(k/2)
-    (Abramowitz & Stegun 6.5.32), accurate to ln(1 + O(k/u))."""
-    u = np.asarray(u, float)
+    """ln P(χ²_k > u), finite far into the tail. k = 1: ln 2 + ln Φ(−√u) (the normal tail's
+    log, stable); k = 2: −u/2 exactly; otherwise ln Q(k/2, u/2) (the regularised incomplete
+    gamma function) and, where that underflows, the leading term of its asymptotic series
+    (k/2 − 1)·ln(u/2) − u/2 − ln Γ(k/2) (Abramowitz & Stegun 6.5.32)."""
+    u = np.maximum(np.asarray(u, float), 0.0)
     k = np.asarray(k, float)
-    out = np.asarray(sps.chi2.logsf(u, k), float)
-    bad = ~np.isfinite(out) & (u > 0)
-    if np.any(bad):
-        ub = np.broadcast_to(u, out.shape)[bad]
-        kb = np.broadcast_to(k, out.shape)[bad]
-        out = out.copy()
-        out[bad] = ((kb / 2 - 1) * np.log(ub / 2) - ub / 2 - special.gammaln(kb / 2))
+    u, k = np.broadcast_arrays(u, k)
+    out = np.empty(u.shape)
+    one = k == 1
+    two = k == 2
+    rest = ~(one | two)
+    out[one] = math.log(2.0) + special.log_ndtr(-np.sqrt(u[one]))
+    out[two] = -0.5 * u[two]
+    if np.any(rest):
+        ur, kr = u[rest], k[rest]
+        with np.errstate(divide="ignore"):
+            q = np.log(special.gammaincc(kr / 2, ur / 2))
+        bad = ~np.isfinite(q)
+        q[bad] = ((kr[bad] / 2 - 1) * np.log(ur[bad] / 2) - ur[bad] / 2
+                  - special.gammaln(kr[bad] / 2))
+        out[rest] = q
     return out if out.ndim else float(out)
 
 
@@ -142,7 +151,8 @@ def _davies_vec(u: np.ndarray, s: int, V: np.ndarray) -> np.ndarray:
     return np.minimum(0.0, np.logaddexp(a, b))
 
 
-def family_p(sc, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.ndarray]:
+def family_p(sc, n_cand: int, draws: int = MC_DRAWS
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each candidate's own p-value and its family-wise p-value over the step.
 
     Every direction the step tested (each candidate at each searched value: orthonormal
@@ -157,17 +167,17 @@ def family_p(sc, n_cand: int, draws: int = MC_DRAWS) -> tuple[np.ndarray, np.nda
     seed) and computing every candidate's own p on each draw gives the distribution of the
     step's smallest own p; a candidate's family-wise p is the fraction of draws at or below
     its own (Westfall & Young 1993, single-step min-P). Returns (ln own p, family-wise p)
-    per candidate (NaN: untested)."""
+    per candidate (NaN: untested) and the sorted null minima (:func:`family_null`)."""
     local = np.full(n_cand, np.nan)
     p_fw = np.full(n_cand, np.nan)
     if not sc.groups:
-        return local, p_fw
+        return local, p_fw, np.zeros(0)
     obs = _candidate_stats(sc, _group_lr(sc, sc.r0[:, None], np.array([sc.rss0])), n_cand)
     local = obs[:, 0]
     sim = family_null(sc, n_cand, draws)
     for i in range(n_cand):
         p_fw[i] = p_from_null(sim, local[i])
-    return local, p_fw
+    return local, p_fw, sim
 
 
 def family_null(sc, n_cand: int, draws: int = MC_DRAWS) -> np.ndarray:

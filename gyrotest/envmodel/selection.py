@@ -66,7 +66,6 @@ from .fit import VIF_MAX, FitResult, WorkData, fit_model
 from .lookelsewhere import (
     Whiteness,
     davies_log_p,
-    family_null,
     family_p,
     ljung_box,
     p_from_null,
@@ -494,7 +493,7 @@ def _search(sc: Screen, spec: TermSpec, replaces: list[str] | None
         with sc.not_recording():
             r = optimize.minimize_scalar(lambda v: -lr_at(v), bounds=(a, b),
                                          method="bounded",
-                                         options={"xatol": 1e-3 / T, "maxiter": 12})
+                                         options={"xatol": 1e-3 / T, "maxiter": 8})
         best = float(r.x) if -float(r.fun) > vals[i] else float(f[i])
         return (float(vals[i]), {pname: best}, total_variation(list(vals)),
                 {pname: (lo, hi)})
@@ -506,7 +505,7 @@ def _search(sc: Screen, spec: TermSpec, replaces: list[str] | None
     b = math.log(grid[min(i + 1, n - 1)])
     with sc.not_recording():
         r = optimize.minimize_scalar(lambda u: -lr_at(math.exp(u)), bounds=(a, b),
-                                     method="bounded", options={"xatol": 0.01, "maxiter": 12})
+                                     method="bounded", options={"xatol": 0.02, "maxiter": 8})
     best = math.exp(float(r.x)) if -float(r.fun) > vals[i] else float(grid[i])
     return float(vals[i]), {pname: float(best)}, total_variation(vals), {pname: (lo, hi)}
 
@@ -649,7 +648,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             progress(i, len(moves), spec.label)
         out.append(score_candidate(sc, spec, rep or None, index=i))
     sc.current = -1
-    local, p_fw = family_p(sc, len(out))
+    local, p_fw, sim = family_p(sc, len(out))
     tested = []
     for i, c in enumerate(out):
         if c.degenerate is None and c.error is None and math.isfinite(local[i]):
@@ -663,7 +662,6 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     # full weight); the test itself is the fixed-shape statistic the bootstrap calibrates
     passing = [c for c in tested if c.p_family <= alpha]
     if passing:
-        sim = family_null(sc, len(out))
         for c in passing:
             lr = c.lr
             try:

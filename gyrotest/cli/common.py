@@ -32,6 +32,7 @@ from ..units import format_number
 class Settings:
     debug: bool = False
     quiet: bool = False
+    verbose: bool = False
 
 
 def settings() -> Settings:
@@ -92,9 +93,24 @@ def err_console():
     return _err_console
 
 
+def notes_shown() -> bool:
+    """Notes and progress reach stderr when it is a terminal, or with ``-v`` on any stderr
+    (a log file, ``2>err``); ``-q`` silences them. A redirected stderr then holds the
+    warnings and the error only."""
+    s = settings()
+    if s.quiet:
+        return False
+    if s.verbose:
+        return True
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # a closed or odd stream
+        return False
+
+
 def note(msg: str) -> None:
-    """An informational line on stderr (suppressed by -q)."""
-    if not settings().quiet:
+    """An informational line on stderr: on a terminal, or anywhere with -v (-q: never)."""
+    if notes_shown():
         err_console().print(f"[dim]{_escape(msg)}[/dim]")
 
 

@@ -111,6 +111,15 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
         _render(ba.runs, ba.repeatability, ba.multi, axis=name, unit=unit)
 
 
+def run_name(label: str) -> str:
+    """A run's label for tables and notes: the file name without its directory, and a
+    position of a multi-position log with its file (``up (multipos.csv)``)."""
+    pos, sep, path = label.partition(" (")
+    if sep and path.endswith(")"):
+        return f"{pos} ({os.path.basename(path[:-1])})"
+    return os.path.basename(label)
+
+
 def _render(runs, rep, multi, axis: str = "", unit=None):
     from rich.table import Table
 
@@ -125,7 +134,7 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
     for col in ("run", "used", "mean output", "Ω_IA", "D_F", "±1σ", "σ/√n"):
         t.add_column(col, justify="left" if col == "run" else "right")
     for r in runs:
-        label = os.path.basename(r.label) if not multi else r.label
+        label = run_name(r.label)
         t.add_row(label, format_duration(r.duration_s), fmt_num(r.mean_output_dph * f, 6),
                   fmt_num(r.earth_rate_ia_dph * f, 6) if r.earth_rate_ia_dph is not None else "—",
                   fmt_num(r.bias_dph * f, 6) if not multi else "(fit)",
@@ -134,7 +143,7 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
     _render_warmup(runs, u)
     for r in runs:
         for n in r.notes:
-            (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
+            (note if n.startswith("noise term(s)") else warn)(f"{run_name(r.label)}: {n}")
     if rep:
         c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs, axis {axis}[/bold]: D_F mean "
                 f"{fmt_num(rep.mean_dph * f, 6)} {u.rate}, 1σ {fmt_num(rep.sigma_1_dph * f, 3)} "
@@ -176,7 +185,7 @@ def _render_warmup(runs, u) -> None:
             f"{format_duration(w0['block_s'])} blocks)")
     for r in runs:
         w = r.warmup_time
-        name = os.path.basename(r.label)
+        name = run_name(r.label)
         if w["warmup_time_s"] == w["warmup_time_s"]:  # finite
             c.print(f"  {name}: warm-up time {fmt_num(w['warmup_time_s'], 5)} s "
                     f"({format_duration(w['warmup_time_s'])}; ± {fmt_num(w['block_s'], 3)} s "

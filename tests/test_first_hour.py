@@ -48,3 +48,129 @@ def test_multiposition_notes_keep_the_position(tmp_path):
     assert starts <= {f"{p} (multipos.csv)" for p in
                       ("up", "down", "north", "south", "east", "west")}, starts
     assert "up (multipos.csv)" in r.out and str(SAMPLE) not in r.out
+
+
+# ----------------------------------------------------------------------------- first command (9)
+def test_bare_gyrotest_prints_the_help():
+    r = run_cli([])
+    assert r.code == 0 and r.err == ""
+    assert r.out == run_cli(["--help"]).out
+    assert len(r.out.splitlines()) > 20  # the normal help, not one squashed line
+
+
+@pytest.mark.parametrize("typo,meant", [("bais", "bias"), ("alan", "allan"),
+                                        ("thermal-fitt", "thermal-fit")])
+def test_a_mistyped_command_gets_did_you_mean(typo, meant):
+    r = run_cli([typo, "x.csv"])
+    r.assert_clean_error(f"no such command '{typo}'", f"did you mean '{meant}'")
+
+
+def test_readme_says_how_to_call_gyrotest_after_the_setup():
+    first = (ROOT / "README.md").read_text(encoding="utf-8").split("\n---\n", 1)[0]
+    assert ". .venv/bin/activate" in first or "source .venv/bin/activate" in first
+
+
+# ----------------------------------------------------------------------------- notes (item 6)
+def test_notes_reach_a_redirected_stderr_only_with_v(tmp_path):
+    p = _rate_csv(tmp_path / "log.csv", "rate_dps")
+    quiet = run_cli(["bias", p])  # stderr is not a terminal here: warnings and errors only
+    assert quiet.code == 0 and "auto-detected" not in quiet.err
+    loud = run_cli(["bias", p, "-v"])
+    assert loud.code == 0 and "auto-detected" in loud.err
+    assert quiet.out == loud.out
+    bad = run_cli(["bias", p, "--axis", "nope"])  # the error alone, on one line
+    assert bad.code == 2 and len(bad.err_lines) == 1, bad.err
+
+
+# ----------------------------------------------------------------------------- messages (10)
+def test_too_short_for_a_tau_names_the_file_and_the_option(tmp_path):
+    p = _rate_csv(tmp_path / "short.csv", "rate_dps", n=2000)
+    for dev in ("oadev", "theo1"):
+        r = run_cli(["allan", p, "--taus", "1,10,100000", "--dev", dev])
+        r.assert_clean_error("short.csv", "τ = 100000 s", "--taus")
+        assert "--tau-max" not in r.err
+
+
+def test_a_constant_log_prints_a_plain_number(tmp_path):
+    p = tmp_path / "const.csv"
+    p.write_text("time,rate_dph\n" + "".join(f"{i * 0.1:.1f},5.0\n" for i in range(3000)))
+    for cmd in ("allan", "bias"):
+        r = run_cli([cmd, p])
+        r.assert_clean_error("const.csv", "constant (5 in every sample)")
+        assert "np." not in r.err
+
+
+def test_east_and_west_sense_no_earth_rate():
+    from gyrotest.earth import OMEGA_E_DPH, earth_rate_component, ia_unit_vector
+
+    for az in (90.0, 270.0, -90.0):
+        assert earth_rate_component(48.137, az, 0.0) == 0.0
+    assert ia_unit_vector(90.0, 0.0)[0] == 0.0 and ia_unit_vector(0.0, 90.0)[:2].tolist() == [0, 0]
+    assert earth_rate_component(48.137, 0.0, 90.0) == pytest.approx(OMEGA_E_DPH * np.sin(
+        np.radians(48.137)), rel=1e-12)
+
+
+def test_simulate_prints_no_rounding_noise(tmp_path):
+    r = run_cli(["simulate", SAMPLE / "scenarios" / "hidden_none.toml", "-o", tmp_path / "s.csv"])
+    assert r.code == 0, r.err
+    assert "e-1" not in r.out and "earth 0 deg/h" in r.out
+
+
+def test_rate_unit_is_checked_and_an_unused_one_is_said(tmp_path):
+    log = [SAMPLE / "multipos.csv", "--profile", SAMPLE / "multipos.profile.toml"]
+    run_cli(["info", *log, "--rate-unit", "furlongs"]).assert_clean_error(
+        "--rate-unit", "furlongs", "deg/h")
+    r = run_cli(["info", *log, "--rate-unit", "deg/s"])
+    assert r.code == 0 and "--rate-unit deg/s not used" in r.err and "counts" in r.err
+
+
+def test_one_name_for_the_reference_temperature_and_the_field_columns():
+    from gyrotest.cli.cmd_thermal_fit import command as thermal
+    from gyrotest.cli.common import ingest_overrides
+
+    names = {o for p in thermal.params if not getattr(p, "hidden", False) for o in p.opts}
+    assert "--t-ref" in names and "--t0" not in names and "--field-col" in names
+    assert "--field-cols" not in names
+    # the old spellings still work (hidden); the new ones accept lists like --rate-col
+    a = run_cli(["thermal-fit", "--setpoints", SAMPLE / "thermostat.csv", "--t-ref", "21", "--json"])
+    b = run_cli(["thermal-fit", "--setpoints", SAMPLE / "thermostat.csv", "--t0", "21", "--json"])
+    assert a.code == b.code == 0 and a.out == b.out
+    ov = ingest_overrides({"temp_col": ("A,B", "C"), "field_cols": ("X,Y", "Z")})
+    assert ov["columns"]["temperature"] == ["A", "B", "C"]
+    assert ov["columns"]["field"] == ["X", "Y", "Z"]
+    ov = ingest_overrides({"field_cols_alias": "X,Y,Z"})
+    assert ov["columns"]["field"] == ["X", "Y", "Z"]
+
+
+def test_durations_show_their_unit_in_help():
+    for cmd in (["bias"], ["allan"], ["model", "fit"], ["thermal-fit"], ["export", "stable32"]):
+        out = " ".join(run_cli([*cmd, "--help"]).out.split())
+        assert "[default: 0]" not in out and "[default: 0s]" in out, cmd
+
+
+def test_plots_of_several_figures_say_where_each_goes(tmp_path):
+    out = run_cli(["thermal-fit", "--help"]).out
+    assert "FILE-NAME.png" in " ".join(out.split())
+    png = tmp_path / "th.png"
+    r = run_cli(["thermal-fit", SAMPLE / "thermal.parquet", "--profile",
+                 SAMPLE / "thermal.profile.toml", "--plot", png, "-v"])
+    assert r.code == 0, r.err
+    written = [ln for ln in r.err_lines if "written to" in ln]
+    assert len(written) == 1 and written[0].startswith("plots written to ")
+    files = sorted(p.name for p in tmp_path.iterdir())
+    assert files and all(f in written[0] for f in files), (files, written)
+
+
+def test_make_imu_files_lists_only_what_it_wrote(tmp_path):
+    import subprocess
+    import sys
+
+    fake = tmp_path / "fake" / "rosbags"  # rosbags "not installed"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('rosbags hidden by the test')\n")
+    r = subprocess.run([sys.executable, SAMPLE / "make_imu_files.py", tmp_path / "imu",
+                        "--minutes", "0.2"], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(fake.parent), "PATH": ""})
+    assert r.returncode == 0, r.stderr
+    assert "no bags written" in r.stdout and "imu.bag" not in r.stdout, r.stdout
+    assert "imu.mat" in r.stdout and not (tmp_path / "imu" / "imu.bag").exists()

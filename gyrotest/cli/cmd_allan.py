@@ -71,7 +71,8 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Drift model from 'gyrotest model fit -o m.json' (or thermal-fit/mag-fit): "
                    "its deterministic drift is removed before the noise analysis, as "
                    "'gyrotest compensate' does.")
-@click.option("--skip", default="0", show_default=True, help="Warm-up trim, e.g. 30min.")
+@click.option("--skip", default="0s", show_default=True,
+              help="Warm-up trim: a duration, e.g. 30min, 2h, 90s (a plain number is seconds).")
 @click.option("--outliers", "outliers", type=click.Choice(["flag", "remove", "robust"]),
               default="flag", show_default=True,
               help="Spikes (Hampel filter, robust scale): flag = warn with their times and "

@@ -28,15 +28,17 @@ from .common_display import resolve_display_unit, unit_option
 
 @click.command("bias")
 @click.argument("logs", nargs=-1, required=True)
-@click.option("--skip", default="0", show_default=True,
-              help="Warm-up trim at the start of each run, e.g. 40min, 2h, 90s.")
+@click.option("--skip", default="0s", show_default=True,
+              help="Warm-up trim at the start of each run: a duration, e.g. 40min, 2h, 90s (a "
+                   "plain number is seconds).")
 @click.option("--axis", default=None,
               help="Gyro axis (rate column) to analyse, comma-separated for several; default "
                    "every axis (one IA: the earth rate is removed only with a single axis).")
 @click.option("--positions", default=None,
               help="IA direction of each file in order (multi-position test), e.g. up,down,north,south.")
-@click.option("--settle", default="0", show_default=True,
-              help="Time dropped after every position change in a log with a position column.")
+@click.option("--settle", default="0s", show_default=True,
+              help="Time dropped after every position change in a log with a position column: "
+                   "a duration, e.g. 30s, 2min.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
 @click.option("--outliers", type=click.Choice(["flag", "remove", "robust"]), default="flag",
               show_default=True,

@@ -42,8 +42,9 @@ def _axes_option(f):
 
 
 def _allan_input_options(f):
-    f = click.option("--skip", default="0", show_default=True,
-                     help="Warm-up trim when INPUT is a log, e.g. 30min.")(f)
+    f = click.option("--skip", default="0s", show_default=True,
+                     help="Warm-up trim when INPUT is a log: a duration, e.g. 30min, 90s (a "
+                          "plain number is seconds).")(f)
     f = ingest_options(f)
     return f
 

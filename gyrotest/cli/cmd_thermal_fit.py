@@ -44,8 +44,11 @@ def _coef_table(title, coefs):
 @click.argument("log", type=str, required=False)
 @click.option("--setpoints", type=click.Path(dir_okay=False), default=None,
               help="Table of steady-state set-points (CSV: temperature, dw[, sigma][, dTdt]).")
-@click.option("--t0", type=float, default=21.0, show_default=True,
-              help="Reference temperature t0, degC (ΔT = T − t0; the paper's lab: 21).")
+@click.option("--t-ref", "t_ref", type=float, default=None,
+              help="Reference temperature T_ref, degC (ΔT = T − T_ref; default 21, the "
+                   "paper's lab), as in 'gyrotest model fit --t-ref'.")
+@click.option("--t0", "t0_alias", type=float, default=None, hidden=True,
+              help="Old name of --t-ref.")
 @click.option("--sensor", default=None,
               help="Temperature channel of the model (default: the one that fits held-out "
                    "data best).")
@@ -54,11 +57,12 @@ def _coef_table(title, coefs):
 @click.option("--weighted", is_flag=True,
               help="Weight set-points by 1/sigma² (default: equal weights).")
 @domain_fit_options(smooth_help="Smoother window W for dT/dt or 'auto'.",
-                    plot_help="Drift vs temperature and residual plots (.png/.svg/.pdf).")
+                    plot_help="Drift vs temperature and residual plots (.png/.svg/.pdf).",
+                    figures="thermal, then the fit's time, channels and allan; setpoints")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resolution, smooth,
+def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, skip, resolution, smooth,
             folds, reference, output, plot_path, as_json, ingest_opts):
     """Thermal drift model of Antonova & Matveev: dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt.
 
@@ -71,8 +75,8 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     \b
     Examples:
       gyrotest thermal-fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
-          --t0 21 -o thermal.json
-      gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t0 21
+          --t-ref 21 -o thermal.json
+      gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t-ref 21
     """
     from ..envmodel.domain import (
         analyse_thermal,
@@ -82,6 +86,9 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     )
 
     check_thermal_input(log is not None, setpoints)
+    if t_ref is not None and t0_alias is not None and t_ref != t0_alias:
+        raise InputError("--t-ref and --t0 (its old name) disagree; give --t-ref only")
+    t0 = next((v for v in (t_ref, t0_alias) if v is not None), 21.0)
     out_path = check_output(output, (".json", ".toml"), "model file")
     if output and log is None:
         raise InputError("-o needs a chamber log (a set-point table gives no full model)")
@@ -114,7 +121,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     c = console()
     if th:
         c.print(f"[bold]thermal-fit[/bold]: Antonova–Matveev model on {th.sensor}, "
-                f"ΔT from t0 = {th.t0_c:g} °C")
+                f"ΔT from T_ref = {th.t0_c:g} °C")
         for n in th.notes:
             note(n)
         c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ HAC)",
@@ -130,7 +137,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
         if out_path:
             c.print(f"  model written to {escape(str(out_path))}")
     if sp:
-        c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from t0 = {sp.t0_c:g} °C"
+        c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from T_ref = {sp.t0_c:g} °C"
                 + (" (weighted by 1/σ²)" if sp.weighted else ""))
         c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² (± 1σ from the scatter)",
                             sp.coefficients))

@@ -130,7 +130,7 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
             out[name] = step(name, lambda t=test: ad.run_scale_factor(t, campaign, cache))
         elif name == "thermal":
             out[name] = step(name, lambda t=test: ad.run_thermal(t, campaign, cache))
-            t0 = float(test.opt("t0", 21.0))
+            t0 = ad.thermal_t_ref(test)
             for i, terms in enumerate(test.opt("model_steps", []) if test.logs else [], 1):
                 k = f"thermal.step{i}"
                 out[k] = step(f"thermal model step {i}: {terms}",
@@ -650,7 +650,7 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         pulse = u == "arcsec/pulse"
         lhs = "S0·ΔN/Δt" if pulse or not u else "S0·V"
         t0 = self.c.tests.get("thermal")
-        t0v = f"{fmt_number(float(t0.opt('t0', 21.0)))} °C" if t0 else "the reference"
+        t0v = f"{fmt_number(ad.thermal_t_ref(t0))} °C" if t0 else "the reference"
         e_terms = []
         if have("D_T", "D_Tdot", "D_gradTdot"):
             e_terms.append(f"{v('D_T')}·ΔT {v('D_Tdot', 3, True)}·dT/dt "

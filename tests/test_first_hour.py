@@ -174,3 +174,51 @@ def test_make_imu_files_lists_only_what_it_wrote(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "no bags written" in r.stdout and "imu.bag" not in r.stdout, r.stdout
     assert "imu.mat" in r.stdout and not (tmp_path / "imu" / "imu.bag").exists()
+
+
+# ----------------------------------------------------------------------------- workbench hint (7)
+def _cand(term, spec, replaces=None, custom=None):
+    from gyrotest.envmodel.candidate import Candidate
+
+    return Candidate(term, "effect", replaces, 1.0, 1.0, 10.0, 5.0, 1e-6, 1e-6, 1, True,
+                     spec=spec, custom=custom)
+
+
+def test_paste_hint_is_the_complete_model():
+    from gyrotest.envmodel.terms import TermSpec
+    from gyrotest.envmodel.verdict import paste_hint
+
+    base = [TermSpec("bias"), TermSpec("T", ("T_case_C",)), TermSpec("dGdt", ("A", "B")),
+            TermSpec("custom", (), "vib", "extra.vib_g**2")]
+    new = TermSpec("hyst", ("T_case_C",))
+    assert paste_hint(base, _cand(new.label, new)) == (
+        "--terms 'T(T_case_C),dGdt(A,B),hyst(T_case_C)' --term 'vib:extra.vib_g**2'")
+    lag = TermSpec("Tlag", ("T_case_C",))
+    assert paste_hint(base, _cand(lag.label, lag, replaces="T(T_case_C)")).startswith(
+        "--terms 'dGdt(A,B),Tlag(T_case_C)' ")
+    own = TermSpec("custom", (), "rh", "extra.RH_pct")
+    assert paste_hint(base[:2], _cand("rh", own)) == "--terms 'T(T_case_C)' --term 'rh:extra.RH_pct'"
+    alt = paste_hint(base[:2], _cand("chan(RH)", TermSpec("chan", ("RH",)), custom="c:extra.RH"))
+    assert alt == "--terms 'T(T_case_C),chan(RH)' (or --terms 'T(T_case_C)' --term 'c:extra.RH')"
+
+
+def test_pasting_the_workbench_hint_fits_the_model_it_judged(tmp_path):
+    """The README's hidden-coil step: the options the verdict prints fit the model whose
+    held-out RMS the verdict states (pasting only the new term dropped T(T_case_C))."""
+    import re
+    import shlex
+
+    log = tmp_path / "coil.csv"
+    assert run_cli(["simulate", SAMPLE / "scenarios" / "hidden_coil.toml", "-o", log,
+                    "--seed", "1"]).code == 0
+    prof = tmp_path / "coil.profile.toml"
+    d = run_cli(["model", "diagnose", log, "--profile", prof, "--terms", "T(T_case_C)",
+                 "--path", "1", "--json"])
+    assert d.code == 0, d.err
+    verdict = json.loads(d.out)["verdict"]
+    m = re.search(r"add it with (--terms '[^']*')", verdict)
+    assert m, verdict
+    held = float(re.search(r"→ ([0-9.]+) deg/h", verdict).group(1))
+    f = run_cli(["model", "fit", log, "--profile", prof, *shlex.split(m.group(1)), "--json"])
+    assert f.code == 0, f.err
+    assert json.loads(f.out)["rms_holdout_dph"] == pytest.approx(held, rel=2e-3)

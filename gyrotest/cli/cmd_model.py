@@ -277,12 +277,13 @@ def render_diagnosis(diag, top: int = 12) -> None:
     style = "green" if diag.found else "bold"
     out.print(f"[{style}]{escape(diag.verdict)}[/{style}]")
     if len(diag.path) > 1:
-        out.print("  forward path (each step judged in the model with the steps before it):")
-        for k, p in enumerate(diag.path, 1):
+        out.print("  forward path (each step judged in the model with the steps before it; "
+                  "the options fit the model up to that step):")
+        for k, (p, hint) in enumerate(zip(diag.path, _path_hints(diag)), 1):
             out.print(f"    {k}. +{escape(p['term'])}: held-out "
                       f"{fmt_num(p['rms_holdout_before_dph'])} → "
                       f"{fmt_num(p['rms_holdout_after_dph'])} deg/h (held-out/floor "
-                      f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(p['add'])}")
+                      f"{fmt_num(p['ratio_to_floor_after'], 3)}); {escape(hint)}")
     out.print("  rule: " + escape(SUMMARY.format(min_pct=diag.min_improvement_pct,
                                                    alpha=diag.alpha)))
     if b.excursions:
@@ -310,6 +311,24 @@ def render_history(steps, *, logs: int = 1) -> None:
                   f"{s.aic:.0f}", daic)
         prev_aic = s.aic
     out.print(t)
+
+
+def _path_hints(diag) -> list[str]:
+    """For each step of the forward path, the complete options of the model with that step
+    and the ones before it (a step's own ``--terms 'X'`` would drop the model's terms)."""
+    lib = [s.label for s in diag.base.specs if s.key not in ("bias", "custom")]
+    own = [f"--term '{s.name}:{s.expr}'" for s in diag.base.specs if s.key == "custom"]
+    out = []
+    for p in diag.path:
+        gone = set((p.get("replaces") or "").split("; "))
+        lib = [t for t in lib if t not in gone]
+        add = p["add"].split(" (or ", 1)[0]
+        if add.startswith("--term "):
+            own.append(add)
+        else:
+            lib.append(p["term"])
+        out.append(" ".join(([f"--terms '{','.join(lib)}'"] if lib else []) + own))
+    return out
 
 
 def write_plot(figs, path) -> None:

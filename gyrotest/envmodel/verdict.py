@@ -55,6 +55,28 @@ def period_rule(out: list[Candidate], frame) -> None:
                          else ""))
 
 
+def paste_hint(specs, c: Candidate) -> str:
+    """The options that fit the model of ``specs`` with the candidate ``c`` in it, complete, to
+    paste: ``--terms`` with every library term of the model (less those ``c`` replaces) and
+    ``c``; the model's custom terms as their ``--term`` options. ``--terms 'dTlagdt(T)'``
+    alone would fit a model without the terms it already has."""
+    gone = set((c.replaces or "").split("; "))
+    lib = [s.label for s in specs if s.key not in ("custom", "bias") and s.label not in gone]
+    own = [f" --term '{s.name}:{s.expr}'" for s in specs
+           if s.key == "custom" and s.label not in gone]
+
+    def terms(extra: list[str]) -> str:
+        return f"--terms '{','.join(lib + extra)}'" if lib or extra else ""
+
+    if c.spec is not None and c.spec.key == "custom":
+        return (terms([]) + "".join(own) + f" --term '{c.spec.name}:{c.spec.expr}'").strip()
+    hint = terms([c.term]) + "".join(own)
+    if c.custom:
+        alt = terms([]) + "".join(own) + f" --term '{c.custom}'"
+        hint += f" (or {alt.strip()})"
+    return hint
+
+
 def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
                  path: list[dict], floor: float, ratio: float
                  ) -> tuple[str, Candidate | None]:
@@ -113,8 +135,8 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
         if top.klass == "channel" and math.isfinite(top.r_residual):
             ch = ", ".join(top.spec.channels) if top.spec else ""
             v += f"; the residual follows {ch} (r = {top.r_residual:+.2f})"
-        v += f"; add it with {top.add_hint}" + (f" in place of {top.replaces}"
-                                                 if top.replaces else "")
+        v += (f"; add it with {paste_hint(base.specs, top)}"
+              + (f" (in place of {top.replaces})" if top.replaces else ""))
         if top.equivalents:
             v += ("; indistinguishable in this log from " + ", ".join(top.equivalents[:3])
                   + " (same fitted contribution)")
@@ -140,7 +162,8 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
                 f"({-best.improvement_pct:+.1f} %, more than the fold-to-fold scatter "
                 f"{best.gain_scatter_pct:.1f} %) but not significant ({best.evidence}"
                 + (f"; {best.note}" if best.chance is not None and best.note else "") + "); "
-                f"held-out/floor {ratio:.2f}; try it with {best.add_hint} on a second log"
+                f"held-out/floor {ratio:.2f}; try it with {paste_hint(base.specs, best)} on a "
+                "second log"
                 + (f"; {aside.term} was set aside: {aside.note}"
                    if aside is not None and aside is not best else "")), best
     rej = [c for c in cands if c.rejected]

@@ -222,3 +222,48 @@ def test_pasting_the_workbench_hint_fits_the_model_it_judged(tmp_path):
     f = run_cli(["model", "fit", log, "--profile", prof, *shlex.split(m.group(1)), "--json"])
     assert f.code == 0, f.err
     assert json.loads(f.out)["rms_holdout_dph"] == pytest.approx(held, rel=2e-3)
+
+
+# ----------------------------------------------------------------------------- thermal (item 5)
+THERMAL = [SAMPLE / "thermal.parquet", "--profile", SAMPLE / "thermal.profile.toml"]
+
+
+@pytest.fixture(scope="module")
+def thermal_models(tmp_path_factory):
+    d = tmp_path_factory.mktemp("thermal")
+    am = d / "am.json"
+    r = run_cli(["thermal-fit", *THERMAL, "--t-ref", "21", "-o", am])
+    assert r.code == 0, r.err
+    good = d / "good.json"
+    r2 = run_cli(["model", "fit", *THERMAL, "--terms", "T(T_chamber_C),dTdt(T_chamber_C)",
+                  "--t-ref", "21", "-o", good, "--no-history"])
+    assert r2.code == 0, r2.err
+    return r.out, am, good
+
+
+def test_thermal_fit_leads_with_what_the_data_determine(thermal_models):
+    out, _, _ = thermal_models
+    lines = out.splitlines()
+    lead = next(i for i, ln in enumerate(lines) if "determined by this log" in ln)
+    assert lead == 1, lines[:3]
+    assert "not determined" in lines[lead] and "w1" in lines[lead].split("not determined")[1]
+    assert out.index("IEEE 952 E terms") < out.index("Antonova–Matveev dw")
+    assert out.index("D_T ") < out.index("w0 ")
+
+
+def test_export_refuses_undetermined_terms_and_extrapolation(thermal_models, tmp_path):
+    _, am, good = thermal_models
+    lut = tmp_path / "lut.csv"
+    r = run_cli(["export", "env-model", am, "-o", lut])
+    r.assert_clean_error("am.json", "not determined", "T2(T_chamber_C)", "--force")
+    assert not lut.exists()
+    r = run_cli(["export", "env-model", am, "-o", lut, "--force"])
+    assert r.code == 0 and "exported with --force" in r.err and lut.exists()
+    # a model of determined terms exports; a grid beyond the fitted range does not
+    r = run_cli(["export", "env-model", good, "-o", lut, "--temps", "21:55:1"])
+    assert r.code == 0 and r.err == "", r.err
+    r = run_cli(["export", "env-model", good, "-o", tmp_path / "x.csv", "--temps", "-40:85:5"])
+    r.assert_clean_error("-40", "fitted on T_chamber_C", "extrapolate", "--force")
+    assert not (tmp_path / "x.csv").exists()
+    r = run_cli(["export", "env-model", good, "-o", tmp_path / "x.h"])
+    assert r.code == 0, r.err

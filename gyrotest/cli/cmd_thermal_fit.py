@@ -27,17 +27,41 @@ from .common import (
     with_ingest,
 )
 
+#: |value / 1σ| below which a coefficient is "not determined by this log" (the fit's "not
+#: significant", :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+DETERMINED_Z = 2.0
+
+
+def _z(c) -> float:
+    return abs(c.value / c.stderr) if math.isfinite(c.stderr) and c.stderr > 0 else math.nan
+
 
 def _coef_table(title, coefs):
     from rich.table import Table
 
     t = Table(title=title)
-    for col, just in (("coefficient", "left"), ("value ± 1σ", "right"), ("unit", "left")):
+    for col, just in (("coefficient", "left"), ("value ± 1σ", "right"), ("unit", "left"),
+                      ("|value/σ|", "right")):
         t.add_column(col, justify=just)
     for c in coefs:
         err = fmt_num(c.stderr, 2) if math.isfinite(c.stderr) else "—"
-        t.add_row(c.name, f"{fmt_num(c.value)} ± {err}", c.unit)
+        z = _z(c)
+        zt = "—" if not math.isfinite(z) else (
+            fmt_num(z, 3) + ("" if z >= DETERMINED_Z else " not determined"))
+        t.add_row(c.name, f"{fmt_num(c.value)} ± {err}", c.unit, zt)
     return t
+
+
+def determined_line(coefs) -> str:
+    """One line that leads the output: the coefficients this log determines (|z| ≥ 2) and
+    those it does not."""
+    good = [c.name for c in coefs if _z(c) >= DETERMINED_Z]
+    weak = [c.name for c in coefs if not _z(c) >= DETERMINED_Z]
+    line = "  determined by this log: " + (", ".join(good) or "none")
+    if weak:
+        line += (f"; not determined (|value| < {DETERMINED_Z:g}·1σ): {', '.join(weak)} "
+                 "(export a model of the determined terms: gyrotest model fit --terms ... -o)")
+    return line
 
 
 @click.command("thermal-fit")
@@ -124,9 +148,10 @@ def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, s
                 f"ΔT from T_ref = {th.t0_c:g} °C")
         for n in th.notes:
             note(n)
-        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ HAC)",
-                            th.coefficients))
-        c.print(_coef_table("IEEE 952 E terms", th.ieee_coefficients))
+        c.print(escape(determined_line(th.ieee_coefficients + th.coefficients)))
+        c.print(_coef_table("IEEE 952 E terms (± 1σ HAC)", th.ieee_coefficients))
+        c.print(_coef_table("Antonova–Matveev dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ HAC; "
+                            "-o saves this model)", th.coefficients))
         h = th.hysteresis
         if "heating_minus_cooling_dph" in h:
             c.print(f"  heating − cooling residual: {fmt_num(h['heating_minus_cooling_dph'])} ± "

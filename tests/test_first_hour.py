@@ -267,3 +267,98 @@ def test_export_refuses_undetermined_terms_and_extrapolation(thermal_models, tmp
     assert not (tmp_path / "x.csv").exists()
     r = run_cli(["export", "env-model", good, "-o", tmp_path / "x.h"])
     assert r.code == 0, r.err
+
+
+# ----------------------------------------------------------------------------- conveniences (11)
+def test_info_plot_is_a_quick_look_of_the_raw_log(tmp_path):
+    from gyrotest.ingest import read_log
+    from gyrotest.profile import load_profile
+    from gyrotest.quicklook import envelope, figure_quicklook
+
+    png = tmp_path / "look.png"
+    r = run_cli(["info", SAMPLE / "magnetic.parquet", "--profile", SAMPLE / "magnetic.profile.toml",
+                 "--plot", png, "--json"])
+    assert r.code == 0, r.err
+    assert json.loads(r.out)["plot"] == str(png) and png.stat().st_size > 20_000
+    g = read_log(SAMPLE / "magnetic.parquet", profile=load_profile(SAMPLE / "magnetic.profile.toml"))
+    fig = figure_quicklook(g)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert labels == ["gyro output, deg/h", "temperatures, °C", "magnetic field, µT"]
+    # the envelope keeps every sample's extremes (a spike survives) and the whole record
+    t = np.arange(15_601) * 0.1
+    x = np.zeros_like(t)
+    x[12_345] = 40.0
+    tb, mean, lo, hi = envelope(t, x)
+    assert hi.max() == 40.0 and lo.min() == 0.0 and tb[-1] > t[-1] - 2 and len(tb) <= 4000
+
+
+def test_info_plot_shades_gaps_and_marks_spikes_at_their_time(tmp_path):
+    from gyrotest.ingest import read_log
+    from gyrotest.noise.outliers import detect_outliers
+    from gyrotest.quicklook import figure_quicklook
+
+    rng = np.random.default_rng(3)
+    t = np.arange(20_000) * 0.1
+    t[8000:] += 30.0  # a 30 s gap
+    x = 1 + 0.05 * rng.standard_normal(t.size)
+    x[12_000] += 40.0  # a spike after the gap
+    p = tmp_path / "gs.csv"
+    np.savetxt(p, np.c_[t, x], delimiter=",", header="time,rate_dph", comments="", fmt="%.6g")
+    g = read_log(p)
+    reps = [detect_outliers(g.rates[a], g.tau0, segments=g.segments, channel=a) for a in g.axes]
+    fig = figure_quicklook(g, outliers=reps)
+    ax = fig.axes[0]
+    spans = [pt for pt in ax.patches]  # the gap, shaded
+    assert len(spans) == 1
+    lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("spike")]
+    assert len(lines) == 1 and lines[0].get_xdata()[0] == pytest.approx(t[12_000] / 60)
+
+
+@pytest.fixture
+def lab_folder(tmp_path):
+    d = tmp_path / "lab"
+    d.mkdir()
+    for p in list(SAMPLE.glob("*.parquet")) + list(SAMPLE.glob("*.profile.toml")) + [
+            SAMPLE / "multipos.csv", SAMPLE / "thermostat.csv"]:
+        (d / p.name).symlink_to(p)
+    return d
+
+
+def test_report_init_writes_a_campaign_of_the_logs_it_recognised(lab_folder):
+    from gyrotest.report.campaign import load_campaign
+
+    r = run_cli(["report", "--init", lab_folder, "--json"])
+    assert r.code == 0, r.err
+    doc = json.loads(r.out)
+    tests = {f["file"]: f["test"] for f in doc["logs"]}
+    assert tests == {"static.parquet": "bias", "bias_run1.parquet": "bias",
+                     "bias_run2.parquet": "bias", "bias_run3.parquet": "bias",
+                     "ratetable_22a.parquet": "scale_factor",
+                     "ratetable_22b.parquet": "scale_factor",
+                     "ratetable_45.parquet": "scale_factor", "thermal.parquet": "thermal",
+                     "magnetic.parquet": "magnetic", "multipos.csv": "multiposition",
+                     "thermostat.csv": None}
+    text = (lab_folder / "campaign.toml").read_text(encoding="utf-8")
+    assert "FILL IN" in text and "# files not used" in text and "thermostat.csv" in text
+    camp = load_campaign(str(lab_folder / "campaign.toml"))  # a valid campaign as written
+    assert set(camp.tests) == {"bias", "allan", "scale_factor", "thermal", "magnetic",
+                               "multiposition"}
+    assert camp.tests["allan"].logs[0].name == "static.parquet"  # the longest static run
+    # never over an existing file
+    before = (lab_folder / "campaign.toml").read_bytes()
+    run_cli(["report", "--init", lab_folder]).assert_clean_error("campaign.toml exists")
+    assert (lab_folder / "campaign.toml").read_bytes() == before
+    run_cli(["report", "--init", lab_folder / "nope"]).assert_clean_error("no such directory")
+
+
+def test_allan_csv_names_its_units(tmp_path):
+    import csv
+
+    p = _rate_csv(tmp_path / "log.csv", "rate_dps")
+    out = tmp_path / "a.csv"
+    r = run_cli(["allan", p, "--csv", out, "--taus", "octave"])
+    assert r.code == 0, r.err
+    head = next(csv.reader(open(out)))
+    assert head[:4] == ["source", "axis", "deviation", "tau_s"]
+    assert {"sigma_deg_h", "sigma_lo_deg_h", "sigma_hi_deg_h", "model_deg_h"} <= set(head)
+    assert not {"tau", "sigma"} & set(head)

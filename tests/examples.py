@@ -1,29 +1,36 @@
 """The examples a user is shown (README, man page, every ``--help``), extracted and runnable.
 
 Used by ``tests/test_examples_run.py`` (every example runs on ``sample_data/``) and by
-``benchmarks/bench_examples.py`` (the slow ones, and the time of each).
+``benchmarks/bench_examples.py`` (every example, duplicates too, with the time of each).
 
 An example is one shell command line as the user would paste it (continuation lines joined,
-``$`` prompt and trailing ``# comment`` removed). Examples come in *blocks*: the commands of one
-README code block, of one command's ``--help`` or of the man page's EXAMPLES section, run in
-order in one working directory, because a later example may read what an earlier one wrote
-(``-o model.json`` … ``--model model.json``); the README's blocks share one directory in the
-README's order (``allan.json`` made in one section is exported in the next).
+``$`` prompt removed). Examples come in *blocks*: the commands of one README code block, of
+one command's ``--help`` or of the man page's EXAMPLES section. A block runs in order in a
+directory of its own that looks like the repository root (``sample_data/`` in it), because a
+later example may read what an earlier one wrote (``-o model.json`` … ``--model model.json``):
+every block is self-contained, as a reader copying it would need it to be.
 
-The runner understands the little shell the examples use: ``cmd > file``, ``cat FILE | cmd``,
-globs (``lot/campaign_*.toml``) and quoting; ``gyrotest …`` runs in-process (``cliutil``),
-``python sample_data/….py`` in a subprocess.
+The runner understands the little shell the examples use: ``a && b``, ``cmd > file``,
+``cat FILE | cmd``, globs (``lot/campaign_*.toml``), quoting and comments, ``mkdir -p`` and
+``cp``; ``gyrotest …`` runs in-process (``cliutil``), ``python sample_data/….py`` in a
+subprocess.
 
-Templates: an example may name something the bundled data cannot provide (a Dask cluster's
-address). :data:`TEMPLATES` lists those, each with the value the test fills in or the reason
-it cannot run here; there are no other exceptions.
+Not run, each with its reason (:func:`why_not`): the set-up commands of the README's first
+screen and Development section (``.ci/run`` runs them), benchmark scripts (``benchmarks/``),
+examples naming what the bundled data cannot provide (:data:`TEMPLATES`: a Dask cluster's
+address) and examples of an optional extra that is not installed (:data:`REQUIRES`).
+:func:`plan` leaves out an example already run with the same words in an earlier block,
+unless a later example of its own block reads what it wrote.
 """
 
 from __future__ import annotations
 
 import glob
+import importlib.util
+import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import time
@@ -34,16 +41,25 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: placeholder text in an example -> (replacement, or None when it cannot run here, and why)
 TEMPLATES: dict[str, tuple[str | None, str]] = {
-    "tcp://HOST:PORT": (None, "needs a running Dask scheduler"),
-    "tcp://10.0.0.5:8786": (None, "needs a running Dask scheduler"),
+    "tcp://10.0.0.5:8786": (None, "needs a running Dask scheduler at that address"),
+}
+#: text in an example -> the module it needs (an optional extra of pyproject.toml)
+REQUIRES: dict[str, str] = {"--scheduler local": "distributed"}
+#: command prefixes that are not gyrotest examples -> why they are not run here
+NOT_EXAMPLES: dict[str, str] = {
+    "python3 -m venv": "set-up command (.ci/run runs the README's)",
+    ".venv/bin/pip": "set-up command (.ci/run runs the README's)",
+    ".venv/bin/pytest": "the test suite itself",
+    ".venv/bin/python benchmarks/": "a benchmark (benchmarks/README.md)",
+    "python benchmarks/": "a benchmark (benchmarks/README.md)",
 }
 
 
 @dataclass
 class Example:
     source: str          # "README.md", "man page", "gyrotest allan --help"
-    block: str           # the block's id (examples of one block share a directory, in order)
-    line: int            # 1-based line in the source (the README/man page) or example number
+    block: str           # the block's id
+    line: int            # 1-based line in the source, or the example's line in the help
     command: str         # one shell line
     output: str = ""     # the output the README shows below it (README only)
 
@@ -51,6 +67,10 @@ class Example:
     def key(self) -> str:
         """The command without comments or extra blanks: examples with one key are one run."""
         return " ".join(shlex.split(self.command, comments=True))
+
+    @property
+    def where(self) -> str:
+        return f"{self.block}, line {self.line}"
 
 
 @dataclass
@@ -61,7 +81,7 @@ class Block:
 
 
 _FENCE = re.compile(r"^```(\w*)\s*$")
-_RUNNABLE = ("gyrotest", "python", "cat ", ".venv/bin/gyrotest")
+_RUNNABLE = ("gyrotest", "python", "cat ", "mkdir", ".venv/")
 
 
 def _join_continuations(lines: list[tuple[int, str]]) -> list[tuple[int, str, list[str]]]:
@@ -143,7 +163,7 @@ def help_blocks() -> list[Block]:
 
 def man_blocks(path: Path = ROOT / "man" / "gyrotest.1") -> list[Block]:
     """The man page: its EXAMPLES section, and the examples of each command's section (the
-    same text as ``--help``, checked here as the man page shows them)."""
+    same text as ``--help``, taken here as the man page shows them)."""
     text = path.read_text(encoding="utf-8")
     plain = text.replace("\\-", "-").replace("\\e", "\\").replace("\\&", "")
     blocks: list[Block] = []
@@ -174,6 +194,87 @@ def all_blocks() -> list[Block]:
     return readme_blocks() + man_blocks() + help_blocks()
 
 
+# ----------------------------------------------------------------------------- planning
+def why_not(ex: Example) -> str:
+    """Why an example is not run here ("" when it is run)."""
+    cmd = ex.command.strip()
+    for prefix, why in NOT_EXAMPLES.items():
+        if cmd.startswith(prefix):
+            return why
+    for ph, (value, why) in TEMPLATES.items():
+        if ph in cmd and value is None:
+            return why
+    for text, module in REQUIRES.items():
+        if text in cmd and importlib.util.find_spec(module) is None:
+            return f"needs the optional module {module!r}, not installed"
+    return ""
+
+
+#: options whose value is a file an example writes
+_OUT_OPTS = ("-o", "--output", "--pdf", "--md", "--html", "--plot", "--csv", "--points",
+             "--psd", "--init", ">")
+
+
+def _words(ex: Example) -> list[str]:
+    return [w for part in re.split(r"\s&&\s", ex.command)
+            for w in shlex.split(part, comments=True)]
+
+
+def outputs(ex: Example) -> set[str]:
+    """What an example writes, as paths relative to its directory: the values of the output
+    options, ``> file``, a script's or ``mkdir``'s directory, ``cp``'s destination, and the
+    profile and truth files ``simulate -o NAME.csv`` writes beside its log."""
+    w = _words(ex)
+    out = {w[i + 1] for i, x in enumerate(w[:-1]) if x in _OUT_OPTS}
+    if w and w[0] in ("python", "python3", "mkdir"):
+        out |= {x for x in w[2 if w[0] != "mkdir" else 1:] if not x.startswith("-")}
+    if "cp" in w:
+        out.add(w[-1])
+    if len(w) > 1 and w[:2] == ["gyrotest", "simulate"]:
+        for o in list(out):
+            stem = o.rsplit(".", 1)[0]
+            out |= {stem, f"{stem}.profile.toml", f"{stem}.truth.json"}
+    return {o.rstrip("/") for o in out}
+
+
+def _reads(ex: Example, made: set[str]) -> bool:
+    """Does the example name one of the paths ``made`` (or something inside one)?"""
+    for x in _words(ex):
+        x = x.rstrip("/")
+        if any(x == m or x.startswith(m + "/") or x.startswith(m + "_run") for m in made):
+            return True
+    return False
+
+
+@dataclass
+class Step:
+    example: Example
+    skip: str = ""       # why it is not run ("" = run)
+
+
+def plan(blocks: list[Block]) -> list[list[Step]]:
+    """Per block, its examples with the reason to leave one out: :func:`why_not`, or the same
+    words already run in an earlier block (README, man page, --help order) while no example
+    run after it in its own block reads what it writes."""
+    seen: dict[str, str] = {}
+    out = []
+    for b in blocks:
+        steps = [Step(ex, why_not(ex)) for ex in b.examples]
+        first = {i: ex.key in seen for i, ex in enumerate(b.examples)}
+        for i in range(len(steps) - 1, -1, -1):  # from the last: who needs whom
+            st = steps[i]
+            if st.skip or not first[i]:
+                continue
+            later = [s.example for s in steps[i + 1:] if not s.skip]
+            if not any(_reads(e, outputs(st.example)) for e in later):
+                st.skip = f"the same as {seen[st.example.key]}"
+        for st in steps:
+            if not st.skip:
+                seen.setdefault(st.example.key, st.example.where)
+        out.append(steps)
+    return out
+
+
 # ----------------------------------------------------------------------------- running
 @dataclass
 class Ran:
@@ -182,68 +283,71 @@ class Ran:
     out: str
     err: str
     seconds: float
-    skipped: str = ""
 
 
-def fill_template(cmd: str) -> tuple[str | None, str]:
-    """The command with its placeholders filled, or (None, why it cannot run here)."""
-    for ph, (value, why) in TEMPLATES.items():
-        if ph in cmd:
-            if value is None:
-                return None, why
-            cmd = cmd.replace(ph, value)
-    return cmd, ""
+def _glob(words: list[str], cwd: Path) -> list[str]:
+    out: list[str] = []
+    for w in words:
+        hits = sorted(glob.glob(str(cwd / w))) if any(c in w for c in "*?[") else []
+        out += [os.path.relpath(h, cwd) for h in hits] or [w]
+    return out
+
+
+def _run_words(words: list[str], cwd: Path, stdin: bytes | None) -> tuple[int, str, str]:
+    """One simple command (no && or |) in ``cwd``."""
+    if words[0] == "mkdir":
+        for d in [w for w in words[1:] if not w.startswith("-")]:
+            (cwd / d).mkdir(parents=True, exist_ok=True)
+        return 0, "", ""
+    if words[0] == "cp":
+        *srcs, dst = [w for w in words[1:] if not w.startswith("-")]
+        for s in srcs:
+            shutil.copy(cwd / s, cwd / dst)
+        return 0, "", ""
+    if words[0] in ("gyrotest", ".venv/bin/gyrotest"):
+        from cliutil import run_cli
+
+        r = run_cli(words[1:], stdin=stdin)
+        return r.code, r.out, r.err
+    if words[0] in ("python", "python3"):
+        p = subprocess.run([sys.executable, *words[1:]], capture_output=True, text=True,
+                           input=None if stdin is None else stdin.decode(), cwd=cwd)
+        return p.returncode, p.stdout, p.stderr
+    raise AssertionError(f"unsupported command in an example: {' '.join(words)}")
 
 
 def run_example(ex: Example, cwd: Path) -> Ran:
     """Run one example in ``cwd`` (which holds ``sample_data`` as the repository does)."""
-    import os
-
-    cmd, why = fill_template(ex.command)
-    if cmd is None:
-        return Ran(ex, 0, "", "", 0.0, skipped=why)
-    words = shlex.split(cmd, comments=True)
-    stdin = None
-    if "|" in words:
-        i = words.index("|")
-        left, words = words[:i], words[i + 1:]
-        assert left[0] == "cat" and len(left) == 2, f"unsupported pipe: {cmd}"
-        stdin = (cwd / left[1]).read_bytes()
-    out_file = None
-    if ">" in words:
-        i = words.index(">")
-        words, out_file = words[:i], words[i + 1]
-    expanded: list[str] = []
-    for w in words:
-        hits = sorted(glob.glob(str(cwd / w))) if any(c in w for c in "*?[") else []
-        expanded += [str(Path(h).relative_to(cwd)) for h in hits] or [w]
-    words = expanded
+    cmd = ex.command
+    for ph, (value, _) in TEMPLATES.items():
+        if value is not None:
+            cmd = cmd.replace(ph, value)
     t0 = time.perf_counter()
     old = Path.cwd()
     os.chdir(cwd)
+    code, out, err = 0, "", ""
     try:
-        if words[0] in ("gyrotest", ".venv/bin/gyrotest"):
-            from cliutil import run_cli
-
-            r = run_cli(words[1:], stdin=stdin)
-            code, out, err = r.code, r.out, r.err
-        elif words[0] in ("python", "python3"):
-            p = subprocess.run([sys.executable, *words[1:]], capture_output=True, text=True,
-                               input=None if stdin is None else stdin.decode())
-            code, out, err = p.returncode, p.stdout, p.stderr
-        else:
-            raise AssertionError(f"unsupported example: {cmd}")
-        if out_file is not None and code == 0:
-            Path(out_file).write_text(out, encoding="utf-8")
-            out = ""
+        for part in re.split(r"\s&&\s", cmd):
+            words = shlex.split(part, comments=True)
+            stdin = None
+            if "|" in words:
+                i = words.index("|")
+                left, words = words[:i], words[i + 1:]
+                assert left[0] == "cat" and len(left) == 2, f"unsupported pipe: {part}"
+                stdin = (cwd / left[1]).read_bytes()
+            out_file = None
+            if ">" in words:
+                i = words.index(">")
+                words, out_file = words[:i], words[i + 1]
+            code, o, e = _run_words(_glob(words, cwd), cwd, stdin)
+            out, err = out + (o if out_file is None else ""), err + e
+            if code != 0:
+                break
+            if out_file is not None:
+                (cwd / out_file).write_text(o, encoding="utf-8")
     finally:
         os.chdir(old)
     return Ran(ex, code, out, err, time.perf_counter() - t0)
-
-
-def block_dir(b: Block) -> str:
-    """The README's blocks share one directory (in order); every other block has its own."""
-    return "README" if b.source == "README.md" else b.name
 
 
 def workdir(tmp: Path) -> Path:
@@ -255,20 +359,11 @@ def workdir(tmp: Path) -> Path:
     return tmp
 
 
-def _main() -> None:  # pragma: no cover - a quick listing while editing the docs
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as d:
-        for b in all_blocks():
-            wd = workdir(Path(d) / re.sub(r"\W+", "_", block_dir(b)))
-            for ex in b.examples:
-                r = run_example(ex, wd)
-                print(f"{r.seconds:6.2f} s  exit {r.code}  {b.name}:{ex.line}  {ex.command}"
-                      + (f"  [skipped: {r.skipped}]" if r.skipped else ""))
-                if r.code:
-                    print("        " + (r.err.strip().splitlines() or [""])[-1])
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.path.insert(0, str(Path(__file__).parent))
-    _main()
+def created_files(root: Path) -> list[str]:
+    """Files and directories an example run left in ``root`` (relative, the ``sample_data``
+    link excluded; a directory once, not its contents)."""
+    out = []
+    for p in sorted(root.iterdir()):
+        if p.name != "sample_data":
+            out.append(p.name + ("/" if p.is_dir() else ""))
+    return out

@@ -124,8 +124,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
           --plot allan.png
       gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
           --terms +markov --vehicle-rate 10deg/s --json
-      gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
-      gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
+      gyrotest allan sample_data/static.parquet sample_data/bias_run1.parquet \\
+          --profile sample_data/static.profile.toml --skip 30min --plot overlay.png  # overlaid
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --taus 1,10,100 --no-fit                      # the plain deviation table
     """
     parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
     # a single text log is read on a thread while the analysis modules are imported (their

@@ -78,7 +78,8 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
           --skip 30min
       gyrotest bias sample_data/bias_run1.parquet sample_data/bias_run2.parquet \\
           sample_data/bias_run3.parquet --profile sample_data/bias_run1.profile.toml --skip 30min
-      gyrotest bias up.csv down.csv --positions up,down --latitude 48.1 --rate-unit deg/h
+      gyrotest bias sample_data/multipos.csv --profile sample_data/multipos.profile.toml \\
+          --settle 30s                                 # positions from the log's column
     """
     skip_s = parse_duration(skip, what="--skip")
     unit = resolve_display_unit(display_unit, ingest_opts)

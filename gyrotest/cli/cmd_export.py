@@ -27,11 +27,17 @@ def command():
 
     \b
     Examples:
-      gyrotest allan static.csv --json > allan.json
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --skip 30min --json > allan.json
       gyrotest export kalibr allan.json -o imu.yaml --rostopic /imu0
+      gyrotest export stable32 sample_data/static.parquet \\
+          --profile sample_data/static.profile.toml -o static_oadev.txt --skip 30min
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms "T(T_chamber_C),dTdt(T_chamber_C)" --t-ref 21 -o thermal.json
       gyrotest export gyroparams allan.json -o gyro.m --thermal thermal.json
-      gyrotest export stable32 static.csv -o static_oadev.txt --skip 30min
       gyrotest export env-model thermal.json -o thermal_lut.csv --temps 21:55:1
+      gyrotest scale-factor sample_data/ratetable_22a.parquet \\
+          --profile sample_data/ratetable_22a.profile.toml --json > sf.json
       gyrotest export scale-factor sf.json -o sf_comp.h
     """
 

@@ -52,7 +52,8 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
     \b
     Examples:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
-      gyrotest info sample_data/thermal.parquet --plot thermal_look.png
+      gyrotest info sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --plot thermal_look.png                 # a quick look: output, temperatures, gaps
     """
     from ..ingest import RoleError
     from ..noise.outliers import detect_outliers

@@ -385,7 +385,8 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
           --terms T,T2,dTdt -o model.json
       gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
           --terms "T(T_coil_a_C),Tlag(T_chamber_C)" --plot fit.png
-      gyrotest model fit vib_run.csv --terms T --term "vib:extra.vib_g**2" --json   # your log
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms "T(T_chamber_C)" --term "grad:temp.T_coil_a_C - temp.T_coil_b_C" --json
     """
     from ..envmodel.fit import fit_document, fit_log
     from ..envmodel.history import append_history, session_paths
@@ -509,8 +510,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
 
     \b
     Examples:
-      gyrotest model diagnose sample_data/thermal.parquet \\
-          --profile sample_data/thermal.profile.toml --terms T,T2
+      gyrotest simulate sample_data/scenarios/hidden_coil.toml -o coil.csv --seed 1
+      gyrotest model diagnose coil.csv --profile coil.profile.toml --terms "T(T_case_C)"
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
@@ -558,6 +559,8 @@ def history_cmd(path, show_all, plot_path, as_json):
 
     \b
     Example:
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms T,T2,dTdt -o model.json
       gyrotest model history model.json --plot history.png
     """
     from ..envmodel.history import load_history, steps_for_log

@@ -109,12 +109,12 @@ def command(campaign, variant, template, init_dir, pdf_path, html_path, md_path,
 
     \b
     Examples:
-      gyrotest report --template > campaign.toml
-      gyrotest report --init my_lab          # my_lab/campaign.toml from the logs in my_lab/
+      gyrotest report --template > my-campaign.toml
+      mkdir -p my_lab && cp sample_data/*.parquet sample_data/*.profile.toml my_lab/
+      gyrotest report --init my_lab        # my_lab/campaign.toml from the logs in my_lab/
       gyrotest report sample_data/campaign.toml --pdf spec.pdf
       gyrotest report sample_data/campaign.toml --variant engineering --pdf eng.pdf
-      gyrotest report campaign.toml --html spec.html --md spec.md
-      gyrotest report campaign.toml --json > spec.json
+      gyrotest report sample_data/campaign.toml --html spec.html --json > spec.json
     """
     from ..output import write_rendered
     from ..report.campaign import load_campaign

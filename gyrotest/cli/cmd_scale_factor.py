@@ -104,9 +104,10 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     Examples:
       gyrotest scale-factor sample_data/ratetable_22a.parquet sample_data/ratetable_22b.parquet \\
           sample_data/ratetable_45.parquet --profile sample_data/ratetable_22a.profile.toml
-      gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
-          --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
-      gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
+      gyrotest scale-factor sample_data/ratetable_22a.parquet --counts-col pulses \\
+          --table-col table_dps --scale-factor 0.2 --latitude 48.137 --ia up \\
+          --points points.csv --plot sf.png             # no profile: every column named
+      gyrotest scale-factor --table points.csv --scale-factor 0.2 --json   # a saved table
     """
     from .. import scalefactor as sfm
 

@@ -190,7 +190,13 @@ def test_no_table_cell_breaks_inside_a_word(sheet):
                          "0.0398 ± 0.0090", "≤ 0.05265", "CONDITIONAL PASS"],
                         ["0428", Num(4.75e-6, "", 1.2e-7, k=2.0), "0.012", "strapdown",
                          "arcsec/pulse", "4.750·10⁻⁶", "PASS"]])
-    tables = [b for s in sh.walk() for b in s.blocks if isinstance(b, Table)] + [fleet_like]
+    from gyrotest.report.build import make_report
+    from gyrotest.report.campaign import load_campaign
+
+    eng = make_report(load_campaign(str(make_figures.CAMPAIGN)), figures=False,
+                      variant="engineering")  # its commands, diagnostics and history tables
+    tables = [b for one in (sh, eng) for s in one.walk() for b in s.blocks
+              if isinstance(b, Table)] + [fleet_like]
     from reportlab.pdfbase.pdfmetrics import stringWidth
 
     for t in tables:

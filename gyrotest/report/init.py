@@ -140,9 +140,16 @@ def _profile_line(logs: list[FoundLog]) -> list[str]:
     if not any(profs):
         return ["# profile = \"bench.profile.toml\"    # FILL IN if the logs need one (columns, "
                 "units, S0)"]
+    from ..profile import load_profile
+
     first = next(p for p in profs if p)
     line = [f"profile = {_q(first.name)}"]
-    if len({(p.read_text(encoding='utf-8').split('\n', 1)[-1] if p else '') for p in profs}) > 1:
+    seen = set()
+    for p in profs:  # what the profiles say, not their comments or names
+        d = load_profile(p).to_dict() if p else {}
+        d.pop("source", None)
+        seen.add(repr(sorted(d.items())))
+    if len(seen) > 1:
         line[0] += "    # one profile for every log of the test: check it fits all of them"
     return line
 

@@ -246,7 +246,10 @@ def estimate_bias(log: GyroLog, *, skip_s: float = 0.0, axis: str | None = None,
         er = log.site.earth_rate_dph()
     elif earth_rate:
         notes.append("no site given (--latitude/--ia): earth rate NOT removed; D_F includes it")
-    unc = mean_uncertainty(rate, part.tau0, segs)
+    try:
+        unc = mean_uncertainty(rate, part.tau0, segs)
+    except AnalysisError as e:  # a constant rate: say which log
+        raise AnalysisError(f"{log.source}: {e}") from None
     if unc.default_rejected:
         notes.append(unc.default_rejected)
     warm = None

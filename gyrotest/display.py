@@ -154,12 +154,13 @@ def parse_display_unit(text: str | None, *, what: str = "--unit") -> DisplayUnit
     return UNITS[name]
 
 
-def term_text(term, unit: DisplayUnit = DEFAULT, digits: int = 3) -> str:
+def term_text(term, unit: DisplayUnit = DEFAULT, digits: int = 3, k: float = 1.0) -> str:
     """A fitted noise term (:class:`gyrotest.noise.fit.FittedTerm`-like: ``main``, ``params``,
     ``sigma``, ``upper``, ``units``, ``status``, ``value``) as text in ``unit``, e.g.
     ``N = 0.0501 ± 0.0003 deg/s/√Hz`` or ``R ≤ 2.1e-10 deg/s²``; the deg/h family gives the
-    term's own text."""
-    if unit.is_internal and hasattr(term, "text"):
+    term's own text. ``k``: the ± is k·1σ (the expanded uncertainty U of a sheet whose tables
+    give U, k = 2), to be said where the text is shown."""
+    if unit.is_internal and hasattr(term, "text") and k == 1.0:
         return term.text(digits)
     from .units import format_number as fmt
 
@@ -172,12 +173,12 @@ def term_text(term, unit: DisplayUnit = DEFAULT, digits: int = 3) -> str:
             return f"{term.main} not identified (bound not computed) {lab}"
         return f"{term.main} ≤ {fmt(unit.convert(term.upper, main_unit)[0], digits)} {lab}"
     parts = []
-    for k in [term.main, *[k for k in term.params if k != term.main]]:
-        v, lk = unit.convert(term.params[k], term.units[k])
-        s = term.sigma.get(k)
-        s = unit.convert(s, term.units[k])[0] if s is not None else None
-        txt = f"{k} = {fmt(v, digits + 1)}"
+    for key in [term.main, *[p for p in term.params if p != term.main]]:
+        v, lk = unit.convert(term.params[key], term.units[key])
+        s = term.sigma.get(key)
+        s = unit.convert(s, term.units[key])[0] if s is not None else None
+        txt = f"{key} = {fmt(v, digits + 1)}"
         if s is not None and math.isfinite(s):
-            txt += f" ± {fmt(s, 2)}"
+            txt += f" ± {fmt(k * s, 2)}"
         parts.append(f"{txt} {lk}")
     return ", ".join(parts)

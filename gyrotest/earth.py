@@ -91,6 +91,19 @@ def check_latitude(lat: float) -> float:
     return lat
 
 
+def cosd(deg):
+    """cos of an angle in degrees, exactly 0 at odd multiples of 90° (``np.cos(np.pi/2)`` is
+    6e-17: an IA pointing east would sense 6e-16 deg/h of earth rate instead of none)."""
+    deg = np.asarray(deg, dtype=float)
+    return np.where(np.mod(deg, 180.0) == 90.0, 0.0, np.cos(np.radians(deg)))
+
+
+def sind(deg):
+    """sin of an angle in degrees, exactly 0 at multiples of 180° (:func:`cosd`)."""
+    deg = np.asarray(deg, dtype=float)
+    return np.where(np.mod(deg, 180.0) == 0.0, 0.0, np.sin(np.radians(deg)))
+
+
 def earth_rate_component(latitude_deg, azimuth_deg=0.0, elevation_deg=90.0):
     """Earth-rate component along the input axis, deg/h.
 
@@ -98,20 +111,17 @@ def earth_rate_component(latitude_deg, azimuth_deg=0.0, elevation_deg=90.0):
     IA azimuth A (from north, clockwise) and elevation e (GYRO_REFERENCE §2; IEEE 952
     §12.11.4.1.1). Works element-wise on arrays.
     """
-    phi = np.radians(latitude_deg)
-    a = np.radians(azimuth_deg)
-    e = np.radians(elevation_deg)
-    val = OMEGA_E_DPH * (np.cos(phi) * np.cos(e) * np.cos(a) + np.sin(phi) * np.sin(e))
+    phi, a, e = latitude_deg, azimuth_deg, elevation_deg
+    val = OMEGA_E_DPH * (cosd(phi) * cosd(e) * cosd(a) + sind(phi) * sind(e))
     return float(val) if np.ndim(val) == 0 else val
 
 
 def ia_unit_vector(azimuth_deg, elevation_deg) -> np.ndarray:
     """Unit vector of the IA in the local-level (north, east, up) frame."""
-    a, e = np.radians(azimuth_deg), np.radians(elevation_deg)
-    return np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    a, e = azimuth_deg, elevation_deg
+    return np.array([cosd(e) * cosd(a), cosd(e) * sind(a), sind(e)], dtype=float)
 
 
 def earth_rate_vector(latitude_deg) -> np.ndarray:
     """Earth rate in the local-level (north, east, up) frame, deg/h."""
-    phi = np.radians(latitude_deg)
-    return OMEGA_E_DPH * np.array([np.cos(phi), 0.0, np.sin(phi)])
+    return OMEGA_E_DPH * np.array([cosd(latitude_deg), 0.0, sind(latitude_deg)], dtype=float)

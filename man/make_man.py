@@ -128,7 +128,7 @@ def render() -> str:
             "gyrotest bias sample_data/bias_run1.parquet sample_data/bias_run2.parquet "
             "--profile sample_data/bias_run1.profile.toml --skip 30min --json\n"
             "gyrotest model diagnose sample_data/thermal.parquet "
-            "--profile sample_data/thermal.profile.toml --terms T,dTdt"),
+            "--profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt"),
         ".fi",
         ".SH SEE ALSO",
         "README.md and CHANGELOG.md in the gyrotest sources; IEEE Std 952\\-1997.",

@@ -93,11 +93,13 @@ def main(argv=None) -> None:
         fh.write("time_ns,gx_rps,gy_rps,gz_rps\n")
         for t, row in zip(ns.tolist(), g):
             fh.write(f"{t},{row[0]:.9e},{row[1]:.9e},{row[2]:.9e}\n")
+    files = ["imu.mat", "imu.csv.gz"]
     try:
         write_bags(a.outdir, ns, g, acc)
+        files = ["imu.bag", "imu_mcap/", *files]
     except ImportError:
         print("rosbags is not installed (pip install 'gyrotest[ros]'): no bags written")
-    print(f"wrote {len(ns):,} samples to {a.outdir}/ (imu.bag, imu_mcap/, imu.mat, imu.csv.gz)")
+    print(f"wrote {len(ns):,} samples to {a.outdir}/ ({', '.join(files)})")
 
 
 if __name__ == "__main__":

@@ -47,9 +47,10 @@ def test_table_csv_plots_and_explanations(hump_log):
         assert frag in r.out, frag
     assert "KROBKA-M5" in r.err and "KROBKA-M6" in r.err
     rows = list(csv.DictReader(open(out_csv)))
-    assert list(rows[0])[:9] == ["source", "axis", "deviation", "tau", "n", "alpha",
-                                 "sigma_lo", "sigma", "sigma_hi"]
-    assert all(float(x["sigma"]) > 0 for x in rows)
+    assert list(rows[0])[:9] == ["source", "axis", "deviation", "tau_s", "n", "alpha",
+                                 "sigma_lo_deg_h", "sigma_deg_h", "sigma_hi_deg_h"]
+    assert "model_deg_h" in rows[0] and "residual_ci" in rows[0]
+    assert all(float(x["sigma_deg_h"]) > 0 for x in rows)
     for p in (png, psd):
         assert p.exists() and p.stat().st_size > 20_000
 
@@ -154,7 +155,7 @@ def test_too_short_for_requested_tau(white_csv):
 
 def test_record_too_short_for_any_fit(tmp_path):
     f = write_csv(tmp_path / "s.csv", np.arange(6) * 0.1, {"rate": [1, 2, 1, 3, 2, 1]})
-    r = run_cli(["allan", f, *RATE])
+    r = run_cli(["allan", f, *RATE, "-v"])
     # the one-τ table is printed; the fit is skipped with a note (no error, no traceback)
     assert r.code == 0 and "Traceback" not in r.err
     assert "noise model not fitted" in r.err and "0.8944" in r.out

@@ -67,7 +67,7 @@ def test_bound_only_two_parameter_term_does_not_break_the_impact(extra):
 def test_plain_table_for_a_short_tau_list(krobka_log, tmp_path):
     """`--taus 1,10,100` (the Stable32/AllanTools habit): the table, a note, no fit."""
     png = tmp_path / "t.png"
-    r = run_cli(["allan", krobka_log, *RATE, "--taus", "1,10,100", "--plot", png])
+    r = run_cli(["allan", krobka_log, *RATE, "--taus", "1,10,100", "--plot", png, "-v"])
     assert r.code == 0, r.err
     assert "sigma_lo" in r.out and "Noise model" not in r.out
     assert "noise model not fitted" in r.err and "only 3 τ" in r.err

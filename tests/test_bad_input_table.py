@@ -117,7 +117,7 @@ def test_mixed_time_zones_are_read_as_utc(tmp_path, cmd):
         rows.append(f"{stamp}{'+00:00' if i % 2 else ''},{r[i]!r}")
     p = _write(tmp_path / "tz.csv", "time,rate", rows)
     extra = ["-o", tmp_path / "o.parquet"] if cmd == "ingest" else []
-    res = run_cli([cmd, p, "--rate-unit", "deg/h", *extra])
+    res = run_cli([cmd, p, "--rate-unit", "deg/h", "-v", *extra])
     assert res.code == 0, res.err
     assert "mixes time zones" in res.err
     log = read_log(p, overrides={"gyro": {"rate_unit": "deg/h"}})
@@ -139,7 +139,7 @@ def test_inf_is_a_missing_value(tmp_path, cmd, col, value):
         "inf.csv", f"'{col}'", "±inf", "row 6 (line 7)", "--nan gap")
     assert not (tmp_path / "o.parquet").exists()
     # the --nan policy applies to ±inf exactly as to NaN
-    res = run_cli([cmd, p, "--rate-unit", "deg/h", "--nan", "gap", *extra])
+    res = run_cli([cmd, p, "--rate-unit", "deg/h", "--nan", "gap", "-v", *extra])
     assert res.code == 0, res.err
     assert "dropped and treated as gaps" in res.err
 
@@ -191,7 +191,7 @@ DAMAGE = {
 def test_damaged_metadata_is_reported_and_columns_still_read(tmp_path, converted, case, cmd):
     fn, key = DAMAGE[case]
     p = _damage(converted, tmp_path / "dmg.parquet", fn)
-    r = run_cli([cmd, p])
+    r = run_cli([cmd, p, "-v"])
     assert r.code == 0, r.err
     assert "Traceback" not in r.err
     assert "gyrotest metadata is damaged" in r.err and key in r.err, r.err
@@ -272,10 +272,12 @@ def test_symlinked_output_is_replaced_not_followed(tmp_path):
 # ----------------------------------------------------------------------------- -q / --debug
 def test_quiet_and_debug_anywhere(tmp_path):
     p = _write(tmp_path / "log.csv", "t,rate", [f"{i * 0.1:.1f},{v!r}" for i, v in enumerate(_rate())])
-    loud = run_cli(["info", p, "--rate-unit", "deg/h"])
+    loud = run_cli(["info", p, "--rate-unit", "deg/h", "-v"])
     quiet = run_cli(["info", p, "--rate-unit", "deg/h", "-q"])
-    assert loud.code == quiet.code == 0
-    assert "auto-detected" in loud.err and quiet.err == ""
+    piped = run_cli(["info", p, "--rate-unit", "deg/h"])  # stderr not a terminal, no -v
+    assert loud.code == quiet.code == piped.code == 0
+    assert "auto-detected" in loud.err and quiet.err == "" and piped.err == ""
+    assert run_cli(["-v", "info", p, "-q", "--rate-unit", "deg/h"]).err == "", "-q wins"
     assert run_cli(["info", p, "-q", "--rate-unit", "deg/h", "--quiet"]).err == ""
     bad = run_cli(["info", tmp_path / "nope.csv", "--debug"])
     assert bad.code == 2 and "Traceback" in bad.err

@@ -616,7 +616,7 @@ def test_bad_input():
         compute_deviation(np.full(500, 12.5), 1.0, input_kind="rate")
     with pytest.raises(AnalysisError, match="constant rate"):
         compute_deviation(0.1 * np.arange(500), 1.0, input_kind="angle")
-    with pytest.raises(InputError, match=r"record too short for τ = 1000 s.*412 samples.*tau-max"):
+    with pytest.raises(InputError, match=r"record too short for τ = 1000 s.*412 samples.*--taus"):
         compute_deviation(y[:412], 1.0, input_kind="rate", taus=[1, 10, 1000])
     with pytest.raises(AnalysisError, match="record too short for oadev"):
         compute_deviation(y[:3], 1.0, input_kind="rate", taus="octave")

@@ -452,9 +452,9 @@ def test_env_model_lut_and_header_reproduce_the_model(thermal_model, tmp_path):
     from gyrotest.envmodel.model import EnvModel
 
     lut, hdr = tmp_path / "lut.csv", tmp_path / "thermal_comp.h"
-    r = run_cli(["export", "env-model", thermal_model, "-o", lut, "--temps", "20:56:1"])
+    r = run_cli(["export", "env-model", "--force", thermal_model, "-o", lut, "--temps", "20:56:1"])
     assert r.code == 0, r.err
-    r = run_cli(["export", "env-model", thermal_model, "-o", hdr, "--prefix", "fog_comp"])
+    r = run_cli(["export", "env-model", "--force", thermal_model, "-o", hdr, "--prefix", "fog_comp"])
     assert r.code == 0, r.err
     import pandas as pd
 
@@ -495,19 +495,19 @@ def test_env_model_dynamic_terms_and_channels(thermal_model, tmp_path):
             "coefficients": [{"name": "warmup", "value": 0.3, "stderr": 0.01, "unit": "deg/h"}],
             "nonlinear": [{"name": "tau_w_s", "value": 600.0, "stderr": 10.0, "unit": "s"}]}
     dyn = _edit_model(thermal_model, tmp_path / "dyn.json", [warm])
-    r = run_cli(["export", "env-model", dyn, "-o", tmp_path / "d.h"])
+    r = run_cli(["export", "env-model", "--force", dyn, "-o", tmp_path / "d.h"])
     r.assert_clean_error("dyn.json", "warmup", "--static-only")
-    r = run_cli(["export", "env-model", dyn, "-o", tmp_path / "d.h", "--static-only"])
+    r = run_cli(["export", "env-model", "--force", dyn, "-o", tmp_path / "d.h", "--static-only"])
     assert r.code == 0 and "left out: warmup" in r.err
     assert "Left out (--static-only): warmup" in (tmp_path / "d.h").read_text()
     coil = {"key": "T", "label": "T(T_coil_a_C)", "channels": ["T_coil_a_C"],
             "coefficients": [{"name": "T(T_coil_a_C)", "value": 0.5, "stderr": 0.1,
                               "unit": "deg/h/degC"}]}
     two = _edit_model(thermal_model, tmp_path / "two.json", [coil])
-    r = run_cli(["export", "env-model", two, "-o", tmp_path / "two.csv"])
+    r = run_cli(["export", "env-model", "--force", two, "-o", tmp_path / "two.csv"])
     r.assert_clean_error("two.json", "2 channels", ".h")
     hdr = tmp_path / "two.h"
-    r = run_cli(["export", "env-model", two, "-o", hdr])
+    r = run_cli(["export", "env-model", "--force", two, "-o", hdr])
     assert r.code == 0, r.err
     # drift(T_chamber=30, dTdt=2, T_coil_a=25) by hand from the stored coefficients
     m = json.loads(two.read_text())

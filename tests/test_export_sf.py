@@ -68,7 +68,7 @@ def test_lut_closed_form(tmp_path):
     np.testing.assert_allclose(lut["epsilon_k_ppm"], 50.0 + _f_closed(I), atol=1e-8)
     np.testing.assert_allclose(lut["output_rate_dps"],
                                I / (1 + 1e-6 * (50.0 + _f_closed(I))), rtol=1e-11, atol=1e-12)
-    np.testing.assert_allclose(lut["cubic_ppm"], -12 * (I / 400) ** 2, atol=1e-8)
+    np.testing.assert_allclose(lut["u2_ppm"], -12 * (I / 400) ** 2, atol=1e-8)
     assert json.loads(r.out)["t_ref_degC"] == 25.0
     text = out.read_text()
     assert "eps_K [ppm] = 50 + 0.5*(T - 25 degC) + f(I)" in text

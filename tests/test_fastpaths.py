@@ -460,7 +460,7 @@ def test_allan_prefetched_read_identical_to_serial(tmp_path, monkeypatch):
                delimiter=",", header="time,gx,gy", comments="")
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,omega_dph\n0.01,1\n0.02,abc\n0.03,2\n")
-    cases = [[str(good), "--rate-unit", "deg/s"], [str(good), "--rate-unit", "deg/s", "--json"],
+    cases = [[str(good), "--rate-unit", "deg/s", "-v"], [str(good), "--rate-unit", "deg/s", "--json"],
              [str(bad), "--rate-unit", "deg/h"], [str(bad), "--rate-unit", "deg/h", "--taus", "zz"],
              [str(tmp_path / "missing.csv")]]
     started = []

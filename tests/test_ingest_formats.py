@@ -77,7 +77,7 @@ def test_units_in_the_header_are_recognised_and_used(tmp_path):
 def test_bracketed_text_survives_rich_markup(tmp_path):
     p = tmp_path / "units.csv"
     p.write_text("time [s],gx [deg/s],temp (degC)\n0,1,20\n0.1,1,20\n0.2,1,21\n")
-    r = run_cli(["info", p])
+    r = run_cli(["info", p, "-v"])
     assert r.code == 0, r.err
     assert "time column 'time [s]'" in r.out
     assert "gx [deg/s]" in r.out and "temp (degC)" in r.out

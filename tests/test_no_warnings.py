@@ -36,7 +36,7 @@ def _commands(tmp: Path) -> list[list[str]]:
          S / "ratetable_45.parquet", "--profile", S / "ratetable_22a.profile.toml",
          "--settle", "10s", "--plot", tmp / "sf.png"],
         ["thermal-fit", S / "thermal.parquet", "--profile", S / "thermal.profile.toml",
-         "--t0", "21", "-o", tmp / "thermal.json"],
+         "--t-ref", "21", "-o", tmp / "thermal.json"],
         ["mag-fit", S / "magnetic.parquet", "--profile", S / "magnetic.profile.toml",
          "--plot", tmp / "mag.png"],
         ["model", "fit", S / "thermal.parquet", "--profile", S / "thermal.profile.toml",

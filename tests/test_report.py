@@ -341,7 +341,7 @@ def test_customer_sheet_is_sendable(tmp_path):
     # the contradictions of issue 14 are explained, not left side by side
     assert "D_T and w1 are not two measurements" in text
     assert "Two asymmetry numbers, one explanation" in text
-    assert "u² (cubic in the output)" in text
+    assert "u²" in text and "cubic in the output" not in text
     # expanded uncertainty: U = 2σ in the check JSON, and in the number text
     ch = {c["key"]: c for c in d["checks"]}["thermal.D_T"]
     m = ch["measured"]

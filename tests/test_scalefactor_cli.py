@@ -200,9 +200,13 @@ def test_bad_no_input_and_both_inputs(three):
 def test_forced_terms(three):
     tmp, logs, prof = three
     r = run_cli(["scale-factor", *logs, "--profile", prof, "--settle", "5s", "--terms",
-                 "asymmetry,cubic", "--json"])
+                 "asymmetry,u2", "--json"])
     assert r.code == 0, r.err
     d = json.loads(r.out)
-    assert d["nonlinearity_model"]["terms"] == ["asymmetry", "cubic"]
+    assert d["nonlinearity_model"]["terms"] == ["asymmetry", "u2"]
     c = {x["term"]: x for x in d["nonlinearity_model"]["coefficients"]}
-    assert c["cubic"]["coefficient_ppm"] == pytest.approx(-20, abs=3)
+    assert c["u2"]["coefficient_ppm"] == pytest.approx(-20, abs=3)
+    # the earlier name (by the output power) is read as the one name
+    old = run_cli(["scale-factor", *logs, "--profile", prof, "--settle", "5s", "--terms",
+                   "asymmetry,cubic", "--json"])
+    assert old.code == 0 and json.loads(old.out)["nonlinearity_model"] == d["nonlinearity_model"]

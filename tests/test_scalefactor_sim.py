@@ -88,9 +88,9 @@ def test_model_terms_and_bias(acceptance):
     _, res, truths, _ = acceptance
     # c1 (even output term) and c2 (odd) are in the scenario; the periodic 1 ppm at P = 7 deg/s
     # cannot be resolved on log-spaced rates, so only the dominant terms are asserted
-    assert {"asymmetry", "cubic"} <= set(res.model.terms)
+    assert {"asymmetry", "u2"} <= set(res.model.terms)
     assert res.model.history[0].rms_ppm_fs > 5 * res.model.residual_rms_ppm_fs
-    cubic = next(c for c in res.model.coefficients if c.name == "cubic")
+    cubic = next(c for c in res.model.coefficients if c.name == "u2")
     assert cubic.coef_ppm == pytest.approx(-25.0, abs=2.0)
     d_f = truths[0]["bias"]["D_F_dph"]
     assert abs(res.bias_dph - d_f) < 0.2  # model intercept (absorbs the unresolved periodic)
@@ -139,7 +139,7 @@ def test_sf_uncertainty_calibrated_over_seeds(tmp_path):
     z = np.array(z)
     assert 0.6 < np.sqrt(np.mean(z ** 2)) < 1.3
     assert np.mean(np.abs(z) < 2) >= 0.85
-    assert sum(t == {"asymmetry", "quadratic", "cubic"} for t in terms) >= 8
+    assert sum(t == {"asymmetry", "u1", "u2"} for t in terms) >= 8
     assert np.sqrt(np.mean(np.array(za) ** 2)) < 1.6
 
 

@@ -42,12 +42,21 @@ def _split_cols(value) -> list[str] | None:
     return parts or None
 
 
+def _split_many(*values) -> list[str] | None:
+    """Column names from repeated and/or comma-separated option values (``--temp-col A,B``,
+    ``--temp-col A --temp-col B``); a campaign's string or list works too."""
+    parts: list[str] = []
+    for v in values:
+        if v is None:
+            continue
+        for item in [v] if isinstance(v, str) else v:
+            parts += _split_cols(item) or []
+    return parts or None
+
+
 def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
     """The ingest options (the command line's keys, :data:`READ_OPTIONS` values) as profile
     overrides: ``{"columns": {...}, "gyro": {...}, "site": {...}}`` (None: not given)."""
-    temp = opts.get("temp_col")
-    if isinstance(temp, str):
-        temp = [temp]
     cols = {
         "time": opts.get("time_col"),
         "rate": _split_cols(opts.get("rate_col")),
@@ -58,8 +67,8 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
         "voltage": _split_cols(opts.get("voltage_col")),
         "delta_angle": _split_cols(opts.get("delta_angle_col")),
         "angle": _split_cols(opts.get("angle_col")),
-        "temperature": list(temp or []) or None,
-        "field": _split_cols(opts.get("field_cols")),
+        "temperature": _split_many(opts.get("temp_col")),
+        "field": _split_many(opts.get("field_cols"), opts.get("field_cols_alias")),
         "supply": opts.get("supply_col"),
         "table_rate": opts.get("table_col"),
         "position": opts.get("position_col"),

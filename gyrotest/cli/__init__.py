@@ -71,7 +71,28 @@ SHORT_HELP: dict[str, str] = {
 }
 
 
-class LazyGroup(click.Group):
+class SuggestingGroup(click.Group):
+    """A click group that answers a mistyped sub-command with the nearest names ("No such
+    command 'bais'. Did you mean 'bias'?"), as click already does for options."""
+
+    def resolve_command(self, ctx, args):
+        try:
+            return super().resolve_command(ctx, args)
+        except click.UsageError as e:
+            name = click.utils.make_str(args[0]) if args else ""
+            if not name or name.startswith("-") or self.get_command(ctx, name) is not None:
+                raise
+            import difflib
+
+            close = difflib.get_close_matches(name, self.list_commands(ctx), n=3, cutoff=0.6)
+            if not close:
+                raise
+            hint = " or ".join(repr(c) for c in close)
+            raise click.UsageError(f"No such command {name!r}. Did you mean {hint}?",
+                                   ctx) from e
+
+
+class LazyGroup(SuggestingGroup):
     """A click group whose sub-commands are imported on first use."""
 
     def list_commands(self, ctx):
@@ -104,12 +125,16 @@ def _module_exists(mod: str) -> bool:
     return importlib.util.find_spec(f"{__name__}.{mod}") is not None
 
 
-@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=LazyGroup, invoke_without_command=True,
+             context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, "--version", prog_name="gyrotest")
 @click.option("--debug", is_flag=True, help="Show the Python traceback on errors.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress or notes on stderr.")
+@click.option("-v", "--verbose", is_flag=True,
+              help="Notes on stderr also when it is not a terminal (a file, a pipe); "
+                   "without -v they are shown on a terminal only.")
 @click.pass_context
-def cli(ctx, debug, quiet):
+def cli(ctx, debug, quiet, verbose):
     """gyrotest: gyro test-bench logs to an IEEE-952-style specification sheet.
 
     Ingest bench logs (CSV/TSV, Parquet, Feather, stdin), strip earth rate and estimate the
@@ -117,11 +142,14 @@ def cli(ctx, debug, quiet):
     Allan noise analysis, and write a spec sheet. Every analysis command takes --json for
     scripts; units are explicit everywhere (deg/h, deg/sqrt(h), arcsec/pulse ...).
 
-    Exit codes: 0 ok, 2 bad input or usage, 1 internal error.
+    Exit codes: 0 ok, 2 bad input or usage, 1 internal error. Notes go to stderr on a
+    terminal only (-v: also to a file or pipe; -q: never); warnings and errors always.
     """
     from .common import Settings
 
-    ctx.obj = Settings(debug=debug, quiet=quiet)
+    ctx.obj = Settings(debug=debug, quiet=quiet, verbose=verbose)
+    if ctx.invoked_subcommand is None:  # a bare `gyrotest`: the help, as `gyrotest --help`
+        click.echo(ctx.get_help())
 
 
 def _err(msg: str) -> None:
@@ -132,11 +160,11 @@ def _err(msg: str) -> None:
         pass
 
 
-GLOBAL_FLAGS = ("-q", "--quiet", "--debug")
+GLOBAL_FLAGS = ("-q", "--quiet", "-v", "--verbose", "--debug")
 
 
 def hoist_global_flags(args: list[str]) -> list[str]:
-    """``-q``/``--quiet``/``--debug`` are accepted anywhere on the command line (``gyrotest
+    """``-q``/``--quiet``/``-v``/``--verbose``/``--debug`` are accepted anywhere on the command line (``gyrotest
     allan log.csv -q``): they are moved in front of the sub-command; after ``--`` nothing is
     moved."""
     stop = args.index("--") if "--" in args else len(args)

@@ -71,7 +71,8 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Drift model from 'gyrotest model fit -o m.json' (or thermal-fit/mag-fit): "
                    "its deterministic drift is removed before the noise analysis, as "
                    "'gyrotest compensate' does.")
-@click.option("--skip", default="0", show_default=True, help="Warm-up trim, e.g. 30min.")
+@click.option("--skip", default="0s", show_default=True,
+              help="Warm-up trim: a duration, e.g. 30min, 2h, 90s (a plain number is seconds).")
 @click.option("--outliers", "outliers", type=click.Choice(["flag", "remove", "robust"]),
               default="flag", show_default=True,
               help="Spikes (Hampel filter, robust scale): flag = warn with their times and "
@@ -90,7 +91,8 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @click.option("--allow-irregular", is_flag=True,
               help="Analyse on the nominal τ0 even if the sample interval jitters > 10 %.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default=None,
-              help="Write the deviation table(s) to this CSV file.")
+              help="Write the deviation table(s) to this CSV file, units in the column names "
+                   "(tau_s, sigma_deg_h, model_deg_h ...; as 'gyrotest export allan-csv').")
 @plot_option("σ(τ) with fit, components and residuals (.png/.svg/.pdf).")
 @unit_option
 @click.option("--psd", "psd_path", type=click.Path(dir_okay=False), default=None,
@@ -122,8 +124,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
           --plot allan.png
       gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
           --terms +markov --vehicle-rate 10deg/s --json
-      gyrotest allan fog_100hz.csv fog_2khz.csv --plot hump.png   # Krobka's hump experiment
-      gyrotest allan static.csv --taus 1,10,100 --no-fit          # plain deviation table
+      gyrotest allan sample_data/static.parquet sample_data/bias_run1.parquet \\
+          --profile sample_data/static.profile.toml --skip 30min --plot overlay.png  # overlaid
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --taus 1,10,100 --no-fit                      # the plain deviation table
     """
     parse_duration(skip, what="--skip")  # a bad --skip fails before any log is read
     # a single text log is read on a thread while the analysis modules are imported (their
@@ -223,21 +227,38 @@ def _table_rows(r):
             yield row
 
 
+#: columns of --csv that carry σ (named with its unit: sigma_deg_h) and τ (tau_s)
+_SIGMA_COLS = ("sigma_lo", "sigma", "sigma_hi", "sigma_lo_ci", "sigma_hi_ci", "model")
+
+
+def csv_header(cols, unit: str) -> list[str]:
+    """The --csv column names with their units, as 'gyrotest export allan-csv' writes them:
+    ``tau_s``, ``sigma_deg_h``, ``model_deg_h`` (σ in the deviation's own unit)."""
+    from ..export.table import _unit_tag
+
+    u = _unit_tag(unit)
+    return ["tau_s" if c == "tau" else f"{c}_{u}" if c in _SIGMA_COLS else c for c in cols]
+
+
 def _write_csv(path, results) -> None:
+    units = {str(a.dev.unit or "deg/h") for r in results for a in r.axes}
+    if len(units) > 1:  # one header for every row
+        raise InputError(f"--csv {path}: the logs' deviations have different units "
+                         f"({', '.join(sorted(units))}); write one log at a time")
     buf = io.StringIO()
     cols = ["source", "axis", "deviation", *_TABLE_COLS, "edf", *_CI_COLS, "model",
             "residual_ci", "fitted"]
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(csv_header(cols, units.pop() if units else "deg/h"))
     for r in results:
         for row in _table_rows(r):
-            out = {}
+            out = []
             for k in cols:
                 v = row.get(k, "")
                 if isinstance(v, float) or hasattr(v, "dtype"):
                     v = float(v)
                     v = "" if not math.isfinite(v) else f"{v:.8g}"
-                out[k] = v
+                out.append(v)
             w.writerow(out)
     with atomic_open(path, "w", encoding="utf-8", newline="") as fh:
         fh.write(buf.getvalue())

@@ -28,15 +28,17 @@ from .common_display import resolve_display_unit, unit_option
 
 @click.command("bias")
 @click.argument("logs", nargs=-1, required=True)
-@click.option("--skip", default="0", show_default=True,
-              help="Warm-up trim at the start of each run, e.g. 40min, 2h, 90s.")
+@click.option("--skip", default="0s", show_default=True,
+              help="Warm-up trim at the start of each run: a duration, e.g. 40min, 2h, 90s (a "
+                   "plain number is seconds).")
 @click.option("--axis", default=None,
               help="Gyro axis (rate column) to analyse, comma-separated for several; default "
                    "every axis (one IA: the earth rate is removed only with a single axis).")
 @click.option("--positions", default=None,
               help="IA direction of each file in order (multi-position test), e.g. up,down,north,south.")
-@click.option("--settle", default="0", show_default=True,
-              help="Time dropped after every position change in a log with a position column.")
+@click.option("--settle", default="0s", show_default=True,
+              help="Time dropped after every position change in a log with a position column: "
+                   "a duration, e.g. 30s, 2min.")
 @click.option("--no-earth-rate", is_flag=True, help="Do not subtract the earth-rate component.")
 @click.option("--outliers", type=click.Choice(["flag", "remove", "robust"]), default="flag",
               show_default=True,
@@ -76,7 +78,8 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
           --skip 30min
       gyrotest bias sample_data/bias_run1.parquet sample_data/bias_run2.parquet \\
           sample_data/bias_run3.parquet --profile sample_data/bias_run1.profile.toml --skip 30min
-      gyrotest bias up.csv down.csv --positions up,down --latitude 48.1 --rate-unit deg/h
+      gyrotest bias sample_data/multipos.csv --profile sample_data/multipos.profile.toml \\
+          --settle 30s                                 # positions from the log's column
     """
     skip_s = parse_duration(skip, what="--skip")
     unit = resolve_display_unit(display_unit, ingest_opts)
@@ -111,6 +114,15 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
         _render(ba.runs, ba.repeatability, ba.multi, axis=name, unit=unit)
 
 
+def run_name(label: str) -> str:
+    """A run's label for tables and notes: the file name without its directory, and a
+    position of a multi-position log with its file (``up (multipos.csv)``)."""
+    pos, sep, path = label.partition(" (")
+    if sep and path.endswith(")"):
+        return f"{pos} ({os.path.basename(path[:-1])})"
+    return os.path.basename(label)
+
+
 def _render(runs, rep, multi, axis: str = "", unit=None):
     from rich.table import Table
 
@@ -125,7 +137,7 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
     for col in ("run", "used", "mean output", "Ω_IA", "D_F", "±1σ", "σ/√n"):
         t.add_column(col, justify="left" if col == "run" else "right")
     for r in runs:
-        label = os.path.basename(r.label) if not multi else r.label
+        label = run_name(r.label)
         t.add_row(label, format_duration(r.duration_s), fmt_num(r.mean_output_dph * f, 6),
                   fmt_num(r.earth_rate_ia_dph * f, 6) if r.earth_rate_ia_dph is not None else "—",
                   fmt_num(r.bias_dph * f, 6) if not multi else "(fit)",
@@ -134,7 +146,7 @@ def _render(runs, rep, multi, axis: str = "", unit=None):
     _render_warmup(runs, u)
     for r in runs:
         for n in r.notes:
-            (note if n.startswith("noise term(s)") else warn)(f"{os.path.basename(r.label)}: {n}")
+            (note if n.startswith("noise term(s)") else warn)(f"{run_name(r.label)}: {n}")
     if rep:
         c.print(f"\n[bold]Repeatability over {len(rep.runs)} runs, axis {axis}[/bold]: D_F mean "
                 f"{fmt_num(rep.mean_dph * f, 6)} {u.rate}, 1σ {fmt_num(rep.sigma_1_dph * f, 3)} "
@@ -176,7 +188,7 @@ def _render_warmup(runs, u) -> None:
             f"{format_duration(w0['block_s'])} blocks)")
     for r in runs:
         w = r.warmup_time
-        name = os.path.basename(r.label)
+        name = run_name(r.label)
         if w["warmup_time_s"] == w["warmup_time_s"]:  # finite
             c.print(f"  {name}: warm-up time {fmt_num(w['warmup_time_s'], 5)} s "
                     f"({format_duration(w['warmup_time_s'])}; ± {fmt_num(w['block_s'], 3)} s "

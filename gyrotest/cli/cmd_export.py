@@ -27,11 +27,17 @@ def command():
 
     \b
     Examples:
-      gyrotest allan static.csv --json > allan.json
+      gyrotest allan sample_data/static.parquet --profile sample_data/static.profile.toml \\
+          --skip 30min --json > allan.json
       gyrotest export kalibr allan.json -o imu.yaml --rostopic /imu0
+      gyrotest export stable32 sample_data/static.parquet \\
+          --profile sample_data/static.profile.toml -o static_oadev.txt --skip 30min
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms "T(T_chamber_C),dTdt(T_chamber_C)" --t-ref 21 -o thermal.json
       gyrotest export gyroparams allan.json -o gyro.m --thermal thermal.json
-      gyrotest export stable32 static.csv -o static_oadev.txt --skip 30min
-      gyrotest export env-model thermal.json -o thermal_lut.csv --temps -40:85:5
+      gyrotest export env-model thermal.json -o thermal_lut.csv --temps 21:55:1
+      gyrotest scale-factor sample_data/ratetable_22a.parquet \\
+          --profile sample_data/ratetable_22a.profile.toml --json > sf.json
       gyrotest export scale-factor sf.json -o sf_comp.h
     """
 
@@ -42,8 +48,9 @@ def _axes_option(f):
 
 
 def _allan_input_options(f):
-    f = click.option("--skip", default="0", show_default=True,
-                     help="Warm-up trim when INPUT is a log, e.g. 30min.")(f)
+    f = click.option("--skip", default="0s", show_default=True,
+                     help="Warm-up trim when INPUT is a log: a duration, e.g. 30min, 90s (a "
+                          "plain number is seconds).")(f)
     f = ingest_options(f)
     return f
 
@@ -258,8 +265,11 @@ def allan_csv_cmd(input, output, axes, skip, as_json, ingest_opts):
               help="Prefix of the C function and macros (.h).")
 @click.option("--static-only", is_flag=True,
               help="Leave out terms with memory or time dependence (named in the file).")
+@click.option("--force", is_flag=True,
+              help="Export terms the fit did not determine (|value| < 2·1σ) and --temps "
+                   "outside the fitted range, with a warning, instead of refusing.")
 @json_option
-def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
+def env_model_cmd(model_file, output, temps, prefix, static_only, force, as_json):
     """A drift model as a firmware look-up table (.csv) or C header (.h).
 
     MODEL_FILE is a model written by 'gyrotest thermal-fit -o' or 'gyrotest model fit -o'.
@@ -269,6 +279,19 @@ def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
     header. The .h holds every coefficient with unit and 1σ, the equation in a comment and
     an inline function <prefix>_dph(inputs...) returning the drift in deg/h. Firmware
     subtracts it: compensated rate = rate − drift.
+
+    A term whose coefficient the fit did not determine (|value| < 2·1σ; the constant is not
+    judged) would put its error into firmware, and --temps outside the fitted temperature
+    range extrapolates: both are refused, naming the terms and the range, unless --force
+    (then they are written, with a warning). Refit with the terms the log determines.
+
+    \b
+    Examples:
+      gyrotest model fit sample_data/thermal.parquet \\
+          --profile sample_data/thermal.profile.toml --terms "T(T_chamber_C),dTdt(T_chamber_C)" \\
+          --t-ref 21 -o thermal.json
+      gyrotest export env-model thermal.json -o thermal_lut.csv --temps 21:55:1
+      gyrotest export env-model thermal.json -o thermal_comp.h
     """
     from ..export import envlut
     from ..export.common import read_document, write_output
@@ -276,6 +299,19 @@ def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
     suf = _check_suffix(output, (".csv", ".h"), "env-model")
     grid = envlut.parse_grid(temps) if temps else None
     doc = read_document(model_file, "envmodel")
+    if suf == ".h":
+        envlut.check_prefix(prefix)
+    concerns = []
+    weak = envlut.weak_terms(doc, static_only=static_only)
+    if weak:
+        concerns.append(f"not determined by the fit: {'; '.join(weak)}")
+    far = envlut.outside_range(doc, grid, static_only=static_only) if grid is not None else None
+    if far:
+        concerns.append(far)
+    if concerns and not force:
+        raise InputError(f"{model_file}: " + "; ".join(concerns) + "; refit with the terms the "
+                         "log determines (gyrotest model fit --terms ... -o), keep --temps in "
+                         "the fitted range, or pass --force to export anyway")
     if suf == ".csv":
         text, summary = envlut.lut_csv(doc, grid, static_only=static_only)
     else:
@@ -284,6 +320,7 @@ def env_model_cmd(model_file, output, temps, prefix, static_only, as_json):
         text, summary = envlut.c_header(doc, prefix=prefix, static_only=static_only)
     write_output(output, text)
     warnings = [f"left out: {', '.join(summary['left_out'])}"] if summary["left_out"] else []
+    warnings += [f"exported with --force: {c}" for c in concerns]
     _done(output, as_json, {"kind": "env-model", **summary}, warnings)
 
 

@@ -14,6 +14,8 @@ from .common import (
     ingest_options,
     json_option,
     load_log,
+    note,
+    plot_option,
     warn,
     with_ingest,
 )
@@ -30,10 +32,13 @@ def esc(x) -> str:
 @click.option("--axis", default=None,
               help="Gyro axis (rate column) to list, comma-separated for several; default every axis.")
 @unit_option
+@plot_option("Quick look on one page: the gyro output of every axis, the temperatures, the "
+             "magnetic field, supply and rate table against time, gaps shaded and spikes "
+             "marked (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, axis, display_unit, as_json, ingest_opts):
+def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
     """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps, spikes.
 
     Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
@@ -45,12 +50,18 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     ('gyrotest columns LOG' lists every column).
 
     \b
-    Example:
+    Examples:
       gyrotest info sample_data/multipos.csv --profile sample_data/multipos.profile.toml
+      gyrotest info sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --plot thermal_look.png                 # a quick look: output, temperatures, gaps
     """
     from ..ingest import RoleError
     from ..noise.outliers import detect_outliers
 
+    if plot_path:
+        from ..plotting import check_plot_path
+
+        check_plot_path(plot_path)
     unit = resolve_display_unit(display_unit, ingest_opts)
     try:
         g = load_log(log, ingest_opts, announce=not as_json)
@@ -69,6 +80,12 @@ def command(log, axis, display_unit, as_json, ingest_opts):
         if r.found:
             warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
                  "robust to treat them)")
+    if plot_path:
+        from ..quicklook import plot_quicklook
+
+        summary["plot"] = str(plot_quicklook(g, plot_path, axes=axes, unit=unit, outliers=reps))
+        if not as_json:
+            note(f"plot written to {plot_path}")
     if as_json:
         emit_json(summary)
         return

@@ -34,7 +34,8 @@ from .common import (
 @click.option("--min-dwell", default="30s", show_default=True,
               help="Shortest constant-field stretch that counts as a plateau.")
 @domain_fit_options(smooth_help="Smoother window W or 'auto'.",
-                    plot_help="Plateau means per axis and residual plots (.png/.svg/.pdf).")
+                    plot_help="Plateau means per axis and residual plots (.png/.svg/.pdf).",
+                    figures="levels, then the fit's time, channels and allan")
 @ingest_options
 @json_option
 @with_ingest

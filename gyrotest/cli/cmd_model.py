@@ -23,6 +23,7 @@ from .common import (
     load_for_terms,
     note,
     plot_option,
+    plots_written,
     progress,
     warn,
     with_ingest,
@@ -36,9 +37,10 @@ def prep_options(f):
     opts = [
         click.option("--axis", default=None, help="Gyro axis (rate column) to model; default the "
                      "first."),
-        click.option("--skip", default="0", show_default=True,
-                     help="Drop the start of the log (e.g. 10min); the warm-up term then counts "
-                          "time from the true power-on."),
+        click.option("--skip", default="0s", show_default=True,
+                     help="Drop the start of the log: a duration, e.g. 10min, 90s (a plain "
+                          "number is seconds); the warm-up term then counts time from the true "
+                          "power-on."),
         click.option("--t-ref", "t_ref", type=float, default=None,
                      help="Reference temperature T_ref, degC (default: mean of each sensor)."),
         click.option("--v-ref", "v_ref", type=float, default=None,
@@ -62,12 +64,14 @@ def prep_options(f):
     return f
 
 
-def domain_fit_options(*, smooth_help: str, plot_help: str):
+def domain_fit_options(*, smooth_help: str, plot_help: str, figures: str | None = None):
     """The log-preparation, model-file and plot options of ``thermal-fit`` and ``mag-fit``
     (``--axis --skip --resolution --smooth --folds --reference -o --plot``)."""
     opts = [
         click.option("--axis", default=None, help="Gyro axis (rate column); default the first."),
-        click.option("--skip", default="0", show_default=True, help="Drop the start of the log."),
+        click.option("--skip", default="0s", show_default=True,
+                     help="Drop the start of the log: a duration, e.g. 10min, 90s (a plain "
+                          "number is seconds)."),
         click.option("--resolution", default="auto", show_default=True,
                      help="Working resolution (block length) or 'auto'."),
         click.option("--smooth", default="auto", show_default=True, help=smooth_help),
@@ -78,7 +82,7 @@ def domain_fit_options(*, smooth_help: str, plot_help: str):
                           "fixed for the fit. Default: fitted on the log itself."),
         click.option("-o", "--output", default=None,
                      help="Write the fitted model (.json/.toml) for 'gyrotest compensate'."),
-        plot_option(plot_help),
+        plot_option(plot_help, figures),
     ]
 
     def decorate(f):
@@ -243,7 +247,8 @@ def render_diagnosis(diag, top: int = 12) -> None:
     style = "green" if diag.found else "bold"
     out.print(f"[{style}]{escape(diag.verdict)}[/{style}]")
     if len(diag.path) > 1:
-        out.print("  forward path (each step judged in the model with the steps before it):")
+        out.print("  forward path (each step judged in the model with the steps before it; "
+                  "the options fit the model up to that step):")
         for k, p in enumerate(diag.path, 1):
             out.print(f"    {k}. +{escape(p['term'])}: held-out "
                       f"{fmt_num(p['rms_holdout_before_dph'])} → "
@@ -280,8 +285,7 @@ def render_history(steps, *, logs: int = 1) -> None:
 def write_plot(figs, path) -> None:
     from ..envmodel.plots import write_figures
 
-    paths = write_figures(figs, path)
-    note("plot written: " + ", ".join(str(p) for p in paths))
+    plots_written(write_figures(figs, path))
 
 
 # ----------------------------------------------------------------------------- commands
@@ -309,7 +313,8 @@ def command():
 @click.option("--no-history", is_flag=True, help="Do not append to the model history.")
 @click.option("--k", "k_sigma", type=float, default=4.0, show_default=True,
               help="Excursion threshold: |smoothed residual| > k·σ.")
-@plot_option("Residual plots (.png/.svg: several files; .pdf: one document).")
+@plot_option("Residuals against time, the channels and the residual's Allan deviation "
+             "(.png/.svg/.pdf).", figures="time, channels, allan")
 @ingest_options
 @json_option
 @with_ingest
@@ -332,7 +337,8 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
           --terms T,T2,dTdt -o model.json
       gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
           --terms "T(T_coil_a_C),Tlag(T_chamber_C)" --plot fit.png
-      gyrotest model fit vib_run.csv --terms T --term "vib:extra.vib_g**2" --json   # your log
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms "T(T_chamber_C)" --term "grad:temp.T_coil_a_C - temp.T_coil_b_C" --json
     """
     from ..api.workbench import Model
     from ..envmodel.history import append_history, session_paths
@@ -427,7 +433,8 @@ def _print_rules(ctx, _param, value):
 @click.option("--rules", is_flag=True, is_eager=True, expose_value=False,
               callback=_print_rules,
               help="Print every decision rule of the verdict with its thresholds and exit.")
-@plot_option("Base residual and candidate bar chart (.png/.svg/.pdf).")
+@plot_option("Base residual and candidate bar chart (.png/.svg/.pdf).",
+             figures="the base model's time, channels and allan, then candidates")
 @ingest_options
 @json_option
 @with_ingest
@@ -453,8 +460,8 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
 
     \b
     Examples:
-      gyrotest model diagnose sample_data/thermal.parquet \\
-          --profile sample_data/thermal.profile.toml --terms T,T2
+      gyrotest simulate sample_data/scenarios/hidden_coil.toml -o coil.csv --seed 1
+      gyrotest model diagnose coil.csv --profile coil.profile.toml --terms "T(T_case_C)"
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
@@ -502,6 +509,8 @@ def history_cmd(path, show_all, plot_path, as_json):
 
     \b
     Example:
+      gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
+          --terms T,T2,dTdt -o model.json
       gyrotest model history model.json --plot history.png
     """
     from ..envmodel.history import load_history, steps_for_log

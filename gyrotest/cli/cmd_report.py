@@ -8,7 +8,42 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from .common import emit_json, err_console, note, settings
+from .common import console, emit_json, err_console, note, settings
+
+
+def _init(folder: str, as_json: bool) -> None:
+    """``--init DIR``: DIR/campaign.toml from the logs in DIR (:mod:`gyrotest.report.init`)."""
+    from ..output import atomic_open
+    from ..report.init import campaign_text
+
+    d = Path(folder)
+    if not d.is_dir():
+        raise InputError(f"--init {folder}: no such directory; give the folder holding the logs")
+    out = d / "campaign.toml"
+    if out.exists():
+        raise InputError(f"--init: {out} exists; edit it, or move it away to start again")
+    text, found = campaign_text(d)
+    if not any(f.test for f in found):
+        raise InputError(f"--init {folder}: no log recognised among {len(found)} file(s)"
+                         + (f" ({found[0].path.name}: {found[0].why})" if found else "")
+                         + "; put a bench profile NAME.profile.toml beside each log")
+    with atomic_open(out, "w", encoding="utf-8") as fh:
+        fh.write(text + "\n")
+    if as_json:
+        emit_json({"campaign": str(out), "logs": [
+            {"file": f.path.name, "profile": f.profile.name if f.profile else None,
+             "test": f.test, "why": f.why} for f in found]})
+        return
+    from rich.markup import escape
+
+    c = console()
+    c.print(f"wrote {escape(str(out))}: "
+            f"{sum(1 for f in found if f.test)} of {len(found)} log(s) recognised")
+    for f in found:
+        c.print(f"  {escape(f.path.name):<28} {escape(f.test or 'not used'):<14} "
+                f"{escape(f.why)}")
+    c.print(f"next: fill in the lines marked FILL IN, then 'gyrotest report {escape(str(out))} "
+            "--pdf spec.pdf'")
 
 
 def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
@@ -32,6 +67,12 @@ def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path |
                    "the diagnostics, algorithm notes, model history, commands and warnings.")
 @click.option("--template", is_flag=True,
               help="Print a commented campaign file with every key (docs/campaign.md) and exit.")
+@click.option("--init", "init_dir", default=None, metavar="DIR",
+              type=click.Path(file_okay=False),
+              help="Start a campaign from the logs in DIR: write DIR/campaign.toml with each "
+                   "log it recognises in its test (rate table → scale_factor, coils → "
+                   "magnetic, positions → multiposition, temperature span → thermal, static "
+                   "→ bias and allan), commented, and exit. An existing file is kept.")
 @click.option("--pdf", "pdf_path", default=None, metavar="FILE",
               help="Write the sheet as PDF to this file.")
 @click.option("--html", "html_path", default=None, metavar="FILE",
@@ -43,7 +84,8 @@ def _check_out(path: str | None, suffixes: tuple[str, ...], what: str) -> Path |
 @click.option("--json", "as_json", is_flag=True,
               help="Print the whole sheet as one JSON document (items with units, sources, "
                    "limits and verdicts; provenance) instead of Markdown.")
-def command(campaign, variant, template, pdf_path, html_path, md_path, no_figures, as_json):
+def command(campaign, variant, template, init_dir, pdf_path, html_path, md_path, no_figures,
+            as_json):
     """Spec sheet (IEEE 952 style) of the test campaign CAMPAIGN (a TOML file).
 
     Runs every test of the campaign through the same analyses as the individual commands
@@ -67,11 +109,12 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
 
     \b
     Examples:
-      gyrotest report --template > campaign.toml
+      gyrotest report --template > my-campaign.toml
+      mkdir -p my_lab && cp sample_data/*.parquet sample_data/*.profile.toml my_lab/
+      gyrotest report --init my_lab        # my_lab/campaign.toml from the logs in my_lab/
       gyrotest report sample_data/campaign.toml --pdf spec.pdf
       gyrotest report sample_data/campaign.toml --variant engineering --pdf eng.pdf
-      gyrotest report campaign.toml --html spec.html --md spec.md
-      gyrotest report campaign.toml --json > spec.json
+      gyrotest report sample_data/campaign.toml --html spec.html --json > spec.json
     """
     from ..output import write_rendered
     from ..report.campaign import load_campaign
@@ -80,6 +123,9 @@ def command(campaign, variant, template, pdf_path, html_path, md_path, no_figure
         from ..report.template import TEMPLATE
 
         click.echo(TEMPLATE, nl=False)
+        return
+    if init_dir is not None:
+        _init(init_dir, as_json)
         return
     if campaign is None:
         raise InputError("report: give a CAMPAIGN file (or --template to print one)")

@@ -62,8 +62,9 @@ def _duration(ctx, param, value):
 @click.option("--full-scale", type=float, default=None,
               help="Full-scale input rate, deg/s (default: the largest |rate| tested).")
 @click.option("--terms", default="auto", show_default=True,
-              help="Nonlinearity terms: auto (chosen by the data), linear, or a list of "
-                   "asymmetry,quadratic,cubic,quartic,quintic,lockin,periodic.")
+              help="Nonlinearity terms of f(I): auto (chosen by the data), linear, or a list "
+                   "of asymmetry,u1,u2,u3,u4,lockin,periodic (uk: the term c_k·(I/FS)^k, "
+                   "∝ I^(k+1) in the output).")
 @click.option("--alpha", type=float, default=0.05, show_default=True,
               help="Significance level for adding a term (F-test, Bonferroni-corrected).")
 @click.option("--weighted-line", is_flag=True,
@@ -103,9 +104,10 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     Examples:
       gyrotest scale-factor sample_data/ratetable_22a.parquet sample_data/ratetable_22b.parquet \\
           sample_data/ratetable_45.parquet --profile sample_data/ratetable_22a.profile.toml
-      gyrotest scale-factor run1.csv --counts-col pulses --scale-factor 0.5 \\
-          --sample-rate 100 --latitude 48.1 --ia up --rates 1,10,100,500 --plot sf.png
-      gyrotest scale-factor --table points.csv --scale-factor 0.5 --json
+      gyrotest scale-factor sample_data/ratetable_22a.parquet --counts-col pulses \\
+          --table-col table_dps --scale-factor 0.2 --latitude 48.137 --ia up \\
+          --points points.csv --plot sf.png             # no profile: every column named
+      gyrotest scale-factor --table points.csv --scale-factor 0.2 --json   # a saved table
     """
     from .. import scalefactor as sfm
     from ..api.analyses import scale_factor
@@ -359,7 +361,9 @@ def _render(res, plot_path, points_path) -> None:
                    kept)
     c.print(ht)
     if res.model.coefficients:
-        ct = Table(title="f(I) of ε_K, ppm (u = I/FS)", title_justify="left")
+        from ..scalefactor.fit import OUTPUT_POWER_NOTE
+
+        ct = Table(title=f"f(I) of ε_K, ppm; {OUTPUT_POWER_NOTE}", title_justify="left")
         for col in ("term", "f(I)", "coefficient, ppm", "kept"):
             ct.add_column(col, justify="right" if col == "coefficient, ppm" else "left")
         for cf in res.model.coefficients:

@@ -27,25 +27,52 @@ from .common import (
     with_ingest,
 )
 
+#: |value / 1σ| below which a coefficient is "not determined by this log" (the fit's "not
+#: significant", :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+DETERMINED_Z = 2.0
+
+
+def _z(c) -> float:
+    return abs(c.value / c.stderr) if math.isfinite(c.stderr) and c.stderr > 0 else math.nan
+
 
 def _coef_table(title, coefs):
     from rich.table import Table
 
     t = Table(title=title)
-    for col, just in (("coefficient", "left"), ("value ± 1σ", "right"), ("unit", "left")):
+    for col, just in (("coefficient", "left"), ("value ± 1σ", "right"), ("unit", "left"),
+                      ("|value/σ|", "right")):
         t.add_column(col, justify=just)
     for c in coefs:
         err = fmt_num(c.stderr, 2) if math.isfinite(c.stderr) else "—"
-        t.add_row(c.name, f"{fmt_num(c.value)} ± {err}", c.unit)
+        z = _z(c)
+        zt = "—" if not math.isfinite(z) else (
+            fmt_num(z, 3) + ("" if z >= DETERMINED_Z else " not determined"))
+        t.add_row(c.name, f"{fmt_num(c.value)} ± {err}", c.unit, zt)
     return t
+
+
+def determined_line(coefs) -> str:
+    """One line that leads the output: the coefficients this log determines (|z| ≥ 2) and
+    those it does not."""
+    good = [c.name for c in coefs if _z(c) >= DETERMINED_Z]
+    weak = [c.name for c in coefs if not _z(c) >= DETERMINED_Z]
+    line = "  determined by this log: " + (", ".join(good) or "none")
+    if weak:
+        line += (f"; not determined (|value| < {DETERMINED_Z:g}·1σ): {', '.join(weak)} "
+                 "(export a model of the determined terms: gyrotest model fit --terms ... -o)")
+    return line
 
 
 @click.command("thermal-fit")
 @click.argument("log", type=str, required=False)
 @click.option("--setpoints", type=click.Path(dir_okay=False), default=None,
               help="Table of steady-state set-points (CSV: temperature, dw[, sigma][, dTdt]).")
-@click.option("--t0", type=float, default=21.0, show_default=True,
-              help="Reference temperature t0, degC (ΔT = T − t0; the paper's lab: 21).")
+@click.option("--t-ref", "t_ref", type=float, default=None,
+              help="Reference temperature T_ref, degC (ΔT = T − T_ref; default 21, the "
+                   "paper's lab), as in 'gyrotest model fit --t-ref'.")
+@click.option("--t0", "t0_alias", type=float, default=None, hidden=True,
+              help="Old name of --t-ref.")
 @click.option("--sensor", default=None,
               help="Temperature channel of the model (default: the one that fits held-out "
                    "data best).")
@@ -54,11 +81,12 @@ def _coef_table(title, coefs):
 @click.option("--weighted", is_flag=True,
               help="Weight set-points by 1/sigma² (default: equal weights).")
 @domain_fit_options(smooth_help="Smoother window W for dT/dt or 'auto'.",
-                    plot_help="Drift vs temperature and residual plots (.png/.svg/.pdf).")
+                    plot_help="Drift vs temperature and residual plots (.png/.svg/.pdf).",
+                    figures="thermal, then the fit's time, channels and allan; setpoints")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resolution, smooth,
+def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, skip, resolution, smooth,
             folds, reference, output, plot_path, as_json, ingest_opts):
     """Thermal drift model of Antonova & Matveev: dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt.
 
@@ -71,13 +99,16 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     \b
     Examples:
       gyrotest thermal-fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
-          --t0 21 -o thermal.json
-      gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t0 21
+          --t-ref 21 -o thermal.json
+      gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t-ref 21
     """
     from ..api.workbench import thermal_fit
     from ..envmodel.domain import check_thermal_input, parse_gradient, thermal_terms
 
     check_thermal_input(log is not None, setpoints)
+    if t_ref is not None and t0_alias is not None and t_ref != t0_alias:
+        raise InputError("--t-ref and --t0 (its old name) disagree; give --t-ref only")
+    t0 = next((v for v in (t_ref, t0_alias) if v is not None), 21.0)
     out_path = check_output(output, (".json", ".toml"), "model file")
     if output and log is None:
         raise InputError("-o needs a chamber log (a set-point table gives no full model)")
@@ -110,12 +141,13 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
     c = console()
     if th:
         c.print(f"[bold]thermal-fit[/bold]: Antonova–Matveev model on {th.sensor}, "
-                f"ΔT from t0 = {th.t0_c:g} °C")
+                f"ΔT from T_ref = {th.t0_c:g} °C")
         for n in th.notes:
             note(n)
-        c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ)",
-                            th.coefficients))
-        c.print(_coef_table("IEEE 952 E terms", th.ieee_coefficients))
+        c.print(escape(determined_line(th.ieee_coefficients + th.coefficients)))
+        c.print(_coef_table("IEEE 952 E terms (± 1σ)", th.ieee_coefficients))
+        c.print(_coef_table("Antonova–Matveev dw = w0 + w1·ΔT + w2·ΔT² + w_ΔV·dT/dt (± 1σ; "
+                            "-o saves this model)", th.coefficients))
         h = th.hysteresis
         if "heating_minus_cooling_dph" in h:
             c.print(f"  heating − cooling residual: {fmt_num(h['heating_minus_cooling_dph'])} ± "
@@ -126,7 +158,7 @@ def command(log, setpoints, t0, sensor, gradient, weighted, axis, skip, resoluti
         if out_path:
             c.print(f"  model written to {escape(str(out_path))}")
     if sp:
-        c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from t0 = {sp.t0_c:g} °C"
+        c.print(f"[bold]set-points[/bold]: {len(sp.points)} points, ΔT from T_ref = {sp.t0_c:g} °C"
                 + (" (weighted by 1/σ²)" if sp.weighted else ""))
         c.print(_coef_table("dw = w0 + w1·ΔT + w2·ΔT² (± 1σ from the scatter)",
                             sp.coefficients))

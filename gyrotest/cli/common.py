@@ -34,6 +34,7 @@ from ..units import format_number
 class Settings:
     debug: bool = False
     quiet: bool = False
+    verbose: bool = False
 
 
 def settings() -> Settings:
@@ -94,9 +95,24 @@ def err_console():
     return _err_console
 
 
+def notes_shown() -> bool:
+    """Notes and progress reach stderr when it is a terminal, or with ``-v`` on any stderr
+    (a log file, ``2>err``); ``-q`` silences them. A redirected stderr then holds the
+    warnings and the error only."""
+    s = settings()
+    if s.quiet:
+        return False
+    if s.verbose:
+        return True
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):  # a closed or odd stream
+        return False
+
+
 def note(msg: str) -> None:
-    """An informational line on stderr (suppressed by -q)."""
-    if not settings().quiet:
+    """An informational line on stderr: on a terminal, or anywhere with -v (-q: never)."""
+    if notes_shown():
         err_console().print(f"[dim]{_escape(msg)}[/dim]")
 
 
@@ -145,10 +161,23 @@ def progress(description: str, total: float | None = None) -> Iterator[Callable[
 
 
 # ----------------------------------------------------------------------------- options
-def plot_option(help: str):
-    """The ``--plot FILE`` option (.png/.svg/.pdf) with a command's own help text."""
+def plot_option(help: str, figures: str | None = None):
+    """The ``--plot FILE`` option (.png/.svg/.pdf) with a command's own help text; ``figures``
+    names the figures of a command that draws several, and the help says where each goes."""
+    if figures:
+        help += (f" Several figures ({figures}): the first is FILE, each other one is written "
+                 "beside it as FILE-NAME.png (.svg); a .pdf holds them all, one per page.")
     return click.option("--plot", "plot_path", type=click.Path(dir_okay=False), default=None,
                         help=help)
+
+
+def plots_written(paths) -> None:
+    """The one note for written plot files: "plot written to a.png" or "plots written to
+    a.png, a-channels.png"."""
+    paths = [str(p) for p in paths]
+    if paths:
+        note(("plot written to " if len(paths) == 1 else "plots written to ")
+             + ", ".join(paths))
 
 
 def json_option(f):
@@ -163,13 +192,38 @@ def _split_cols(value: str | None) -> list[str] | None:
     return parts or None
 
 
+def _split_many(*values) -> list[str] | None:
+    """Column names from repeated and/or comma-separated option values (``--temp-col A,B``,
+    ``--temp-col A --temp-col B``); a campaign's string or list works too."""
+    parts: list[str] = []
+    for v in values:
+        if v is None:
+            continue
+        for item in [v] if isinstance(v, str) else v:
+            parts += _split_cols(item) or []
+    return parts or None
+
+
 INGEST_OPTION_NAMES = (
     "profile", "time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
     "time_unit",
-    "temp_col", "field_cols", "supply_col", "table_col", "position_col", "latitude", "ia",
+    "temp_col", "field_cols", "field_cols_alias", "supply_col", "table_col", "position_col", "latitude", "ia",
     "nan_policy", "topic", "delta_angle_col", "angle_col", "angle_unit", "output_kind",
 )
+
+
+def _check_rate_unit(ctx, param, value):
+    """--rate-unit names a rate unit gyrotest knows, whatever the log holds."""
+    if value is None:
+        return None
+    from ..units import factor
+
+    try:
+        factor(value, "rate")
+    except InputError as e:
+        raise click.BadParameter(str(e)) from None
+    return value
 
 
 def ingest_options(f):
@@ -180,7 +234,7 @@ def ingest_options(f):
         click.option("--time-col", default=None, help="Time column (seconds or ISO-8601)."),
         click.option("--rate-col", default=None,
                      help="Rate column(s), comma-separated for several axes."),
-        click.option("--rate-unit", default=None,
+        click.option("--rate-unit", default=None, callback=_check_rate_unit,
                      help="Unit of the rate column: deg/h, deg/s, rad/s, mrad/s, urad/s, deg/min."),
         click.option("--counts-col", default=None, help="Pulse counts per sample column."),
         click.option("--up-col", default=None, help="Up-pulse column (with --down-col)."),
@@ -207,8 +261,12 @@ def ingest_options(f):
         click.option("--time-unit", type=click.Choice(["s", "ms", "us", "ns"]), default=None,
                      help="Unit of a numeric time column (default: seconds, or a ms/us/ns Unix "
                           "epoch recognised from its magnitude and spacing)."),
-        click.option("--temp-col", multiple=True, help="Temperature column, degC (repeatable)."),
-        click.option("--field-cols", default=None, help="Magnetic field columns X,Y,Z (uT)."),
+        click.option("--temp-col", multiple=True,
+                     help="Temperature column(s), degC: comma-separated or repeated."),
+        click.option("--field-col", "field_cols", multiple=True,
+                     help="Magnetic field columns X,Y,Z, uT: comma-separated or repeated."),
+        click.option("--field-cols", "field_cols_alias", default=None, hidden=True,
+                     help="Old spelling of --field-col."),
         click.option("--supply-col", default=None, help="Supply-voltage column, V."),
         click.option("--table-col", default=None, help="Commanded rate-table rate column (deg/s)."),
         click.option("--position-col", default=None, help="Multi-position label column."),
@@ -250,6 +308,7 @@ def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = Fal
     if announce:
         for msg in log.notes:
             note(f"{log.source}: {msg}")
+    unused_unit_warning(log, opts)
     return log
 
 
@@ -264,8 +323,24 @@ def _parquet(path: str) -> bool:
 def api_read_options(opts: dict) -> dict:
     """The collected ingest options as keyword arguments of :func:`gyrotest.read`."""
     out = {api: opts[cli] for api, cli in READ_OPTIONS.items() if opts.get(cli) is not None}
+    if opts.get("field_cols_alias"):  # the old spelling --field-cols, still accepted
+        out["field_cols"] = list(out.get("field_cols") or ()) + [opts["field_cols_alias"]]
     out["profile"] = opts.get("profile")
     return out
+
+
+def unused_unit_warning(log, opts: dict) -> None:
+    """--rate-unit (or --angle-unit) on a log whose gyro output has no such column is not used:
+    say so rather than leave the user believing it applied."""
+    kind = getattr(getattr(log, "gyro", None), "output_kind", None)
+    if kind is None:
+        return
+    if opts.get("rate_unit") and kind not in ("rate",):
+        warn(f"{log.source}: --rate-unit {opts['rate_unit']} not used: the gyro output is "
+             f"{kind}, not a rate column")
+    if opts.get("angle_unit") and kind not in ("delta-angle", "angle"):
+        warn(f"{log.source}: --angle-unit {opts['angle_unit']} not used: the gyro output is "
+             f"{kind}, not an angle column")
 
 
 def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True):

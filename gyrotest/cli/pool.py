@@ -80,7 +80,22 @@ def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]
     deviations.PROGRESS = None  # a worker process draws no bar
 
     log = load_log(path, opts, announce=False, stream=stream)
-    return fn(log, **kw), [f"{log.source}: {m}" for m in log.notes]
+    return named(fn, log, **kw), [f"{log.source}: {m}" for m in log.notes]
+
+
+def named(fn: Callable, log, **kw):
+    """``fn(log, **kw)``; an error about the data that does not say which log it is about
+    ("record too short for τ = 1e5 s …") gets the log's name in front, as every other
+    one-line error has."""
+    from ..errors import InputError
+
+    try:
+        return fn(log, **kw)
+    except InputError as e:
+        src = getattr(log, "source", None)
+        if src and len(e.args) == 1 and isinstance(e.args[0], str) and src not in e.args[0]:
+            e.args = (f"{src}: {e.args[0]}",)
+        raise
 
 
 def prefetch_log(paths: Sequence[str], opts: dict):
@@ -122,10 +137,10 @@ def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None
         if announce:
             for msg in log.notes:
                 note(f"{log.source}: {msg}")
-        return [fn(log, **kw)]
+        return [named(fn, log, **kw)]
     n_jobs = min(jobs or default_jobs(), len(paths))
     if n_jobs < 2 or "-" in paths:
-        return [fn(log, **kw) for log in load_logs(paths, opts, announce=announce,
+        return [named(fn, log, **kw) for log in load_logs(paths, opts, announce=announce,
                                                    stream=stream)]
     from concurrent.futures import ProcessPoolExecutor
 

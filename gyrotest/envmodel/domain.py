@@ -411,7 +411,7 @@ def mag_fit(wd: WorkData, *, extra_terms: list[str] | None = None, settle_s: flo
     chans = list(fr.field_uT)
     if len(chans) < 3:
         raise InputError(f"{wd.info.get('source')}: mag-fit needs three field channels "
-                         f"(X, Y, Z, µT; found {len(chans)}); name them with --field-cols")
+                         f"(X, Y, Z, µT; found {len(chans)}); name them with --field-col")
     terms = [f"H{a}({c})" for a, c in zip("xyz", chans)]
     active = [tm for tm, c in zip(terms, chans) if np.ptp(fr.field_uT[c]) > 1e-9]
     if not active:
@@ -601,7 +601,7 @@ def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,
     extra, _ = mag_terms(with_terms)
     if len(log.field_uT) < 3:
         raise InputError(f"terms Hx, Hy, Hz: {log.source} has {len(log.field_uT)} magnetic-field "
-                         "channel(s); name X, Y, Z with --field-cols")
+                         "channel(s); name X, Y, Z with --field-col")
     wd = prepare_log(log, path, axis=axis, skip=skip, resolution=resolution, smooth=smooth,
                      reference=reference)
     return mag_fit(wd, extra_terms=extra, settle_s=settle_s, min_dwell_s=min_dwell_s,

@@ -343,9 +343,12 @@ def setpoint_figures(sp) -> list[tuple[str, object]]:
     return [("setpoints", fig)]
 
 
-def mag_figures(mg) -> list[tuple[str, object]]:
+def mag_figures(mg, k: float = 1.0) -> list[tuple[str, object]]:
     """Plateau means against the applied level per axis (up/down sweeps marked) with the
-    fitted slope; then the fit's time/residual figures."""
+    fitted slope; then the fit's time/residual figures. ``k``: the slopes' ± in the legend
+    is k·1σ (a sheet's expanded uncertainty U); the legend's title says which."""
+    from ..noise.plots import legend_pm_title
+
     figs = []
     axes_present = [a for a in "xyz" if any(p.axis == a for p in mg.plateaus)]
     if axes_present:
@@ -367,10 +370,10 @@ def mag_figures(mg) -> list[tuple[str, object]]:
                 c = coef[f"w{a}"]
                 hh = np.linspace(min(p.level_uT for p in pa), max(p.level_uT for p in pa), 10)
                 ax.plot(hh, c.value * hh / 100.0, color="k", lw=1.2,
-                        label=f"w{a} = {c.value:.4g} ± {c.stderr:.2g}")
+                        label=f"w{a} = {c.value:.4g} ± {k * c.stderr:.2g}")
             ax.set_xlabel(f"applied field along {a.upper()}, µT")
             ax.set_ylabel("plateau mean − zero level, deg/h")
-            ax.legend(loc="best", fontsize=7.5)
+            ax.legend(loc="best", fontsize=7.5, title=legend_pm_title(k), title_fontsize=7.5)
         fig.suptitle("Helmholtz sequence: drift per level (deg/h per 100 µT slopes)",
                      fontsize=10)
         figs.append(("levels", fig))

@@ -365,7 +365,7 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
             if not chans:
                 if len(have) < e.default_channel + 1:
                     raise InputError(f"term {label!r}: {src} has no magnetic-field channels; "
-                                     "name them with --field-cols X,Y,Z")
+                                     "name them with --field-col X,Y,Z")
                 chans = [have[e.default_channel]]
             if chans[0] not in frame.field_uT:
                 raise InputError(f"term {label!r}: {src} has no field channel {chans[0]!r} "
@@ -376,7 +376,7 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
             if e.needs == "fieldall":
                 if not have:
                     raise InputError(f"term {label!r}: {src} has no magnetic-field channels; "
-                                     "name them with --field-cols X,Y,Z")
+                                     "name them with --field-col X,Y,Z")
                 chans = []
             elif len(chans) != 2 or chans[0] == chans[1]:
                 raise InputError(f"term {label!r}: name two different field channels, e.g. "
@@ -392,7 +392,7 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
             have = list(frame.field_uT)
             if not have:
                 raise InputError(f"term {label!r}: {src} has no magnetic-field channels; "
-                                 "name them with --field-cols X,Y,Z")
+                                 "name them with --field-col X,Y,Z")
             chans = list(chans) or have[:3]
             if len(set(chans)) != len(chans):
                 raise InputError(f"term {label!r}: a field channel is named twice")

@@ -136,6 +136,48 @@ def regressor_text(t, refs) -> tuple[str, str]:
 
 
 # ----------------------------------------------------------------------------- evaluation
+#: a coefficient whose |value / 1σ| is below this is not determined by the log it was fitted
+#: on ("not significant" in :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+DETERMINED_Z = 2.0
+
+
+def weak_terms(doc: Document, *, static_only: bool = False) -> list[str]:
+    """The exported terms the fit did not determine: some coefficient with |value| < 2·1σ
+    (HAC). The constant (bias) is not judged: it is the model's offset at the reference
+    temperature, whatever its size. Such a term put into firmware adds its error, not a
+    correction."""
+    out = []
+    for t in plan(doc, static_only=static_only).terms:
+        if t.spec.key == "bias":
+            continue
+        zs = [abs(v / s) for v, s in zip(t.coef, t.coef_stderr) if s and s > 0]
+        if zs and min(zs) < DETERMINED_Z:
+            out.append(f"{t.spec.label} ({t.coef[0]:.4g} ± {t.coef_stderr[0]:.2g}, "
+                       f"|z| = {min(zs):.2g})")
+    return out
+
+
+def outside_range(doc: Document, temps: np.ndarray, *, static_only: bool = False
+                  ) -> str | None:
+    """The part of a look-up table's temperature grid outside the range the model was fitted
+    on (rounded outward to whole degC, as the default grid is), or None: rows there are an
+    extrapolation of the fit."""
+    p = plan(doc, static_only=static_only)
+    if len(p.temp_channels) != 1:
+        return None
+    ch = p.temp_channels[0]
+    rng = ((p.model.data or {}).get("channel_ranges") or {}).get(f"temperature:{ch}")
+    if not rng or rng[0] is None or rng[1] is None:
+        return None
+    lo, hi = math.floor(float(rng[0])), math.ceil(float(rng[1]))
+    bad = temps[(temps < lo) | (temps > hi)]
+    if not bad.size:
+        return None
+    return (f"--temps reaches {float(bad.min()):g} ... {float(bad.max()):g} degC but the model "
+            f"was fitted on {ch} = {float(rng[0]):.4g} ... {float(rng[1]):.4g} degC: "
+            f"{bad.size} row(s) would extrapolate")
+
+
 def parse_grid(spec: str, what: str = "--temps") -> np.ndarray:
     """``start:stop:step`` (inclusive stop) or a comma list; InputError otherwise."""
     try:
@@ -232,10 +274,14 @@ def t_needs_window(p: Plan) -> bool:
 
 
 # ----------------------------------------------------------------------------- C header
-def c_header(doc: Document, *, prefix: str = "gyro_drift", static_only: bool = False,
-             guard: str | None = None) -> tuple[str, dict]:
+def check_prefix(prefix: str) -> None:
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix):
         raise InputError(f"--prefix {prefix!r} is not a C identifier")
+
+
+def c_header(doc: Document, *, prefix: str = "gyro_drift", static_only: bool = False,
+             guard: str | None = None) -> tuple[str, dict]:
+    check_prefix(prefix)
     p = plan(doc, static_only=static_only)
     refs = p.model.refs
     P = prefix.upper()

@@ -34,10 +34,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..scalefactor.fit import TERM_ALIASES, TERMS
 from .common import Document, banner, need, number
 from .envlut import ascii_text
 
-POWERS = {"quadratic": 1, "cubic": 2, "quartic": 3, "quintic": 4}
+#: the power of u = I/FS of each power term of f(I) (u1 … u4: one name everywhere)
+POWERS = {"u1": 1, "u2": 2, "u3": 3, "u4": 4}
 KNOWN = set(POWERS) | {"asymmetry", "periodic", "lockin"}
 
 
@@ -126,7 +128,7 @@ def load(doc: Document) -> SFModel:
     for i, c in enumerate(need(ek, "f_terms", src, "epsilon_k")):
         if not isinstance(c, dict):
             raise InputError(f"{src}: epsilon_k.f_terms[{i}] is not an object")
-        name = c.get("term")
+        name = TERM_ALIASES.get(c.get("term"), c.get("term"))  # an older document: cubic → u2
         if name not in KNOWN:
             raise InputError(f"{src}: epsilon_k.f_terms[{i}]: unknown term {name!r}; known: "
                              f"{', '.join(sorted(KNOWN))}")
@@ -236,7 +238,9 @@ def c_header(doc: Document, *, prefix: str = "gyro_sf") -> tuple[str, dict]:
     for name, c in m.terms.items():
         s = m.sigma.get(name)
         lines.append(f" *   {P}_{name.upper()}_PPM = {c:.10g} ppm"
-                     + (f" (+- {s:.3g})" if isinstance(s, (int, float)) else ""))
+                     + (f" (+- {s:.3g})" if isinstance(s, (int, float)) else "")
+                     + (f": f(I) term {name}, {TERMS[name].formula}, u = I/FS" if name in POWERS
+                        else ""))
     lines.append(" * Inputs: the rate as the gyro reports it (S0*out, deg/s) and the "
                  "temperature (degC).")
     lines = [ascii_text(x) for x in lines]

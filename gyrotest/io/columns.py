@@ -21,6 +21,19 @@ _RATE_NAMES = {"rate", "omega", "gyro", "w", "rate_dph", "omega_dph", "rate_dps"
 _RATE_RE = re.compile(
     r"^(?:(?:rate|omega|gyro|gyr|ang_?vel|angular_velocity)_?[xyz123]?|[gw]_?[xyz])"
     r"(?:_(?:d?p[hs]|rads?|rad_?s|rps|deg_?[sh]|mrad_?s))?$")
+
+
+def is_rate_name(name: str) -> bool:
+    """A gyro rate column by its name (without a bracketed unit, lower case): the names above,
+    and the same words as loggers write them, separated by blanks, hyphens or dots (``Gyro Z``
+    of ``Gyro Z (deg/s)``), with ``rate`` after the sensor's name (``gyro_rate_dps``)."""
+    if name in _RATE_NAMES or _RATE_RE.match(name):
+        return True
+    key = re.sub(r"[\s.\-]+", "_", name.strip())
+    key = re.sub(r"^(gyro|gyr|omega)_?rate(?=_|$)", r"\1", key)
+    return key in _RATE_NAMES or bool(_RATE_RE.match(key))
+
+
 #: per-sample angle increments (an IMU's Δθ output): dtheta, dtheta_x, delta_angle_y, dang_z
 _DELTA_ANGLE_RE = re.compile(r"^(?:d_?theta|delta_?angle|delta_?theta|dang)_?[xyz123]?"
                              r"(?:_(?:rad|deg|mrad|urad|arcsec))?$")
@@ -89,7 +102,7 @@ class RoleError(InputError):
 
 _ROLE_POOLS = [
     ("time", lambda b: b in _TIME_NAMES),
-    ("rate", lambda b: b in _RATE_NAMES or bool(_RATE_RE.match(b))),
+    ("rate", is_rate_name),
     ("delta-angle", lambda b: bool(_DELTA_ANGLE_RE.match(b))),
     ("counts", lambda b: b in _COUNT_NAMES),
     ("counter", lambda b: b in _COUNTER_NAMES),
@@ -191,7 +204,7 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
             if n in used:
                 continue
             ln = base_name(n).lower()
-            if ln in _RATE_NAMES or _RATE_RE.match(ln):
+            if is_rate_name(ln):
                 found.setdefault("rate", []).append(n)
             elif _DELTA_ANGLE_RE.match(ln):
                 found.setdefault("delta-angle", []).append(n)

@@ -398,7 +398,7 @@ def angle_series(
         pos += L
     if not any_variation:
         what = "angle increases at a constant rate" if input_kind == "angle" else (
-            f"{input_kind} is constant ({arr[segs[0][0]]!r} in every sample)"
+            f"{input_kind} is constant ({float(arr[segs[0][0]]):.6g} in every sample)"
         )
         raise AnalysisError(
             f"the {what}: every deviation is exactly zero and no noise can be identified; "
@@ -901,7 +901,7 @@ def compute_deviation(
         raise InputError(
             f"record too short for τ = {tau_txt} s: the longest segment has {series.n_longest} "
             f"samples ({longest} angle points) and {kind} needs {_MIN_POINTS_TEXT[kind]}; "
-            "use a shorter --tau-max"
+            "drop the longer τ from --taus"
         )
     if dropped:
         notes.append(

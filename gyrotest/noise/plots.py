@@ -61,27 +61,35 @@ def _slope_fan(ax) -> None:
     ax.text(x0, y0 * 10 ** (0.06 * yr), "slope guides", fontsize=7, color="0.35", ha="left")
 
 
-def _components(ax, fit, tf, unit=None) -> None:
+def legend_pm_title(k: float = 1.0) -> str:
+    """What a legend's ± means: one standard deviation, or the expanded uncertainty U = k·1σ
+    of the sheet the figure is on (so a legend and the table beside it read alike)."""
+    return "± = 1σ" if k == 1.0 else f"± = U (k = {k:g})"
+
+
+def _components(ax, fit, tf, unit=None, k: float = 1.0) -> None:
+    """The fitted model's terms as dashed curves (bounds dotted); ``k``: the legend's ± is
+    k·1σ."""
     from ..display import DEFAULT, term_text
     from .fit import _basis
     from .impact import _coef_from_value
 
     u = unit or DEFAULT
 
-    k = 0
+    i = 0
     for t in fit.terms:
-        cc = _COMP_COLORS[k % len(_COMP_COLORS)]
+        cc = _COMP_COLORS[i % len(_COMP_COLORS)]
         if t.coef > 0:
             ax.plot(tf, np.sqrt(t.avar(tf)) * u.f, ls="--", lw=1.2, color=cc,
-                    label=f"{t.label} ({t.title}): {term_text(t, u)}"
+                    label=f"{t.label} ({t.title}): {term_text(t, u, k=k)}"
                     + ("" if t.identified else " — not identified"), zorder=2)
-            k += 1
+            i += 1
         elif t.upper is not None and t.key in ("Q", "N", "B", "K", "R"):
             cu = _coef_from_value(t.key, t.upper, t.shape)
             ax.plot(tf, np.sqrt(cu * _basis(t.key, tf, None, t.bi_f0)) * u.f, ls=":", lw=1.0,
                     color=cc, alpha=0.8, label=f"{t.label} ({t.title}) bound: {term_text(t, u)}",
                     zorder=2)
-            k += 1
+            i += 1
 
 
 def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
@@ -95,14 +103,15 @@ def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[st
 
 def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
                  title: str | None = None, show_components: bool | None = None,
-                 size: tuple[float, float] = ALLAN_SIZE, unit=None):
+                 size: tuple[float, float] = ALLAN_SIZE, unit=None, k: float = 1.0):
     """Allan deviation figure (module docstring), ``size`` inches. ``items`` = [(source,
     AxisAnalysis), …]; ``labels`` overrides the legend label of each item. With one item, the
     components of the fitted model are drawn; when the diagnosis added terms, the diagnosed
     model is the main curve and the requested model is shown thin and grey with its
     residuals. Returns the matplotlib figure (close it, or save it with
     :func:`gyrotest.plotting.save_figure`). ``unit``: a :class:`~gyrotest.display.DisplayUnit`
-    for the σ axis and the term labels (default deg/h).
+    for the σ axis and the term labels (default deg/h). ``k``: the terms' ± in the legend
+    is k·1σ (a sheet's expanded uncertainty U), and the legend's title says which.
     """
     from pathlib import Path
 
@@ -161,7 +170,7 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
                 label=(f"{lab}: {name}, χ²/dof {fit.chi2_dof:.2f}" if not single
                        else f"{name}, χ²/dof = {fit.chi2_dof:.2f}"), zorder=4)
         if single:
-            _components(ax, fit, tf, u)
+            _components(ax, fit, tf, u, k)
         for f_, c_, alpha in ([(req, "0.55", 0.8)] if (diag and single) else []) + [
                 (fit, col, 1.0)]:
             r = f_.residuals()
@@ -184,7 +193,7 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     _slope_fan(ax)
     ax.set_ylabel(f"Allan deviation σ(τ), {u.rate}")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7.5, framealpha=0.9,
-              borderaxespad=0.0)
+              borderaxespad=0.0, title=legend_pm_title(k), title_fontsize=7.5)
     if title is None:
         src, a = items[0]
         what = "and noise model" if a.fit is not None else "(no noise model fitted)"

@@ -339,7 +339,7 @@ def compute_theo_deviation(
         raise InputError(
             f"record too short for τ = {', '.join(f'{t:g}' for t in dropped)} s: the longest "
             f"segment has {longest} angle points and {kind} needs {MIN_POINTS_TEXT[kind]}; "
-            "use a shorter --tau-max")
+            "drop the longer τ from --taus")
     if dropped:
         notes.append(f"τ = {', '.join(f'{t:g}' for t in dropped)} s dropped: fewer than one "
                      f"{kind} term ({MIN_POINTS_TEXT[kind]} needed)")

@@ -51,7 +51,13 @@ class Analysis:
 
 # ----------------------------------------------------------------------------- ingest
 def _cli_flag(key: str) -> str:
-    return {"nan_policy": "--nan"}.get(key, "--" + key.replace("_", "-"))
+    return {"nan_policy": "--nan", "field_cols": "--field-col"}.get(
+        key, "--" + key.replace("_", "-"))
+
+
+def thermal_t_ref(test: Test) -> float:
+    """The thermal test's reference temperature, degC: ``t_ref`` (``t0``, its old name), 21."""
+    return float(test.opt("t_ref", test.opt("t0", 21.0)))
 
 
 def ingest_opts(test: Test, campaign: Campaign) -> tuple[dict[str, Any], list[str]]:
@@ -245,12 +251,12 @@ def _prep_opts(test: Test) -> dict[str, Any]:
 
 
 def run_thermal(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
-    """``gyrotest thermal-fit LOG --t0 ... [--sensor] [--gradient A,B] [--setpoints CSV]``
+    """``gyrotest thermal-fit LOG --t-ref ... [--sensor] [--gradient A,B] [--setpoints CSV]``
     (cli/cmd_thermal_fit.py): :func:`gyrotest.envmodel.domain.analyse_thermal`."""
     from ..envmodel.domain import analyse_thermal, thermal_terms
 
     opts, iargv = ingest_opts(test, campaign)
-    t0 = float(test.opt("t0", 21.0))
+    t0 = thermal_t_ref(test)
     setpoints = test.opt("setpoints")
 
     def go():
@@ -266,7 +272,7 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     argv = ["thermal-fit", *[campaign.rel(p) for p in test.logs]]
     if setpoints is not None:
         argv += ["--setpoints", campaign.rel(setpoints)]
-    argv += [*iargv, "--t0", repr(t0), *option_argv(
+    argv += [*iargv, "--t-ref", repr(t0), *option_argv(
         test, ("sensor", "gradient", "axis", "skip", "resolution", "smooth"))]
     return Analysis("thermal", test.name, "thermal-fit", argv, res, obj, logs, dt)
 

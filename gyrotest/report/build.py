@@ -65,8 +65,9 @@ from .sheet import (
 )
 
 VARIANTS = ("customer", "engineering")
-#: sheet names of the f(I) terms: named by their power of u = I/FS in f(I) and by the order
-#: of the nonlinearity they make in the output I·f(I)
+#: sheet names of the f(I) terms: each named once, by its power of u = I/FS in f(I) (u¹ for
+#: the term the terminal, the JSON and the C header call u1); its output power is said once,
+#: under the table (:data:`gyrotest.scalefactor.fit.OUTPUT_POWER_NOTE`)
 F_OF_I_NAMES = TERM_LABELS
 
 
@@ -79,13 +80,13 @@ def asymmetry_explanation(r: dict) -> str:
     if asy.get("status") != "ok" or "asymmetry" not in coefs:
         return ""
     A = coefs["asymmetry"]["coefficient_ppm"]
-    c1 = coefs.get("quadratic", {}).get("coefficient_ppm", 0.0) or 0.0
+    c1 = coefs.get("u1", {}).get("coefficient_ppm", 0.0) or 0.0
     ieee = asy["asymmetry_ppm"]
     txt = (f"Two asymmetry numbers, one explanation: the IEEE 952 asymmetry "
            f"({fmt_number(ieee, 4)} ppm, §5.3.2.1 b) compares straight lines fitted to the "
            f"positive and the negative rates; A ({fmt_number(A, 4)} ppm) is only the "
-           "rate-independent step of the model. The u¹ term of f(I) (quadratic in the "
-           f"output, c1 = {fmt_number(c1, 4)} ppm) also makes |SF+| differ from |SF−|, by "
+           f"rate-independent step of the model. The u¹ term of f(I) (c1 = {fmt_number(c1, 4)} "
+           "ppm) also makes |SF+| differ from |SF−|, by "
            "2·c1·|I|/FS at rate I")
     per = asy.get("per_rate") or []
     if per and c1:
@@ -130,7 +131,7 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
             out[name] = step(name, lambda t=test: ad.run_scale_factor(t, campaign, cache))
         elif name == "thermal":
             out[name] = step(name, lambda t=test: ad.run_thermal(t, campaign, cache))
-            t0 = float(test.opt("t0", 21.0))
+            t0 = ad.thermal_t_ref(test)
             for i, terms in enumerate(test.opt("model_steps", []) if test.logs else [], 1):
                 k = f"thermal.step{i}"
                 out[k] = step(f"thermal model step {i}: {terms}",
@@ -508,12 +509,12 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                                "ppm", ["nonlinearity_model", "coefficients", i, "sigma_ppm"]),
                          "yes" if cf.get("supported_by_data") else "no (shown for scale)"])
         if rows:
-            sec.add(T(["term of f(I) (its effect on the output)", "f(I), u = I/FS",
+            sec.add(T(["term of f(I)", "f(I), u = I/FS",
                        "coefficient ± 1σ, ppm", "supported by the data"], rows,
                       title="Rate-dependent scale-factor error f(I) of ε_K (§8.3)",
                       unit_in_header=True, widths=[2.6, 2.4, 2.2, 1.8], key="sf_model"))
-            sec.add(P("The output error is I·f(I): a term in uⁿ of f(I) is a nonlinearity of "
-                      "order n + 1 in the output."))
+            sec.add(P("The output error is I·f(I): the term c_k·u^k of f(I) is a nonlinearity "
+                      "of order k + 1 in the output (u¹ quadratic, u² cubic)."))
             asym_text = asymmetry_explanation(r)
             if asym_text:
                 sec.add(P(asym_text))
@@ -650,7 +651,7 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
         pulse = u == "arcsec/pulse"
         lhs = "S0·ΔN/Δt" if pulse or not u else "S0·V"
         t0 = self.c.tests.get("thermal")
-        t0v = f"{fmt_number(float(t0.opt('t0', 21.0)))} °C" if t0 else "the reference"
+        t0v = f"{fmt_number(ad.thermal_t_ref(t0))} °C" if t0 else "the reference"
         e_terms = []
         if have("D_T", "D_Tdot", "D_gradTdot"):
             e_terms.append(f"{v('D_T')}·ΔT {v('D_Tdot', 3, True)}·dT/dt "

@@ -147,7 +147,8 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
     },
     "thermal": {
         "log": ("path", None, "thermal-chamber log"),
-        "t0": ("float", "--t0", "reference temperature t0, degC"),
+        "t_ref": ("float", "--t-ref", "reference temperature T_ref, degC (ΔT = T − T_ref)"),
+        "t0": ("float", "--t-ref", "old name of t_ref"),
         "sensor": ("str", "--sensor", "temperature channel of the model"),
         "gradient": ("strs", "--gradient", "two channels A, B for D_gradTdot"),
         "skip": ("duration", "--skip", "drop the start of the log"),

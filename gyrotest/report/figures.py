@@ -58,11 +58,13 @@ def _close(figs) -> None:
         plt.close(f)
 
 
-def allan_figure(source: str, axis_analysis) -> Figure:
-    """Allan deviation, fitted model, its components and the residuals in CI units."""
+def allan_figure(source: str, axis_analysis, k: float = 2.0) -> Figure:
+    """Allan deviation, fitted model, its components and the residuals in CI units; the
+    terms' ± in the legend is the sheet's U = k·1σ, as in its tables."""
     from ..noise.plots import figure_allan
 
-    png, w, h = _png_from_fig(figure_allan([(source, axis_analysis)], size=SIZES["allan"]))
+    png, w, h = _png_from_fig(figure_allan([(source, axis_analysis)], size=SIZES["allan"],
+                                           k=k))
     return Figure("allan", "", png, None, w, h)
 
 
@@ -91,11 +93,12 @@ def thermal_figures(th) -> list[Figure]:
     return out
 
 
-def magnetic_figure(mg) -> Figure | None:
-    """Plateau means against the applied field per axis with the fitted slopes."""
+def magnetic_figure(mg, k: float = 2.0) -> Figure | None:
+    """Plateau means against the applied field per axis with the fitted slopes (± the
+    sheet's U = k·1σ, as in its tables)."""
     from ..envmodel.plots import mag_figures
 
-    figs = mag_figures(mg)
+    figs = mag_figures(mg, k)
     try:
         for name, fig in figs:
             if name == "levels":

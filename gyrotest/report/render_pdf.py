@@ -85,6 +85,55 @@ def _p(text: str, style):
     return Paragraph(escape(str(text)), style)
 
 
+#: left + right padding of a table cell, pt (the TableStyle below)
+CELL_PAD = 6.0
+
+
+def _token_width(text: str, font: str, size: float) -> float:
+    """Width of the widest word of ``text`` (what a cell cannot wrap), pt."""
+    from reportlab.pdfbase.pdfmetrics import stringWidth
+
+    return max((stringWidth(w, font, size) for w in str(text).split()), default=0.0)
+
+
+def column_widths(t: Table, st, width: float) -> list[float]:
+    """Column widths of a table, pt: the table's proportions, widened where a word of a cell
+    (a number, a unit, a verdict) would not fit, taken from the columns with room to spare, so
+    that no cell breaks inside a word ("strapdow|n", "0.01|2"). The monospaced last column
+    of the file and command tables (hashes, command lines) wraps as a terminal does. When the
+    words cannot all fit, the proportions stand."""
+    n = len(t.columns)
+    w = t.widths if t.widths and len(t.widths) == n else [1.0] * n
+    tot = sum(w)
+    colw = [width * x / tot for x in w]
+    mono = t.key in ("files", "commands")
+    need = [0.0] * n
+    for j, head in enumerate(t.columns):
+        need[j] = _token_width(head, st["cellb"].fontName, st["cellb"].fontSize)
+    for r in t.rows:
+        for j, c in enumerate(r):
+            if mono and j == n - 1:
+                continue
+            txt = t.cell_text(c)
+            sty = st["cellb"] if txt in VERDICT_COLOURS else st["cell"]
+            need[j] = max(need[j], _token_width(txt, sty.fontName, sty.fontSize))
+    need = [x + CELL_PAD + 0.5 for x in need]
+    if sum(need) > width:
+        return colw
+    for _ in range(n):  # widen the short columns, narrow the roomy ones in proportion
+        short = [j for j in range(n) if colw[j] < need[j]]
+        if not short:
+            break
+        deficit = sum(need[j] - colw[j] for j in short)
+        for j in short:
+            colw[j] = need[j]
+        slack = {j: colw[j] - need[j] for j in range(n) if colw[j] > need[j]}
+        room = sum(slack.values())
+        for j, s in slack.items():
+            colw[j] -= deficit * s / room
+    return colw
+
+
 def _table(t: Table, st, width: float) -> list[list]:
     """Units (lists of flowables to keep together) of a table: caption + table, then note."""
     from reportlab.lib import colors
@@ -92,9 +141,7 @@ def _table(t: Table, st, width: float) -> list[list]:
     from reportlab.platypus import Table as RLTable
 
     n = len(t.columns)
-    w = t.widths if t.widths and len(t.widths) == n else [1.0] * n
-    tot = sum(w)
-    colw = [width * x / tot for x in w]
+    colw = column_widths(t, st, width)
     mono = t.key in ("files", "commands")
     data = [[Paragraph(escape(c), st["cellb"]) for c in t.columns]]
     style = [("GRID", (0, 0), (-1, -1), 0.4, colors.HexColor("#b8b8b8")),

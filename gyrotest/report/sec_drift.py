@@ -217,7 +217,8 @@ class DriftSections:
                       "warning" if w.get("severity", "warning") == "warning" else "note")
         for n in ax.get("notes", []) + rr.get("notes", []):
             self.warn("allan", n, kind="note")
-        fig = self.draw("allan", lambda: _fig("allan_figure", rr["source"], a.obj.axes[0]))
+        fig = self.draw("allan", lambda: _fig("allan_figure", rr["source"], a.obj.axes[0],
+                                              self.k))
         self.figure(sec, fig, "Overlapping Allan deviation of the static run with χ² "
                     "confidence intervals, the fitted noise model and its components; below, "
                     "the residual per τ in units of the confidence interval.")

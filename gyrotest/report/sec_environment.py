@@ -209,7 +209,7 @@ class EnvironmentSections:
         t = self.c.tests["magnetic"]
         if t.conditions:
             sec.add(P(f"Conditions: {t.conditions}.", "note"))
-        fig = self.draw("magnetic", lambda: _fig("magnetic_figure", a.obj))
+        fig = self.draw("magnetic", lambda: _fig("magnetic_figure", a.obj, self.k))
         self.figure(sec, fig, "Helmholtz-coil run: mean drift of each field level against the "
                     "applied field, per axis, with the fitted sensitivity.")
 

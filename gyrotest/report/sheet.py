@@ -258,11 +258,12 @@ class Check:
     k: float = 2.0
 
     @property
-    def expanded_uncertainty(self) -> float:
-        """U = k·σ of the measured value (0 when no σ was evaluated or for a bound)."""
+    def expanded_uncertainty(self) -> float | None:
+        """U = k·σ of the measured value; None when no σ was evaluated or for a bound (the
+        sheet says "not evaluated" / "upper bound", the JSON null)."""
         m = self.measured
         if m is None or m.bound or m.sigma is None or not math.isfinite(m.sigma):
-            return 0.0
+            return None
         return self.k * m.sigma
 
     @property
@@ -277,7 +278,7 @@ class Check:
         x = abs(m.value)
         if m.bound:
             return PASS if x <= self.limit else INCONCLUSIVE
-        u = self.expanded_uncertainty if self.rule == GUARD_BAND else 0.0
+        u = (self.expanded_uncertainty or 0.0) if self.rule == GUARD_BAND else 0.0
         if x + u <= self.limit:
             return PASS
         if x - u > self.limit:

@@ -101,7 +101,7 @@ limits = { scale_factor_error_ppm = 300, linearity_max_ppm_fs = 20, asymmetry_pp
 [tests.thermal]                              # chamber run: IEEE E terms, Antonova–Matveev model
 log = "thermal.parquet"
 profile = "thermal.profile.toml"
-t0 = 21.0
+t_ref = 21.0
 sensor = "T_chamber_C"
 gradient = ["T_coil_a_C", "T_coil_b_C"]
 model_steps = ["T", "T,T2", "T,T2,dTdt"]     # model history (engineering report)

@@ -78,11 +78,14 @@ def parse_rates(value: str | None) -> list[float] | None:
 
 
 def parse_term_choice(value: str) -> str | list[str]:
-    """``--terms``: ``auto``, ``linear`` (also ``none``) or a list of nonlinearity terms."""
+    """``--terms``: ``auto``, ``linear`` (also ``none``) or a list of nonlinearity terms
+    (``u1`` … ``u4``; their earlier names ``quadratic`` … ``quintic`` are read too)."""
+    from .fit import canonical_terms
+
     v = value.strip().lower()
     if v in ("auto", "linear", "none"):
         return v if v != "none" else "linear"
-    return [t.strip() for t in v.split(",") if t.strip()]
+    return canonical_terms(t for t in v.split(",") if t.strip())
 
 
 def check_settings(*, settle_s: float = 0.0, trim_end_s: float = 0.0, min_dwell_s: float = 2.0,

@@ -28,12 +28,14 @@ from .fit import (
     applicable_terms,
     asymmetry_common_intercept,
     asymmetry_separate_lines,
+    canonical_terms,
     detect_lock_in,
     fit_model,
     ieee_line,
     linearity_stats,
     per_rate_asymmetry,
     select_model,
+    term_order,
 )
 from .lowrate import InputRange, StepResponse, detect_saturation, resolution, threshold
 from .plateaus import STDERR_METHODS, Plateau, RunPlateaus
@@ -609,7 +611,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         model, hist, mn = select_model(P, fs, kref, candidates=cands, alpha=alpha,
                                        weighted=weighted)
     else:
-        forced = [] if terms in ("linear", "none", []) else list(terms)
+        forced = [] if terms in ("linear", "none", []) else canonical_terms(terms)
         bad = [t for t in forced if t not in TERMS]
         if bad:
             raise InputError(f"unknown nonlinearity term {bad[0]!r}; use {', '.join(TERMS)}")
@@ -830,7 +832,9 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
         li.fitted_dps = model.lockin_dph / DPS
         li.fitted_sigma_dps = model.lockin_sigma_dph / DPS
     statement = _statement(model, hist, asym, per)
-    nl = NonlinearityModel(model.terms, coefs, hist, fs, model.period_dps,
+    coefs.sort(key=lambda c: term_order(c.name))  # f(I) read in powers of u: u1 before u2
+    nl = NonlinearityModel(sorted(model.terms, key=term_order), coefs, hist, fs,
+                           model.period_dps,
                            model.wls.chi2_per_dof, model.rms_ppm_fs, statement, alpha, model)
 
     # ---- point table (all points, NaN where excluded)
@@ -876,8 +880,8 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
 
 def _statement(model: ModelFit, hist: list[ModelStep], asym: AsymmetryResult,
                per: PeriodicCheck) -> str:
-    sup = [t for t in model.terms]
-    rej = [h.added for h in hist if not h.accepted and h.added in TERMS]
+    sup = sorted(model.terms, key=term_order)
+    rej = sorted((h.added for h in hist if not h.accepted and h.added in TERMS), key=term_order)
     parts = []
     if sup:
         parts.append("the data support " + ", ".join(sup) + " term(s)")

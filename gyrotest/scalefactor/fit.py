@@ -59,16 +59,20 @@ def _lockin_g(u: np.ndarray) -> np.ndarray:
     return out
 
 
-#: Candidate nonlinearity terms of f(I), in the order they are offered. The coefficient
-#: names follow the simulator and GYRO_REFERENCE §1: asymmetry A, c_k for (I/FS)^k, periodic
-#: amplitude p, Adler lock-in coefficient e_L = ½(Ω_L/FS)²·1e6.
+#: Candidate nonlinearity terms of f(I), in the order they are offered (and listed). Each
+#: power term is named once, by its power k of u = I/FS in f(I) (the scale-factor error
+#: ε_K): ``u1`` … ``u4``, coefficient c_k (ppm at full scale); its effect on the output
+#: I·f(I) is ∝ I^(k+1) (u1 "quadratic", u2 "cubic" in the output: said once, in
+#: ``output_form``). The coefficient names follow the simulator and GYRO_REFERENCE §1:
+#: asymmetry A, c_k for (I/FS)^k, periodic amplitude p, Adler lock-in coefficient
+#: e_L = ½(Ω_L/FS)²·1e6.
 TERMS: dict[str, Term] = {
     "asymmetry": Term("asymmetry", "(A/2)·sgn(I)", "∝ |I| (SF+ ≠ SF−)", "even",
                       lambda u: 0.5 * np.sign(u), 3),
-    "quadratic": Term("quadratic", "c1·(I/FS)", "∝ I²", "even", lambda u: u, 4),
-    "cubic": Term("cubic", "c2·(I/FS)²", "∝ I³", "odd", lambda u: u * u, 5),
-    "quartic": Term("quartic", "c3·(I/FS)³", "∝ I⁴", "even", lambda u: u ** 3, 6),
-    "quintic": Term("quintic", "c4·(I/FS)⁴", "∝ I⁵", "odd", lambda u: u ** 4, 7),
+    "u1": Term("u1", "c1·u", "∝ I²", "even", lambda u: u, 4),
+    "u2": Term("u2", "c2·u²", "∝ I³", "odd", lambda u: u * u, 5),
+    "u3": Term("u3", "c3·u³", "∝ I⁴", "even", lambda u: u ** 3, 6),
+    "u4": Term("u4", "c4·u⁴", "∝ I⁵", "odd", lambda u: u ** 4, 7),
     "lockin": Term("lockin", "e_L·(FS/I)² (Adler: Ω_L = FS·√(2e_L·1e-6))",
                    "I·√(1 − Ω_L²/I²) − I", "odd", _lockin_g, 4),
     "periodic": Term("periodic", "p·sin(2πI/P + φ)", "∝ I·sin(2πI/P + φ)",
@@ -76,21 +80,33 @@ TERMS: dict[str, Term] = {
 }
 
 
-#: Names shown to users (sheet tables, figure legends): each f(I) term by its power of
-#: u = I/FS in f(I) and the order of the nonlinearity it makes in the output I·f(I).
-TERM_LABELS = {"quadratic": "u¹ (quadratic in the output)",
-               "cubic": "u² (cubic in the output)",
-               "quartic": "u³ (quartic in the output)",
-               "quintic": "u⁴ (quintic in the output)",
-               "asymmetry": "A (asymmetry step)", "periodic": "periodic",
-               "lockin": "lock-in"}
+#: The earlier names of the power terms (by the output power), accepted as input
+#: (``--terms``, campaign files, older ``scale-factor --json`` documents) and mapped to the
+#: one name; never printed.
+TERM_ALIASES = {"quadratic": "u1", "cubic": "u2", "quartic": "u3", "quintic": "u4"}
+
+#: The same names typeset (sheet tables, figure legends): u¹ … u⁴ for u1 … u4.
+TERM_LABELS = {"u1": "u¹", "u2": "u²", "u3": "u³", "u4": "u⁴",
+               "asymmetry": "asymmetry A", "periodic": "periodic", "lockin": "lock-in"}
 #: the same, short (figure legends and bar labels)
-TERM_SHORT = {"quadratic": "u¹", "cubic": "u²", "quartic": "u³", "quintic": "u⁴",
-              "asymmetry": "A", "periodic": "periodic", "lockin": "lock-in"}
+TERM_SHORT = {**TERM_LABELS, "asymmetry": "A"}
+#: once, beside a list of the terms: what a power term does to the output
+OUTPUT_POWER_NOTE = ("u = I/FS; the term c_k·u^k of f(I) adds ∝ I^(k+1) to the output error "
+                     "I·f(I): u1 quadratic, u2 cubic")
+
+
+def canonical_terms(names) -> list[str]:
+    """Term names as given (``u2``, or an earlier name such as ``cubic``) → the one name."""
+    return [TERM_ALIASES.get(str(n).strip().lower(), str(n).strip()) for n in names]
+
+
+def term_order(name: str) -> int:
+    """Position of a term in :data:`TERMS` (the order every list of terms is shown in)."""
+    return list(TERMS).index(name) if name in TERMS else len(TERMS)
 
 
 #: A higher power term is only offered together with the lower one of the same parity.
-HIERARCHY = {"quartic": "quadratic", "quintic": "cubic"}
+HIERARCHY = {"u3": "u1", "u4": "u2"}
 
 
 # ----------------------------------------------------------------------------- data
@@ -521,7 +537,7 @@ def select_model(P: Points, fs: float, kref: float, *, candidates: list[str],
        :func:`scan_lockin`) is kept when its F-test p × (number of candidates) < ``alpha``
        and AICc falls;
     1. every subset of the polynomial/asymmetry candidates that respects the hierarchy
-       (quartic only with quadratic, quintic only with cubic) is fitted and the one with the
+       (u3 only with u1, u4 only with u2) is fitted and the one with the
        lowest AICc kept; then, backwards, a term whose removal F-test has p × (number of
        candidates) ≥ ``alpha`` is dropped, least significant first (an exhaustive search:
        single terms are correlated over a sparse rate set and a greedy path can pick the

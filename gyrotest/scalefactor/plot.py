@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from ..plotting import COLORS, new_figure, save_figure
-from .fit import TERM_LABELS, TERM_SHORT
+from .fit import TERM_LABELS, TERM_SHORT, term_order
 
 DPS = 3600.0
 
@@ -50,6 +50,14 @@ def _grid(I: np.ndarray, lin: float) -> np.ndarray:
         parts.append(-np.geomspace(lin, -lo, 200))
     g = np.unique(np.concatenate(parts))
     return g[(g >= min(lo, 0)) & (g <= max(hi, 0))]
+
+
+def _formula(t: str) -> str:
+    """The term's f(I) formula as the tables print it (``c2·u²``), without the lock-in's
+    explanation."""
+    from .fit import TERMS
+
+    return TERMS[t].formula.split(" (")[0] if t in TERMS else t
 
 
 def _history(fig, ax2, history) -> None:
@@ -120,12 +128,11 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
     if model is not None and model.terms and len(Ifit):
         g = _grid(Ifit / DPS, lin) * DPS
         k = float(np.median([r.slope for r in runs]))
+        shown = sorted(model.terms, key=term_order)
         ax.plot(g / DPS, _project(model, Ifit, g, k, fs), color="k", lw=1.8,
-                label="model f(I): " + (", ".join(TERM_SHORT.get(t, t) for t in model.terms)
-                                        if len(model.terms) > 1
-                                        else TERM_LABELS.get(model.terms[0], model.terms[0])))
+                label="model f(I) = " + " + ".join(_formula(t) for t in shown) + ", u = I/FS")
         if len(model.terms) > 1:
-            for j, t in enumerate(model.terms):
+            for j, t in enumerate(shown):
                 def one(x, t=t):
                     from .fit import TERMS
 
@@ -138,7 +145,8 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
                         fpp = c_[0] * TERMS[t].g(u)
                     return -model.kref * x * 1e-6 * fpp
                 ax.plot(g / DPS, _project(model, Ifit, g, k, fs, one), lw=1.0, ls="--",
-                        color=COLORS[(j + 4) % len(COLORS)], label=f"  {TERM_LABELS.get(t, t)} term")
+                        color=COLORS[(j + 4) % len(COLORS)],
+                        label=f"  {TERM_LABELS.get(t, t)} term: {_formula(t)}")
     ax.axhline(0, color="0.5", lw=0.8)
     ax2.axhline(0, color="0.5", lw=0.8)
     li = res.linearity
@@ -148,7 +156,8 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
     # the legend below the panel: inside it covered the curves
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8,
               frameon=False)
-    terms_txt = ", ".join(TERM_SHORT.get(t, t) for t in res.model.terms) or "straight line only"
+    terms_txt = (", ".join(TERM_SHORT.get(t, t) for t in sorted(res.model.terms, key=term_order))
+                 or "straight line only")
     ax2.set_title(f"After the model ({terms_txt}): residual RMS "
                   f"{res.model.residual_rms_ppm_fs:.3g} ppm FS, χ²/dof {res.model.chi2_per_dof:.3g}",
                   fontsize=9.5)

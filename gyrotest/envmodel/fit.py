@@ -325,24 +325,32 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             nf = model_noise(wd, grid, fitter, thetas, start=nf)
     fitter.lik = nf.lik
     X = fitter.X(thetas)
+    draws: dict = {}
     if nf.n_free and getattr(wd, "sensor_noise", None):
         # the noise the terms carry from their sensors joins the noise model (errors in
         # variables): a model whose residual holds a noisy thermometer's noise times a large
         # coefficient is not then "missing" whatever averages that noise out
-        from .sensors import eiv_acov
+        from .sensors import eiv_acov, eiv_draws
 
-        b0, _, _ = gls(nf.lik.whiten(X), nf.lik.whiten(wd.y))
-        offs0 = fitter._offsets()
-        beta_by = {s.label: b0[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
-        E, E_parts = eiv_acov(wd, grid, specs, thetas, beta_by, len(nf.acov["white"]))
-        if np.any(E > 0):
-            nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
-            nf.extra_parts = E_parts
-            fitter.lik = nf.lik
+        draws = eiv_draws(wd, specs, thetas)
+        if draws:
+            b0, _, _ = gls(nf.lik.whiten(X), nf.lik.whiten(wd.y))
+            offs0 = fitter._offsets()
+            beta_by = {s.label: b0[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
+            E, E_parts = eiv_acov(draws, grid, beta_by, len(nf.acov["white"]))
+            if np.any(E > 0):
+                nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
+                nf.extra_parts = E_parts
+                fitter.lik = nf.lik
     lik = nf.lik
     Xw = lik.whiten(X)
     yw = lik.whiten(wd.y)
     beta, rss_w, _ = gls(Xw, yw)
+    eiv_note = None
+    if draws:
+        beta, eiv_note = eiv_corrected(draws, lik, fitter._offsets(), Xw, yw, beta, specs)
+        r_w = yw - Xw @ beta
+        rss_w = float(r_w @ r_w)
     ib = [i for i, s in enumerate(specs) if s.key == "bias"]
     if ib:
         beta[ib[0]] = float(np.mean(wd.y - X @ beta))
@@ -420,6 +428,8 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
     bic = -2.0 * loglik + k_all * math.log(max(lik.m, 2))
     warnings = _warnings(specs, coefs, vif, corr, names[:p_lin], thetas, fitter, rms_fit,
                          rms_hold, nb, n_params)
+    if eiv_note:
+        warnings.append(eiv_note)
     rms_raw = float(np.std(wd.y))
     noise = nf.params
     model = EnvModel(terms=mterms, refs=wd.refs, axis=wd.axis, resolution_s=wd.resolution_s,
@@ -449,6 +459,54 @@ UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk
                "fitted by maximum likelihood on this log, or fixed from a reference run); "
                "nonlinear parameters by Gauss-Newton")
 from ..workbench_rules import VIF_MAX  # noqa: E402  (degenerate design bound)
+
+#: a term whose whitened regressor is more than half its own sensor's noise is not corrected
+#: for attenuation (the correction would divide by a small difference): its reliability
+#: ratio var(signal)/var(signal + noise) is below this (Fuller 1987 §2.5)
+MIN_RELIABILITY = 0.5
+
+
+def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,
+                  beta: np.ndarray, specs) -> tuple[np.ndarray, str | None]:
+    """The errors-in-variables corrected GLS coefficients (X̃ᵀX̃ − M)⁻¹X̃ᵀỹ with M what the
+    sensors' noise adds to X̃ᵀX̃ (:func:`gyrotest.envmodel.sensors.eiv_moment`): a noisy
+    regressor's coefficient is otherwise attenuated by its reliability ratio λ. Columns with
+    λ < :data:`MIN_RELIABILITY` keep their uncorrected value, and a note names them (the
+    model is limited by that sensor). Returns (β, note or None)."""
+    from .sensors import eiv_moment
+
+    p = Xw.shape[1]
+    M = eiv_moment(draws, lik, offsets, p)
+    G = Xw.T @ Xw
+    d = np.diag(G)
+    live = np.flatnonzero(d > 1e-12 * max(float(d.max()), 1e-300))
+    if not np.any(np.diag(M)[live] > 0):
+        return beta, None
+    rel = 1.0 - np.diag(M)[live] / d[live]
+    ok = live[rel >= MIN_RELIABILITY]
+    weak = live[rel < MIN_RELIABILITY]
+    note = None
+    if len(weak):
+        labels = {}
+        for s in specs:
+            a, b = offsets[s.label]
+            for j in range(a, b):
+                labels[j] = s.label
+        names = sorted({labels.get(int(j), "?") for j in weak})
+        note = (f"{', '.join(names)}: limited by the sensor's own noise (reliability "
+                f"{float(np.min(rel[rel < MIN_RELIABILITY])):.2f} < {MIN_RELIABILITY:g}): the "
+                "coefficient is attenuated; a quieter sensor or a longer --smooth would "
+                "read it better")
+    Mc = np.zeros_like(M)
+    Mc[np.ix_(ok, ok)] = M[np.ix_(ok, ok)]
+    A = (G - Mc)[np.ix_(live, live)]
+    try:
+        b = np.linalg.solve(A, (Xw.T @ yw)[live])
+    except np.linalg.LinAlgError:
+        return beta, note
+    out = np.array(beta, float)
+    out[live] = b
+    return out, note
 
 
 def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None = None,

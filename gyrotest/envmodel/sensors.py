@@ -56,6 +56,9 @@ class SensorNoise:
         what of the sensor's noise is left in the filtered channel."""
         out = np.zeros_like(e)
         for a, b, G in self.gains:
+            if G is None:  # the channel is used as read: its noise passes unfiltered
+                out[a:b] = e[a:b]
+                continue
             seg = e[a:b]
             ext = np.concatenate([seg, seg[::-1]])
             out[a:b] = np.fft.irfft(np.fft.rfft(ext) * G, len(ext))[:b - a]
@@ -163,6 +166,21 @@ def stepped(x: np.ndarray) -> bool:
     return float(np.sum(big[:k])) > 0.5 * tot
 
 
+def measure_frame(frame) -> dict[str, SensorNoise]:
+    """The measurement noise of the temperature and extra channels of an EnvFrame (white σ per
+    sample, quantisation step), the channels left as read: the noise is carried into the
+    noise model through the terms that read them (:func:`eiv_acov`)."""
+    found: dict[str, SensorNoise] = {}
+    for group in (frame.temperature, frame.extra):
+        for name, v in group.items():
+            v = np.asarray(v, float)
+            if v.shape != frame.t.shape or not np.all(np.isfinite(v)):
+                continue
+            found[name] = SensorNoise(white_sigma(v), quantisation_step(v), math.inf,
+                                      [(a, b, None) for a, b in frame.bounds])
+    return found
+
+
 def denoise_frame(frame) -> dict[str, SensorNoise]:
     """Replace the temperature and extra channels of an EnvFrame by their Wiener estimates;
     returns the noise found per channel. A stepped channel (a tilt table, a vibration switched
@@ -197,42 +215,55 @@ def term_channels(spec) -> set[str]:
     return chans
 
 
-def eiv_acov(wd, grid, specs, thetas: dict, beta: dict, nlag: int,
-             seed: int = 1953) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Autocovariance (lags 0 … nlag − 1) of the differenced likelihood samples of the noise
-    the model's terms carry from their sensors: for each logged channel with a measured noise
-    (:attr:`WorkData.sensor_noise`), :data:`EIV_DRAWS` realisations of its white noise are
-    passed through its Wiener gains, added to the channel, and every term that reads it is
-    rebuilt; Σ β_j·Δx_j is a realisation of what that sensor puts into the residual (errors
-    in variables, Fuller 1987). The sample autocovariances (biased, so positive definite)
-    are averaged over the realisations and summed over the channels. Returns (the sum, each
-    channel's part); zeros when no term reads a noisy channel."""
+def eiv_draws(wd, specs, thetas: dict, seed: int = 1953) -> dict[str, list[dict]]:
+    """Realisations of what each noisy channel's own measurement noise does to the terms
+    that read it: for each logged channel with a measured noise
+    (:attr:`WorkData.sensor_noise`), :data:`EIV_DRAWS` draws of its white noise (σ², at
+    least q²/12 for a quantised one) are added to the channel and every term that reads it is
+    rebuilt; each draw is {term label: Δx (blocks × coefficients)}."""
     import dataclasses
 
-    out = np.zeros(nlag)
-    parts: dict[str, np.ndarray] = {}
+    out: dict[str, list[dict]] = {}
     noise = getattr(wd, "sensor_noise", None) or {}
-    if not noise or not grid.runs:
-        return out, parts
+    if not noise:
+        return out
     rng = np.random.default_rng(seed)
     fr = wd.frame
     for ch, sn in noise.items():
-        terms = [s for s in specs if s.key != "bias" and ch in term_channels(s)
-                 and abs(beta.get(s.label, np.zeros(1))).sum() > 0]
+        terms = [s for s in specs if s.key != "bias" and ch in term_channels(s)]
         if not terms or not sn.gains or not sn.variance > 0:
             continue
         group = "temperature" if ch in fr.temperature else "extra"
         base = getattr(fr, group)[ch]
         ref = {s.label: _block_on(wd, fr, s, thetas.get(s.label)) for s in terms}
-        acc = np.zeros(nlag)
-        count = 0
+        draws = []
         for _ in range(EIV_DRAWS):
             e = sn.filtered(rng.normal(0.0, math.sqrt(sn.variance), fr.n))
             fr2 = dataclasses.replace(fr, **{group: {**getattr(fr, group), ch: base + e}})
-            d = np.zeros(wd.nb)
-            for s in terms:
-                dx = _block_on(wd, fr2, s, thetas.get(s.label)) - ref[s.label]
-                d += dx @ np.asarray(beta[s.label], float)
+            draws.append({s.label: _block_on(wd, fr2, s, thetas.get(s.label)) - ref[s.label]
+                          for s in terms})
+        out[ch] = draws
+    return out
+
+
+def eiv_acov(all_draws: dict[str, list[dict]], grid, beta: dict, nlag: int
+             ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Autocovariance (lags 0 … nlag − 1) of the differenced likelihood samples of the noise
+    the model's terms carry from their sensors (errors in variables, Fuller 1987): per
+    channel, Σ_j β_j·Δx_j of each draw (:func:`eiv_draws`) is a realisation of what that
+    sensor puts into the residual; the sample autocovariances (biased, so positive definite)
+    are averaged over the draws and summed over the channels. Returns (the sum, each
+    channel's part)."""
+    out = np.zeros(nlag)
+    parts: dict[str, np.ndarray] = {}
+    for ch, draws in all_draws.items():
+        acc = np.zeros(nlag)
+        count = 0
+        for dr in draws:
+            d = sum((dx @ np.asarray(beta[lab], float) for lab, dx in dr.items()
+                     if lab in beta), np.zeros(grid.nb))
+            if not np.any(d):
+                continue
             for run in grid.diffs(grid.means(d)):
                 L = min(nlag, len(run))
                 full = np.correlate(run, run, mode="full")[len(run) - 1:len(run) - 1 + L]
@@ -242,6 +273,28 @@ def eiv_acov(wd, grid, specs, thetas: dict, beta: dict, nlag: int,
             parts[ch] = acc / count
             out += parts[ch]
     return out, parts
+
+
+def eiv_moment(draws: dict[str, list[dict]], lik, offsets: dict, p: int) -> np.ndarray:
+    """E[ΔX̃ᵀΔX̃] (p × p): what the sensors' noise adds to the whitened design's cross
+    products, averaged over the draws and summed over the (independent) channels. The
+    errors-in-variables corrected GLS estimate is (X̃ᵀX̃ − M)⁻¹X̃ᵀỹ (Fuller 1987, §3.1: the
+    method-of-moments correction of the attenuation a noisy regressor gives)."""
+    M = np.zeros((p, p))
+    for _ch, ds in draws.items():
+        acc = np.zeros((p, p))
+        for dr in ds:
+            D = None
+            for lab, dx in dr.items():
+                a, b = offsets[lab]
+                w = lik.whiten(dx)
+                if D is None:
+                    D = np.zeros((w.shape[0], p))
+                D[:, a:b] += w
+            if D is not None:
+                acc += D.T @ D
+        M += acc / max(len(ds), 1)
+    return M
 
 
 def _block_on(wd, frame, spec, theta) -> np.ndarray:
@@ -256,5 +309,6 @@ def _block_on(wd, frame, spec, theta) -> np.ndarray:
     return wd.bmean(x).reshape(wd.nb, -1)
 
 
-__all__ = ["EIV_DRAWS", "SensorNoise", "eiv_acov", "term_channels", "denoise_frame", "quantisation_step", "stepped", "white_sigma",
+__all__ = ["EIV_DRAWS", "SensorNoise", "eiv_acov", "eiv_draws", "eiv_moment",
+           "measure_frame", "term_channels", "denoise_frame", "quantisation_step", "stepped", "white_sigma",
            "wiener"]

@@ -348,11 +348,11 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
     mf = max(1, int(round(fine_dt / log.tau0)))
     fine_dt = mf * log.tau0
     frame = frame_from_log(log, axis=axis, dt=fine_dt if mf > 1 else None)
-    # every term is built from the channels' best estimate of their nodes: the sensors' own
-    # noise filtered out (:mod:`gyrotest.envmodel.sensors`)
-    from .sensors import denoise_frame
+    # each temperature and extra channel's own measurement noise, carried into the noise
+    # model through the terms that read it (:mod:`gyrotest.envmodel.sensors`)
+    from .sensors import measure_frame
 
-    sensor_noise = denoise_frame(frame)
+    sensor_noise = measure_frame(frame)
     if smoothing_s is None:
         W, wnote = choose_smoothing(frame, dur)
     else:

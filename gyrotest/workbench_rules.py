@@ -33,6 +33,13 @@ TAU_POINTS = 16
 PAIR_POOL = 6
 #: computing budget: at most this many likelihood samples (Cholesky factors cost O(n³))
 NL_MAX = 400
+#: draws of each noisy channel's measurement noise simulated for the errors-in-variables
+#: noise term and the attenuation correction (a computing budget)
+EIV_DRAWS = 8
+#: a term whose whitened regressor is more noise than signal (reliability ratio
+#: var(signal)/var(signal + noise) below this) is not corrected for attenuation — the
+#: correction would divide by a small difference — and is named as sensor-limited
+MIN_RELIABILITY = 0.5
 
 #: (heading, text) of each rule, in the order the diagnosis applies them
 RULES: tuple[tuple[str, str], ...] = (
@@ -73,6 +80,16 @@ RULES: tuple[tuple[str, str], ...] = (
      "(two effects that hide each other); a pair passes at alpha over every pair of the "
      "step's candidates (Bonferroni), its searched parameters corrected by Davies' (1987) "
      "bound; its more significant member is named and the next step tests the other."),
+    ("The sensors' own noise",
+     "Each logged temperature and extra channel's own noise (white σ from its second "
+     "differences, at least q²/12 for a channel quantised in steps of q) is simulated "
+     f"({EIV_DRAWS} draws) through every term that reads it: it joins the noise model, and "
+     "the coefficients are corrected for the attenuation it gives (errors in variables, "
+     f"method of moments; a term with a reliability ratio below {MIN_RELIABILITY:g} keeps its "
+     "uncorrected value and is named as sensor-limited). A candidate reading a channel of the "
+     "same kind is 'limited by the sensors', not a missing effect, when its likelihood ratio "
+     "is within the one-sided 1 − alpha quantile of what a noise-free reading of the model's "
+     "own sensors would give (tr(Σ⁻¹E), variance 2·tr((Σ⁻¹E)²))."),
     ("Never degenerate",
      f"A candidate whose design column lies in the span of the model's (variance inflation "
      f"≥ {VIF_MAX:g}) is not proposed; 'model fit' refuses such a model in one line naming "
@@ -107,5 +124,5 @@ def rules_text(width: int = 88) -> str:
     return "\n".join(out).rstrip() + "\n"
 
 
-__all__ = ["ALPHA", "BIC_TIE", "MC_DRAWS", "NL_MAX", "PAIR_POOL", "RULES", "SUMMARY",
-           "TAU_POINTS", "VIF_MAX", "WHITE_LAGS", "rules_text"]
+__all__ = ["ALPHA", "BIC_TIE", "EIV_DRAWS", "MC_DRAWS", "MIN_RELIABILITY", "NL_MAX",
+           "PAIR_POOL", "RULES", "SUMMARY", "TAU_POINTS", "VIF_MAX", "WHITE_LAGS", "rules_text"]

@@ -458,12 +458,10 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
 UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk rate noise "
                "fitted by maximum likelihood on this log, or fixed from a reference run); "
                "nonlinear parameters by Gauss-Newton")
-from ..workbench_rules import VIF_MAX  # noqa: E402  (degenerate design bound)
-
-#: a term whose whitened regressor is more than half its own sensor's noise is not corrected
-#: for attenuation (the correction would divide by a small difference): its reliability
-#: ratio var(signal)/var(signal + noise) is below this (Fuller 1987 §2.5)
-MIN_RELIABILITY = 0.5
+from ..workbench_rules import (
+    MIN_RELIABILITY,  # noqa: E402  (Fuller 1987 §2.5)
+    VIF_MAX,  # noqa: E402  (degenerate design bound)
+)
 
 
 def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,

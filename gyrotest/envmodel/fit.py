@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import AnalysisError
+from ..workbench_rules import MIN_RELIABILITY, VIF_MAX
 from . import stats as st
 from .likelihood import (
     NoiseFit,
@@ -458,10 +459,6 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
 UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk rate noise "
                "fitted by maximum likelihood on this log, or fixed from a reference run); "
                "nonlinear parameters by Gauss-Newton")
-from ..workbench_rules import (
-    MIN_RELIABILITY,  # noqa: E402  (Fuller 1987 §2.5)
-    VIF_MAX,  # noqa: E402  (degenerate design bound)
-)
 
 
 def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,

@@ -452,6 +452,29 @@ def _fold_filters(fit, diag, warns, tau0):
     return fit, diag, warns, info
 
 
+#: the table's (Stable32's) EDF is called out when it exceeds the fit's by this factor
+EDF_NOTE_RATIO = 2.0
+
+
+def _undecided_alpha_note(dev: DeviationResult, edf_table: np.ndarray,
+                          edf_fit: np.ndarray) -> list[str]:
+    """A note when Stable32's noise type at some τ (its lag-1 ACF from 30 points, or B1 from a
+    few averages) makes the printed EDF more than twice the conservative one of the fit: that
+    interval is then far too narrow to read."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        big = np.flatnonzero(np.asarray(edf_table, float)
+                             > EDF_NOTE_RATIO * np.asarray(edf_fit, float))
+    if big.size == 0:
+        return []
+    taus = ", ".join(f"{dev.tau[i]:.4g}" for i in big[:6]) + (" …" if big.size > 6 else "")
+    worst = int(big[np.argmax(np.asarray(edf_table)[big] / np.asarray(edf_fit)[big])])
+    return [f"α at τ = {taus} s is Stable32's identification from too few averages to be "
+            f"decisive (e.g. α = {int(dev.alpha[worst])}, EDF {edf_table[worst]:.3g} at τ = "
+            f"{dev.tau[worst]:.4g} s, against {edf_fit[worst]:.3g} for white rate noise): its "
+            "interval there is too narrow to read; the fit, N_upper and the warnings use the "
+            "conservative EDF (shown with --ci conservative)"]
+
+
 def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
     """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
     try:
@@ -767,6 +790,8 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
             conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
             acf=acf, detrend=det_info, notes=notes, ci_conservative=ci_cols)
     readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
+    if fit_dev is table_dev:
+        notes.extend(_undecided_alpha_note(table_dev, edf, fit.edf))
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None
     if trend_check:

@@ -106,6 +106,7 @@ __all__ = [
     "robust_edf_rules",
     "sanitize_edf",
     "slope_readoffs",
+    "n_upper_bound",
 ]
 
 DEFAULT_TERMS: tuple[str, ...] = ("Q", "N", "B", "K", "R")
@@ -1309,6 +1310,12 @@ def fit_alpha(dev) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return np.asarray(dev.alpha, int), np.asarray(dev.edf, float), methods
 
 
+def _n_averages(segs, m: int) -> int:
+    """Non-overlapping m-sample averages over the segments: the points of a noise
+    identification at averaging factor m."""
+    return int(sum((b - a) // max(m, 1) for a, b in segs))
+
+
 def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
     """(edf, notes) of :func:`robust_edf_rules`."""
     e, _, notes = robust_edf_rules(dev)
@@ -1319,7 +1326,9 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     """The EDF of a deviation table made safe for fitting and for the residuals.
 
     1. Where the noise type was identified from few averages (B1 ratio or reused, typically the
-       longest τ; Riley & Greenhall 2004) and came out as angle noise (α > 0), the EDF is capped
+       longest τ, or the lag-1 ACF from fewer than
+       :data:`~gyrotest.noise.edf.ACF_DECISIVE_POINTS` points; Riley & Greenhall 2004) and
+       came out as angle noise (α > 0), the EDF is capped
        at the white-rate (α = 0) value: an α = +1 at τ = T/10 gives a Greenhall EDF ~10× too
        large when the estimate is really a scattered rate-random-walk point.
     2. :func:`sanitize_edf`: non-increasing in τ.
@@ -1329,7 +1338,7 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
 
     Returns (edf, rules, notes): ``rules[i]`` is "" (the identified α's EDF), "white-rate cap"
     or "running minimum"."""
-    from .edf import edf_for
+    from .edf import ACF_DECISIVE_POINTS, edf_for
 
     alpha, e, methods = fit_alpha(dev)
     e = e.copy()
@@ -1339,7 +1348,9 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     kind = "mdev" if dev.kind == "tdev" else dev.kind
     capped = []
     for i, (a, meth) in enumerate(zip(alpha, methods)):
-        if a > 0 and meth in _WEAK_ID and math.isfinite(e[i]) and n_longest > 1:
+        weak = meth in _WEAK_ID or (meth == "acf" and _n_averages(segs, int(dev.m[i]))
+                                    < ACF_DECISIVE_POINTS)
+        if a > 0 and weak and math.isfinite(e[i]) and n_longest > 1:
             try:
                 cap, _ = edf_for(kind, 0, int(dev.m[i]), n_longest)
             except (InputError, AnalysisError):
@@ -1350,7 +1361,7 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     if capped:
         notes.append("EDF capped at the white-rate value at τ = "
                      + ", ".join(f"{t:.4g}" for t in capped)
-                     + " s (angle-noise type identified from few averages)")
+                     + " s (angle-noise type identified from too few averages to be decisive)")
     e2, changed = sanitize_edf(e)
     if changed:
         notes.append("EDF lowered to the running minimum at τ = "
@@ -1384,6 +1395,47 @@ def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=Non
 # ---------------------------------------------------------------------------------------------
 
 
+#: family-wise level of Krobka's white-noise bound N_upper (:func:`slope_readoffs`)
+N_UPPER_LEVEL = 0.95
+
+
+def n_upper_bound(tau, sigma, edf, *, level: float = N_UPPER_LEVEL) -> tuple[float, float, int]:
+    """Krobka's bound on white rate noise as a statistical upper limit: (N_upper deg/√h, the τ
+    that sets it, the number of τ it was taken over).
+
+    White rate noise N adds N²/τ to the Allan variance of any mixture of independent noises
+    (Krobka (Allan-graph topology) eq. 5.9), so σ²(τ) ≥ N²/τ at every τ: the −½ ray through the
+    leftmost point, lowered until it touches the graph. Read on the estimates σ̂(τ) this
+    construction is biased low (at long τ a few clusters scatter σ̂ far below σ), so each
+    σ̂(τ) is replaced by its one-sided upper confidence limit σ_U(τ) = σ̂·√(ν/χ²_ν(α/k)) from
+    its EDF ν (σ̂²ν/σ² ~ χ²_ν, NIST SP1065 §5.3), at the Bonferroni level α/k over the k τ
+    with an EDF: all k limits hold together with probability ≥ ``level`` = 1 − α, hence
+
+        N_upper = min_τ σ_U(τ)·√τ / 60   deg/√h (σ in deg/h, τ in s)
+
+    is an upper bound of N at that confidence. Without EDF it is the graph reading
+    min σ̂√τ/60."""
+    t = np.asarray(tau, float)
+    s = np.asarray(sigma, float)
+    ok = np.isfinite(t) & np.isfinite(s) & (s > 0) & (t > 0)
+    if edf is None:
+        v = np.where(ok, s * np.sqrt(t), np.inf)
+        i = int(np.argmin(v))
+        return float(v[i] / 60.0), float(t[i]), int(np.count_nonzero(ok))
+    e = np.asarray(edf, float)
+    ok &= np.isfinite(e) & (e > 0)
+    k = int(np.count_nonzero(ok))
+    if k == 0:
+        return math.nan, math.nan, 0
+    q = (1.0 - level) / k
+    with np.errstate(invalid="ignore", divide="ignore"):
+        chi = special.chdtri(np.where(ok, e, 1.0), 1.0 - q)  # lower q-quantile of χ²_ν
+        s_up = s * np.sqrt(np.where(ok, e, 1.0) / chi)
+    v = np.where(ok & np.isfinite(s_up), s_up * np.sqrt(t), np.inf)
+    i = int(np.argmin(v))
+    return float(v[i] / 60.0), float(t[i]), k
+
+
 def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, Any]:
     """The slope-line read-offs other tools report, for comparison (not fits).
 
@@ -1394,8 +1446,12 @@ def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, 
       through it read at τ = 1 s, /60 for deg/√h; IEEE 952 Annex C);
     * ``K_slope`` = 60·σ(τ_i)·√(3/τ_i) deg/h/√h at the slope closest to +½ (line read at τ = 3 s);
     * ``B_slope`` = σ(τ_i)/0.6643 deg/h at the slope closest to 0;
-    * ``N_upper`` = min_τ σ(τ)·√τ/60 deg/√h: Krobka's bound, the −½ ray through the leftmost
-      point lowered until it touches the graph (Krobka (Allan-graph topology) §5, rule 5);
+    * ``N_upper``: Krobka's bound on white rate noise, the −½ ray through the leftmost
+      point lowered until it touches the graph (Krobka (Allan-graph topology) §5, rule 5),
+      taken on the upper 95 % confidence limits of σ̂ (family-wise over the τ, from ``edf``;
+      :func:`n_upper_bound`), so that it is an upper bound of N at 95 %; ``N_upper_graph`` =
+      min σ̂√τ/60, the same construction on the estimates (biased low where few clusters
+      scatter σ̂);
     * ``B_tangent`` = σ_min/0.6643 deg/h: the zero-slope tangent at the minimum with the
       IEEE factor (an upper bound in a mixture; Krobka (Allan-graph topology) M3/M4); ``allan_floor`` = σ_min and
       its τ (what tools that omit 0.664 report as B).
@@ -1420,14 +1476,19 @@ def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, 
     iK = int(np.argmin(np.abs(slope - 0.5) + big))
     iB = int(np.argmin(np.abs(slope) + big))
     imin = int(np.argmin(s))
-    iup = int(np.argmin(s * np.sqrt(t)))
+    n_graph, t_graph, _ = n_upper_bound(t, s, None)
+    n_up, t_up, k_up = n_upper_bound(t, s, None if edf is None else e)
     out.update({
         "N_slope": float(s[iN] * math.sqrt(t[iN]) / 60.0), "N_slope_tau_s": float(t[iN]),
         "N_slope_local_slope": float(slope[iN]),
         "K_slope": float(60.0 * s[iK] * math.sqrt(3.0 / t[iK])), "K_slope_tau_s": float(t[iK]),
         "K_slope_local_slope": float(slope[iK]),
         "B_slope": float(s[iB] / BIAS_INSTABILITY_PLATEAU), "B_slope_tau_s": float(t[iB]),
-        "N_upper": float(s[iup] * math.sqrt(t[iup]) / 60.0), "N_upper_tau_s": float(t[iup]),
+        "N_upper": n_up, "N_upper_tau_s": t_up,
+        "N_upper_rule": (f"min over {k_up} τ of the one-sided upper confidence limit of σ (EDF, "
+                         f"χ², Bonferroni) × √τ/60: {100 * N_UPPER_LEVEL:g} % upper bound of N"
+                         if edf is not None else "min σ√τ/60 (graph reading, no EDF)"),
+        "N_upper_graph": n_graph, "N_upper_graph_tau_s": t_graph,
         "N_leftmost": float(s[0] * math.sqrt(t[0]) / 60.0), "leftmost_tau_s": float(t[0]),
         "B_tangent": float(s[imin] / BIAS_INSTABILITY_PLATEAU),
         "allan_floor_dph": float(s[imin]), "allan_floor_tau_s": float(t[imin]),

@@ -340,7 +340,8 @@ def _fit_table(f, title: str, unit=DEFAULT_UNIT):
         dom = "" if not term.dominant_tau else (f"{fmt_num(term.dominant_tau[0])}–"
                                                 f"{fmt_num(term.dominant_tau[1])}")
         lab = unit.convert(1.0, term.units[term.main])[1] if len(term.params) == 1 else ""
-        t.add_row(f"{term.label} {term.title}", _term_value(term, unit), lab, term.status, dom)
+        status = term.status + (f" ({term.status_note})" if term.status_note else "")
+        t.add_row(f"{term.label} {term.title}", _term_value(term, unit), lab, status, dom)
     return t
 
 
@@ -397,6 +398,8 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
         for w, s, q in zip(imp.rates_rad_s, imp.strapdown_sigma_deg, imp.ratio):
             line += (f"; strapdown at {math.degrees(w):g} deg/s {fmt_num(s * 3600)}″ "
                      f"(SINS/INS {q:.2f})")
+        if imp.extrapolated:
+            line += f" — extrapolated: {imp.extrapolation}"
         c.print(line)
         for fl in imp.flags:
             c.print(f"    {fl['text']}")

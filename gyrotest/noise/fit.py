@@ -106,6 +106,8 @@ __all__ = [
     "robust_edf_rules",
     "sanitize_edf",
     "slope_readoffs",
+    "carry_edf",
+    "MIN_EDF_IDENTIFY",
     "n_upper_bound",
 ]
 
@@ -137,9 +139,37 @@ UNCERTAINTY_METHOD = ("1 sigma from the sandwich covariance A^-1 B A^-1 of that 
                       "(weighted Jacobian A; B with the model-implied correlation of the Allan "
                       "variance estimates between tau); upper bounds: 95 % one-sided profile "
                       "likelihood with the Rao-Scott design-effect correction")
+#: degrees of freedom a term needs where it is carried (:func:`carry_edf`) to be identified:
+#: from ν = 10 on, the log of σ̂² ~ σ²·χ²_ν/ν, whose normal form the fit's likelihood, its
+#: sandwich covariance and the χ²₁ reference of the likelihood-ratio test rest on, has a
+#: skewness below 0.5 in magnitude (ψ''(ν/2)/ψ'(ν/2)^1.5: −0.47 at ν = 10, −0.78 at 4, −1.14
+#: at 2) and σ̂² is within ±45 % (1σ, √(2/ν)) of σ²; a term seen only through fewer degrees of
+#: freedom is an upper bound
+MIN_EDF_IDENTIFY = 10.0
 STATUS_RULE = ("identified when dropping the term raises -2 log-likelihood/design effect by >= "
-               "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue); else upper bound only (printed "
-               "with '<=')")
+               "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue) and the tau that carry the term "
+               "(where its share of the model variance is at least half its largest share) "
+               f"hold an estimate with at least {MIN_EDF_IDENTIFY:g} degrees of freedom; else "
+               "upper bound only (printed with '<=')")
+
+
+def carry_edf(tau, nu, comp, total) -> tuple[float, tuple[float, float]]:
+    """(ν, (τ_lo, τ_hi)): the largest EDF among the τ that carry a term, and their span.
+
+    A term is carried by the fitted τ where its share of the model variance, comp/total, is
+    at least half of its largest share (where it is the dominant term, or near its largest
+    contribution when it never dominates). Its evidence comes from there: when no estimate
+    there has :data:`MIN_EDF_IDENTIFY` degrees of freedom, the χ² asymptotics of the fit do not
+    hold for it and it is not identified (STATUS_RULE)."""
+    t = np.asarray(tau, float)
+    e = np.asarray(nu, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(np.asarray(total, float) > 0, np.asarray(comp, float)
+                         / np.asarray(total, float), 0.0)
+    if t.size == 0 or not np.any(share > 0):
+        return 0.0, (math.nan, math.nan)
+    sel = share >= 0.5 * float(np.max(share))
+    return float(np.max(e[sel])), (float(t[sel].min()), float(t[sel].max()))
 
 
 def parse_terms(spec: str | Sequence[str] | None) -> list[str]:
@@ -701,6 +731,10 @@ class FitTerm:
     bi_f0: float | None = None
     design_effect: float = 1.0
     notes: list[str] = field(default_factory=list)
+    carry_edf: float | None = None
+    #: why the status is what it is when a rule beyond the likelihood-ratio test set it
+    #: (e.g. "spike-driven": identified only because of flagged spikes)
+    status_note: str = ""
 
     @property
     def registry(self) -> str:
@@ -781,6 +815,7 @@ class FitTerm:
             "title": self.title,
             "registry_key": self.registry,
             "status": self.status,
+            "status_note": self.status_note,
             "params": dict(self.params),
             "units": self.units,
             "sigma": dict(self.sigma),
@@ -788,6 +823,7 @@ class FitTerm:
             "display": self.text(),
             "delta_deviance": self.delta_deviance,
             "design_effect": self.design_effect,
+            "carry_edf": self.carry_edf,
             "derived": dict(self.derived),
             "dominant_tau_s": list(self.dominant_tau) if self.dominant_tau else None,
             "zero_dc_psd": self.zero_dc_psd,
@@ -1153,6 +1189,10 @@ def fit_noise_model(
             else:
                 dD = an.delta_deviance(j)
                 identified = c > 0 and dD >= thr[col.key]
+            nu_j, span_j = carry_edf(eng.tau, eng.nu, an.G[:, j] * c, st.s)
+            thin = identified and nu_j < MIN_EDF_IDENTIFY
+            if thin:
+                identified = False
             params = _reported(col.key, c, fc.shape)
             sig: dict[str, float | None] = {p: None for p in params}
             if identified and an.cov is not None:
@@ -1164,7 +1204,14 @@ def fit_noise_model(
                                    "not tested" if math.isnan(dD) else "upper bound"),
                            delta_deviance=dD, coef=c, shape=fc.shape,
                            derived=_derived(col.key, c, fc.shape), bi_f0=bi_cutoff_hz,
-                           design_effect=an.deff[j])
+                           design_effect=an.deff[j], carry_edf=nu_j)
+            if thin:
+                term.status_note = f"EDF < {MIN_EDF_IDENTIFY:g}"
+                term.notes.append(
+                    f"significant by the likelihood ratio (Δ = {dD:.3g}) but carried only by τ "
+                    f"{span_j[0]:.4g}–{span_j[1]:.4g} s, where no estimate has "
+                    f"{MIN_EDF_IDENTIFY:g} degrees of freedom (at most {nu_j:.3g}): not "
+                    "identified; the value shown is the 95 % upper bound")
         else:
             dcol, dD, c_drop = dropped[col.label]
             shape = dcol.shape if (c_drop > 0 or col.key not in NONLINEAR_KEYS) else None

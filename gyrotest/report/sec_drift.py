@@ -294,6 +294,8 @@ class DriftSections:
         if not imp.get("strapdown"):
             sec.add(P("No vehicle rates given ([tests.allan] vehicle_rates): only the "
                       "platform case is predicted.", "note"))
+        if imp.get("extrapolated"):
+            sec.add(P("Extrapolated: " + str(imp.get("extrapolation", "")), "note"))
         sec.add(T(["system", "vehicle rate", f"attitude error σ after {fmt_number(hz)} s",
                        "σ ratio strapdown/platform", "σ with the bounds at their limit"], rows,
                       title="Predicted attitude error of three such gyros (first order)",

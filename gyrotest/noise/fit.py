@@ -486,10 +486,12 @@ def _solve_state(eng: _Engine, cols: list[_Col], s0: np.ndarray | None = None,
     return _State([_Col(k.key, k.label, k.shape, k.lo, k.hi) for k in cols], c, s, D)
 
 
-def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]) -> _State:
+def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float],
+                     shape_hints: dict[str, float] | None = None) -> _State:
     """Place each nonlinear term by a log-grid search of the profile deviance (one at a time,
     others fixed), then refine all shapes jointly (Nelder–Mead on log-shapes, clipped to their
-    ranges)."""
+    ranges). ``shape_hints`` (label → shape) join the grid of their term (the shapes of a
+    model already found, so that a refit of it reaches at least that optimum)."""
     nl = [i for i, c in enumerate(cols) if c.key in NONLINEAR_KEYS]
     placed: list[int] = []
     lin = [i for i in range(len(cols)) if i not in nl]
@@ -497,6 +499,9 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
         col = cols[i]
         n_grid = 240 if col.key == "sine" else 48
         grid = list(np.geomspace(col.lo, col.hi, n_grid))
+        hint = (shape_hints or {}).get(col.label)
+        if hint is not None and col.lo <= hint <= col.hi:
+            grid.append(float(hint))
         if col.key == "sine":
             for f in line_hints:
                 if col.lo <= f <= col.hi:
@@ -1044,6 +1049,7 @@ def fit_noise_model(
     tau0: float | None = None, min_edf: float = MIN_EDF, bi_cutoff_hz: float | None = None,
     line_hints: Sequence[float] = (), tau_range: tuple[float, float] | None = None,
     with_bounds: bool = True, confidence: float = 0.683, scan: bool = False,
+    shape_hints: dict[str, float] | None = None,
 ) -> NoiseFit:
     """Fit σ²_model(τ) = Σ c_j g_j(τ) jointly to an Allan deviation table (module docstring).
 
@@ -1063,6 +1069,8 @@ def fit_noise_model(
     confidence : of ``sigma_lo``/``sigma_hi`` (used where they are recomputed).
     scan : fast mode for the diagnosis: no backward elimination, no bounds, and only the last
         term is tested (the others get status "not tested").
+    shape_hints : {term label: shape} tried with the shape search (e.g. the T_c of a Markov
+        term the diagnosis found), so that refitting a found model reaches its optimum.
 
     The EDF is first made non-increasing in τ (:func:`sanitize_edf`).
 
@@ -1125,7 +1133,7 @@ def fit_noise_model(
     thr = {k: special.chdtri(2 if k in NONLINEAR_KEYS else 1, 1 - _LRT_P) for k in KNOWN_TERMS}
     active = list(cols)
     dropped: dict[str, tuple[_Col, float, float]] = {}  # label -> (col, dD, coef) at drop time
-    st = (_optimise_shapes(eng, active, line_hints)
+    st = (_optimise_shapes(eng, active, line_hints, shape_hints)
           if any(c.key in NONLINEAR_KEYS for c in active) else _solve_state(eng, active))
     # terms at zero leave the model unchanged
     zero = [j for j in range(len(active)) if st.c[j] <= 0]

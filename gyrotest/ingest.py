@@ -368,7 +368,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     if timing.gaps:
         tot = sum(gp.duration_s for gp in timing.gaps)
         notes.append(f"{len(timing.gaps)} gap(s) in the time axis ({tot:.4g} s in all); analyses "
-                     "work per contiguous segment and never bridge a gap")
+                     "work per contiguous segment (allan bridges gaps of ≤ --fill missed "
+                     "samples, default 1, and says so)")
     if timing.irregular:
         notes.append(f"irregular sampling: interval jitter {100 * timing.jitter_rel:.2g}% of the "
                      f"nominal {tau0:.6g} s; uniform-sampling analyses assume the nominal interval")

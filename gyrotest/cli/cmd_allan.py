@@ -77,6 +77,11 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Spikes (Hampel filter, robust scale): flag = warn with their times and "
                    "analyse as recorded; remove = replace each by its running median; robust = "
                    "clip each to the threshold.")
+@click.option("--fill", "fill", type=click.IntRange(0, 1000), default=1, show_default=True,
+              help="Bridge gaps of at most this many missed samples before the analysis "
+                   "(rate: linear interpolation, its effect on σ stated in a note; counter/"
+                   "angle: the gap's exact mean rate); 0 never bridges. Longer gaps split the "
+                   "record.")
 @click.option("--vehicle-rate", "vehicle_rates", multiple=True,
               help="Strapdown vehicle rate for the impact prediction, e.g. 10deg/s (repeatable).")
 @click.option("--horizon", default="1h", show_default=True,
@@ -100,7 +105,7 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
-            skip, outliers, model_path,
+            skip, outliers, model_path, fill,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, display_unit, jobs, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
@@ -157,7 +162,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
               axes=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
               detrend=detrend, run_diagnosis=not no_diagnose,
               impact_horizon_s=horizon_s, bi_cutoff_hz=bi_cutoff, allow_irregular=allow_irregular,
-              fit_model=not no_fit, ci=ci_kind, outliers=outliers)
+              fit_model=not no_fit, ci=ci_kind, outliers=outliers, fill=fill)
     with deviation_progress():  # a bar on a terminal for τ loops longer than 2 s
         if model_path:
             from ..envmodel.model import EnvModel
@@ -286,6 +291,9 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
                 row += [fmt_num(float(tab["model"][i]) * f), res]
             t.add_row(*row)
         c.print(t)
+        gf = (r.settings or {}).get("gap_fill")
+        if gf and (gf.get("filled_gaps") or gf.get("skipped")):
+            c.print(f"  gaps: {escape(gf['note'])}")
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")

@@ -65,6 +65,10 @@ def command(log, axis, display_unit, as_json, ingest_opts):
     reps = [detect_outliers(g.rates[a], g.tau0, t0=float(g.t[0]) if g.n else 0.0, channel=a,
                             segments=g.segments, unit="deg/h") for a in axes if g.n >= 3]
     summary["outliers"] = {r.channel: r.to_dict() for r in reps}
+    from ..gapfill import gap_map
+
+    gmap = gap_map(g) if g.timing.gaps else None
+    summary["gap_map"] = gmap
     for r in reps:
         if r.found:
             warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
@@ -102,6 +106,14 @@ def command(log, axis, display_unit, as_json, ingest_opts):
         c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
             f"at {gp.time_s:.6g} s for {gp.duration_s:.4g} s" for gp in tm.gaps[:5])
             + (" ..." if len(tm.gaps) > 5 else ""))
+        sizes = ", ".join(f"{v} × {k} missed" for k, v in gmap["by_missing_samples"].items())
+        c.print(f"  gap map        {sizes} ({gmap['missing_samples']} samples, "
+                f"{100 * gmap['missing_fraction']:.2g} %); longest gap-free stretch "
+                f"{format_duration(gmap['longest_gap_free_s'])}"
+                + (f"; allan --fill {gmap['fill_max_missing']} (default) bridges "
+                   f"{gmap['bridged_by_fill']} of them → longest "
+                   f"{format_duration(gmap['longest_after_fill_s'])}"
+                   if gmap["bridged_by_fill"] else ""))
     else:
         c.print("  gaps           none")
     if tm.irregular:

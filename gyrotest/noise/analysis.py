@@ -26,6 +26,7 @@ sample (arcsec), the form in which the quantization noise Q = S0/√12 is white 
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 from collections.abc import Sequence
@@ -168,6 +169,8 @@ class AxisAnalysis:
     notes: list[str] = field(default_factory=list)
     ci_conservative: dict[str, Any] | None = None
     outliers: dict[str, Any] | None = None
+    #: what the warnings were computed from (to recompute them when a term's status changes)
+    check_inputs: dict[str, Any] | None = field(default=None, repr=False)
 
     @property
     def best_fit(self) -> NoiseFit | None:
@@ -420,7 +423,7 @@ def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
     if rep.found:
         warn = _outlier_warning(rep, mode)
         rate = apply_outliers(rate, rep, mode, segments=segs)
-    return info, warn, rate
+    return info, warn, rate, rep
 
 
 def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
@@ -429,7 +432,138 @@ def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
     from .outliers import detect_outliers
 
     rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs)
-    return _outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None)
+    return (_outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None),
+            rep)
+
+
+def _stitch_recorded(dev: DeviationResult, data_rec: np.ndarray, segs_rec, stop_ratio,
+                     kw: dict[str, Any]) -> DeviationResult:
+    """``dev`` (computed across bridged gaps) with the rows at the τ that the recorded
+    samples' own gap-free segments support replaced by the deviation of those segments alone
+    (pooled, no difference spanning a gap): the filled samples then only serve the longer τ,
+    where their effect (:mod:`gyrotest.gapfill`) is far inside the confidence interval, and
+    leave the short τ, whose intervals are narrow, exactly as recorded."""
+    from .taus import max_averaging_factor
+
+    longest = max(b - a for a, b in segs_rec)
+    m_max = max_averaging_factor(longest, dev.kind, stop_ratio)
+    sel = np.flatnonzero(np.asarray(dev.m) <= m_max)
+    if sel.size == 0:
+        return dev
+    kw = {k: v for k, v in kw.items() if k != "reuse"}
+    try:
+        rec = compute_deviation(data_rec, dev.tau0, input_kind=dev.input_kind, kind=dev.kind,
+                                taus=[float(dev.tau[i]) for i in sel],
+                                confidence=dev.confidence, stop_ratio=stop_ratio,
+                                segments=segs_rec, unit=dev.unit, **kw)
+    except (InputError, AnalysisError):
+        return dev
+    pos = {int(m): j for j, m in enumerate(rec.m)}
+    out = copy.copy(dev)
+    for name in ("m", "tau", "n", "alpha", "edf", "sigma", "sigma_lo", "sigma_hi"):
+        arr = np.array(getattr(dev, name), copy=True)
+        src = getattr(rec, name)
+        for i in sel:
+            j = pos.get(int(dev.m[i]))
+            if j is not None:
+                arr[i] = src[j]
+        setattr(out, name, arr)
+    meth = list(dev.alpha_method)
+    for i in sel:
+        j = pos.get(int(dev.m[i]))
+        if j is not None and j < len(rec.alpha_method):
+            meth[i] = rec.alpha_method[j]
+    out.alpha_method = meth
+    if dev.alpha_fit is not None and rec.alpha_fit is not None:
+        af, ef = np.array(dev.alpha_fit, copy=True), np.array(dev.edf_fit, copy=True)
+        afm = list(dev.alpha_fit_method or [""] * len(af))
+        for i in sel:
+            j = pos.get(int(dev.m[i]))
+            if j is not None:
+                af[i], ef[i] = rec.alpha_fit[j], rec.edf_fit[j]
+                afm[i] = (rec.alpha_fit_method or [""] * len(rec.alpha_fit))[j]
+        out.alpha_fit, out.edf_fit, out.alpha_fit_method = af, ef, afm
+    t_split = float(max(dev.tau[i] for i in sel))
+    out.notes = list(dev.notes) + [
+        f"τ ≤ {t_split:.4g} s from the recorded samples' gap-free segments alone (pooled); "
+        "longer τ across the bridged gaps"]
+    return out
+
+
+def _spike_guard(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float, in_kind: str,
+                 confidence: float, stop_ratio: float | None) -> None:
+    """No term is identified from flagged spikes (``--outliers flag``, the rate analysed as
+    recorded).
+
+    The fitted models (requested and diagnosed) are refitted, same terms and τ, to the OADEV
+    of the rate with the flagged samples replaced by their running median (the ``remove``
+    treatment). A term identified on the record as it is but not without the spikes rests on
+    them: it becomes an upper bound (the 95 % bound of the refit, the sensor's own), with the
+    reason in its notes and ``status_note``; a term identified both ways whose value moves by
+    more than twice its 1σ gets the value without the spikes in its notes. The warnings are
+    recomputed with the new statuses. Modifies ``res`` in place."""
+    from .outliers import MAX_LISTED, apply_outliers
+
+    clean = apply_outliers(rate, rep, "remove", segments=segs)
+    data = clean * tau0 if in_kind == "increment" else clean
+    try:
+        dev_c = compute_deviation(data, tau0, input_kind=in_kind, kind="oadev",
+                                  taus=[float(t) for t in res.fit_dev.tau],
+                                  confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                                  unit="deg/h")
+    except (InputError, AnalysisError) as e:
+        res.notes.append(f"spike guard not applied: {e}")
+        return
+    ev = sorted(rep.events, key=lambda e: -abs(e.peak_z))[:MAX_LISTED]
+    where = ", ".join(f"t = {e.t_s:.6g} s ({e.peak_z:+.0f}σ)"
+                      for e in sorted(ev, key=lambda e: e.t_s))
+    models = [res.fit]
+    if res.diagnosis is not None and res.diagnosis.final is not res.fit:
+        models.append(res.diagnosis.final)
+    marked: list[str] = []
+    for model in models:
+        try:
+            ref = fit_deviation(dev_c, terms=model.requested, min_edf=model.min_edf,
+                                bi_cutoff_hz=model.bi_f0)
+        except AnalysisError:
+            continue
+        for t in model.terms:
+            if not t.identified:
+                continue
+            tc = ref.term(t.label)
+            if tc is None or not tc.identified:
+                bound = tc.upper if tc is not None and tc.upper is not None else t.value
+                t.notes.append(
+                    f"identified only with the {rep.n_outliers} flagged spike sample(s) "
+                    f"({where}): with them replaced by their running median the same model "
+                    f"gives {t.main} ≤ {bound:.4g} {t.units[t.main]} (not identified); "
+                    f"{t.main} = {t.value:.4g} with the spikes is theirs, not the sensor's")
+                t.status = "upper bound"
+                t.status_note = "spike-driven"
+                t.upper = bound
+                t.sigma = {k: None for k in t.sigma}
+                marked.append(f"{t.label} ({t.main} = {t.value:.4g} → ≤ {bound:.4g})")
+            else:
+                s_raw = t.sigma.get(t.main) or 0.0
+                s_cln = tc.sigma.get(t.main) or 0.0
+                if abs(t.value - tc.value) > 2.0 * max(s_raw, s_cln, 1e-300):
+                    t.notes.append(f"without the {rep.n_outliers} flagged spike sample(s): "
+                                   f"{tc.text()} (the spikes move it)")
+                    marked.append(f"{t.label} moved: {t.value:.4g} with the spikes, "
+                                  f"{tc.value:.4g} without")
+    if not marked:
+        return
+    res.notes.append("spike guard (no term identified from flagged spikes): "
+                     + "; ".join(dict.fromkeys(marked))
+                     + " — --outliers remove analyses the rate without them")
+    if res.check_inputs is not None:
+        warns = krobka_checks(res.fit, res.readoffs, **res.check_inputs)
+        from .filtered import FILTER_STATUS
+
+        if any(t.status == FILTER_STATUS for m in models for t in m.terms):
+            warns = [w for w in warns if w.code not in ("KROBKA-M1", "KROBKA-M5")]
+        res.warnings = warns
+    res.conversions = conversions(res.best_fit)
 
 
 def _fold_filters(fit, diag, warns, tau0):
@@ -540,6 +674,7 @@ def analyse_allan(
     ci: str = "stable32",
     outliers: str = "flag",
     env_model=None,
+    fill: int = 1,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -576,6 +711,9 @@ def analyse_allan(
     outliers : spike handling (:mod:`gyrotest.noise.outliers`): "flag" (default: detect and
         warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
         its running median) or "robust" (each spike clipped to the threshold). Never silent.
+    fill : bridge gaps of at most this many missed samples before the analysis (default 1:
+        single missed samples; 0 never bridges; :func:`gyrotest.gapfill.fill_gaps`, whose
+        effect on σ is stated in the notes). Gaps left split the record into segments.
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
         few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
@@ -590,6 +728,11 @@ def analyse_allan(
         raise InputError(f"{log.source}: a streamed log supports no --skip, --detrend, --model, "
                          f"--outliers {outliers} or --dev {dev}; read it whole")
     log = _skip_warmup(log, skip_s) if not streamed else log
+    fill_rep = None
+    if not streamed and log.timing.gaps:
+        from ..gapfill import fill_gaps
+
+        log, fill_rep = fill_gaps(log, int(fill))
     if dev not in DEVIATION_KINDS:
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)
@@ -615,9 +758,20 @@ def analyse_allan(
         notes.append(f"irregular timestamps (interval jitter {100 * tim.jitter_rel:.2g} % of τ0): "
                      f"analysed on the sample index with the nominal τ0 = {log.tau0:g} s")
     segs = log.segments
+    if streamed and fill > 0 and any(0 < g.missing <= fill for g in tim.gaps):
+        notes.append(f"streamed log: its gaps of ≤ {fill} missed sample(s) are not bridged "
+                     "(filling needs the samples in memory); they split the record")
+    if fill_rep is not None and (fill_rep.filled or fill_rep.skipped):
+        notes.append(fill_rep.note())
+    # the recorded samples and their gap-free segments: the τ these support are computed
+    # from them alone, the bridged record only adds the longer τ
+    raw = (None if fill_rep is None or fill_rep.present is None
+           else (fill_rep.present, fill_rep.segments_before))
     if len(segs) > 1:
         notes.append(f"{len(segs)} gap-free segments ({len(tim.gaps)} gap(s)): deviations pooled "
-                     "over segments (sums of squares and term counts; no difference spans a gap)")
+                     "over segments (sums of squares and term counts; no difference spans a gap)"
+                     + (f"; the longest is {format_duration(max(b - a for a, b in segs) * log.tau0)}"
+                        f" of {format_duration(log.duration_s)}, which ends the τ range"))
     in_kind, in_note = input_kind_of(log)
     quantum = log.gyro.angle_quantum_arcsec
     names = list(axes) if axes else log.axes
@@ -650,6 +804,7 @@ def analyse_allan(
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:
             spike = run_beside(_outliers_streamed, log, name)
+            rep = None
             try:
                 res = _analyse_axis(name, None, log.tau0, segs, in_kind, in_note, quantum,
                                     det_info=None, series=log.series[name],
@@ -664,7 +819,7 @@ def analyse_allan(
                                       float(log.t[0]) if log.n else 0.0, segs, name,
                                       name="gyrotest-spikes")
             else:
-                out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
+                out_info, out_warn, rate, rep = _outliers(rate, log, segs, name, outliers)
             try:
                 if model_info is not None and name == model_info["axis"]:
                     rate = rate - model_pred
@@ -672,10 +827,12 @@ def analyse_allan(
                     rate, det_info = _detrend(rate, log.t, segs, detrend)
                 rates_used[name] = rate
                 res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
-                                    det_info=det_info, **common)
+                                    det_info=det_info, raw=raw, **common)
             finally:
                 if spike is not None:  # its error first, as in the serial order
-                    out_info, out_warn = spike.result()
+                    out_info, out_warn, rep = spike.result()
+            if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
+                _spike_guard(res, rate, rep, segs, log.tau0, in_kind, confidence, stop_ratio)
         results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:
@@ -691,6 +848,7 @@ def analyse_allan(
         "detrend": detrend or "none", "model": model_info, "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
         "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci, "outliers": outliers,
+        "fill": int(fill), "gap_fill": None if fill_rep is None else fill_rep.to_dict(),
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
@@ -701,7 +859,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
                   source, fit_model=True, ci="stable32", series=None,
-                  means=None) -> AxisAnalysis:
+                  means=None, raw=None) -> AxisAnalysis:
     notes: list[str] = []
     if series is not None:  # a streamed log: θ is all there is (the rate rebuilt from it)
         data = series
@@ -710,9 +868,12 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
 
     def deviation(kind: str, grid, **kw) -> DeviationResult:
         src = data if kind not in STREAM_DEVS else theta
-        return compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
-                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                                 unit="deg/h", **kw)
+        d = compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
+                              confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                              unit="deg/h", **kw)
+        if raw is None or kind == "gapadev":
+            return d
+        return _stitch_recorded(d, data[raw[0]], raw[1], stop_ratio, kw)
 
     try:
         # θ once for the table, the OADEV of the fit and the trend check (same numbers)
@@ -806,8 +967,9 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                     oh = deviation("ohdev", long_t, noise_id=False)
             except (InputError, AnalysisError) as e:
                 notes.append(f"trend check skipped: {e}")
-    warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
-                          diagnosis=diag, record_s=record_s)
+    check_inputs = dict(akdev=ak, ohdev=oh, quantum_arcsec=quantum, diagnosis=diag,
+                        record_s=record_s)
+    warns = krobka_checks(fit, readoffs, **check_inputs)
     fit, diag, warns, filt = _fold_filters(fit, diag, warns, tau0)
     if filt is not None:
         notes.append(filt["note"])
@@ -824,4 +986,4 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
         lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
         notes=notes + [f"{n} (fit weights only)" if n.startswith("EDF ") else n
-                       for n in fit.notes], ci_conservative=ci_cols)
+                       for n in fit.notes], ci_conservative=ci_cols, check_inputs=check_inputs)

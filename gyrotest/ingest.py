@@ -394,6 +394,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         units[c] = u
     for c in list(fields):
         u = _unit_for(c, prof, "uT", raw.units)
+        if c not in prof.units and not (raw.units or {}).get(c):
+            u = {"g": "G", "mg": "mG"}.get(u, u)  # hx_g: a field column's _g is gauss
         temps_u = to_internal(fields[c], u, "field", what=f"column {c!r}")
         fields[c] = temps_u
         units[c] = u

@@ -182,14 +182,16 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)
-    if plot_path:
-        from ..noise.plots import plot_allan
+    written = []
+    if plot_path or psd_path:
+        from ..noise.plots import plot_allan, plot_psd, split_by_quantity
 
-        plot_allan(items, plot_path, unit=unit)
-    if psd_path:
-        from ..noise.plots import plot_psd
-
-        plot_psd(items, psd_path, unit=unit)
+        for path, fn, what in ((plot_path, plot_allan, "plot"), (psd_path, plot_psd, "PSD plot")):
+            if not path:
+                continue
+            for group, p in split_by_quantity(items, path):  # gyros and accelerometers apart
+                fn(group, p, unit=unit)
+                written.append((p, what))
     if as_json:
         _warnings(results, as_json)
         emit_json(allan_document(results, csv=csv_path, plot=plot_path, psd=psd_path))
@@ -197,7 +199,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     for r in results:
         _render(r, unit)
     _warnings(results, as_json)
-    for p, what in ((csv_path, "table"), (plot_path, "plot"), (psd_path, "PSD plot")):
+    for p, what in [(csv_path, "table")] + written:
         if p:
             note(f"{what} written to {p}")
 
@@ -250,12 +252,22 @@ def _write_csv(path, results) -> None:
         fh.write(buf.getvalue())
 
 
+def axis_display(a, unit=DEFAULT_UNIT):
+    """The display unit of an analysed axis: ``unit`` for a gyro, the accelerometer's own
+    (σ in m/s², terms in IEEE 1293 units, unchanged) for an accelerometer."""
+    from ..display import ACCEL_DISPLAY
+
+    return ACCEL_DISPLAY if getattr(a, "quantity", "rate") == "acceleration" else unit
+
+
 def _render(r, unit=DEFAULT_UNIT) -> None:
     from rich.table import Table
 
-    f = unit.f  # σ: display rate per deg/h
+    gyro_unit = unit
     c = console()
     for a in r.axes:
+        unit = axis_display(a, gyro_unit)
+        f = unit.f  # σ: display rate per deg/h (1 for an accelerometer: m/s²)
         d = a.dev
         c.print(f"\n[bold]{escape(r.source)}[/bold] — axis {escape(str(a.axis))}: {len(a.dev.tau)} τ, "
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
@@ -364,11 +376,18 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
     if a.diagnosis is not None and a.diagnosis.final is not f:
         c.print(_fit_table(a.diagnosis.final, "Diagnosed model", unit))
     ro = a.readoffs
-    if "N_upper" in ro:
+    if "N_upper" in ro and a.quantity == "acceleration":
+        c.print(f"  classic read-offs (for comparison): VRW slope-line {fmt_num(ro['N_slope'])} "
+                f"m/s/√h at τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper (95 % bound of white "
+                f"noise) = {fmt_num(ro['N_upper'])} m/s/√h; acceleration-RW slope-line "
+                f"{fmt_num(ro['K_slope'])} m/s/h/√h; B tangent σ_min/0.664 = "
+                f"{fmt_num(ro['B_tangent'])} µg (Allan floor {fmt_num(ro['allan_floor'])} m/s² "
+                f"at τ {fmt_num(ro['allan_floor_tau_s'])} s)")
+    elif "N_upper" in ro:
         u = unit
         c.print(f"  classic read-offs (for comparison): N slope-line "
                 f"{fmt_num(u.n_value(ro['N_slope']))} at "
-                f"τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper = min σ√τ/60 = "
+                f"τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper (95 % bound of white noise) = "
                 f"{fmt_num(u.n_value(ro['N_upper']))} {u.n}; K slope-line "
                 f"{fmt_num(u.k_value(ro['K_slope']))} {u.k}; B tangent σ_min/0.664 = "
                 f"{fmt_num(u.rate_value(ro['B_tangent']))} {u.rate} (Allan floor "
@@ -387,7 +406,16 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
                 f"{s['added'] or 'base'} χ²/dof {s['chi2_per_dof']:.2f}" for s in dg.steps))
         c.print(f"  [bold]diagnosis:[/bold] {dg.verdict}")
     conv = a.conversions
-    if "N" in conv:
+    if "N" in conv and conv.get("quantity") == "acceleration":
+        n, kal, mat = conv["N"], conv["kalibr"], conv["matlab_accelparams"]
+        c.print(f"  conversions: VRW = {fmt_num(n['m_s2_per_rt_hz'])} m/s²/√Hz = "
+                f"{fmt_num(n['ug_per_rt_hz'])} µg/√Hz; Kalibr accelerometer_noise_density "
+                f"{fmt_num(kal['accelerometer_noise_density'])}, accelerometer_random_walk "
+                f"{fmt_num(kal['accelerometer_random_walk'])}; MATLAB accelparams NoiseDensity "
+                f"{fmt_num(mat['NoiseDensity'])}, BiasInstability {fmt_num(mat['BiasInstability'])}"
+                f", RandomWalk {fmt_num(mat['RandomWalk'])} (continuous-time; bounds exported as "
+                "bounds)")
+    elif "N" in conv:
         n = conv["N"]
         kal = conv["kalibr"]
         mat = conv["matlab_gyroparams"]

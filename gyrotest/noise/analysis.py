@@ -50,8 +50,10 @@ from .fit import (
     parse_terms,
     robust_edf_rules,
     slope_readoffs,
+    table_quantity,
 )
 from .impact import ImpactResult, attitude_impact
+from .quantity import ACCEL, RATE, quantity_of
 from .spectral import (
     Autocorrelation,
     CrossCorrelation,
@@ -171,6 +173,8 @@ class AxisAnalysis:
     outliers: dict[str, Any] | None = None
     #: what the warnings were computed from (to recompute them when a term's status changes)
     check_inputs: dict[str, Any] | None = field(default=None, repr=False)
+    #: "rate" (a gyro axis, IEEE 952) or "acceleration" (an accelerometer axis, IEEE 1293)
+    quantity: str = "rate"
 
     @property
     def best_fit(self) -> NoiseFit | None:
@@ -217,6 +221,9 @@ class AxisAnalysis:
         d = self.dev
         return {
             "axis": self.axis,
+            "quantity": self.quantity,
+            "sensor": quantity_of(self.quantity).sensor,
+            "units": axis_units(self.quantity),
             "input_kind": self.input_kind,
             "input": self.input_note,
             "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
@@ -253,6 +260,32 @@ def _num(v) -> float | None:
     return v if math.isfinite(v) else None
 
 
+def axis_units(quantity: str) -> dict[str, str]:
+    """The units of an axis' numbers in JSON (gyro: IEEE 952; accelerometer: IEEE 1293)."""
+    q = quantity_of(quantity)
+    out = {"sigma": q.sigma_unit, "tau": "s"}
+    for params in q.units.values():
+        out.update(params)
+    if q is RATE:
+        out["attitude"] = "deg"
+    return out
+
+
+def _accelerometers(log: GyroLog, notes: list[str]):
+    """The log's accelerometer axes in m/s² (:func:`gyrotest.accel.accel_channels`), their
+    notes added to ``notes``."""
+    from ..accel import accel_channels
+
+    acc = accel_channels(log)
+    notes.extend(acc.notes)
+    if acc:
+        notes.append("accelerometer axes " + ", ".join(
+            f"{k} ({acc.units[k]}, {acc.how[k]})" for k in acc.data)
+            + ": analysed in m/s² with the IEEE Std 1293 terms (velocity random walk, bias "
+            "instability, acceleration random walk)")
+    return acc
+
+
 @dataclass
 class AllanAnalysis:
     """The Allan analysis of one log: settings, one :class:`AxisAnalysis` per rate axis, the
@@ -287,10 +320,9 @@ class AllanAnalysis:
             "n_samples": self.n_samples,
             "duration_s": self.duration_s,
             "settings": self.settings,
-            "units": {"sigma": "deg/h", "tau": "s", "N": "deg/sqrt(h)", "B": "deg/h",
-                      "K": "deg/h/sqrt(h)", "R": "deg/h/h", "Q": "arcsec",
-                      "q_c": "deg/h/sqrt(h)", "T_c": "s", "Omega0": "deg/h", "f0": "Hz",
-                      "attitude": "deg"},
+            "units": axis_units("rate"),
+            **({"accelerometer_units": axis_units("acceleration")}
+               if any(a.quantity == "acceleration" for a in self.axes) else {}),
             "axes": [a.to_dict() for a in self.axes],
             "cross_correlation": None if self.cross is None else self.cross.to_dict(),
             "notes": list(self.notes),
@@ -411,13 +443,14 @@ def _outlier_warning(rep, mode: str) -> KrobkaWarning:
                   "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
 
 
-def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
+def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str,
+              unit: str = "deg/h"):
     """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
     None, the rate after the ``mode`` treatment)."""
     from .outliers import apply_outliers, detect_outliers
 
     rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
-                          segments=segs)
+                          segments=segs, unit=unit)
     info = _outlier_report(rep, mode)
     warn = None
     if rep.found:
@@ -426,12 +459,13 @@ def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
     return info, warn, rate, rep
 
 
-def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
+def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str,
+                   unit: str = "deg/h"):
     """:func:`_outliers` for ``--outliers flag`` (the rate stays as recorded), with plain
     arguments and only the small results, for a thread beside the analysis."""
     from .outliers import detect_outliers
 
-    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs)
+    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs, unit=unit)
     return (_outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None),
             rep)
 
@@ -510,7 +544,7 @@ def _spike_guard(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float, in
         dev_c = compute_deviation(data, tau0, input_kind=in_kind, kind="oadev",
                                   taus=[float(t) for t in res.fit_dev.tau],
                                   confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                                  unit="deg/h")
+                                  unit=res.dev.unit)
     except (InputError, AnalysisError) as e:
         res.notes.append(f"spike guard not applied: {e}")
         return
@@ -612,7 +646,7 @@ def _undecided_alpha_note(dev: DeviationResult, edf_table: np.ndarray,
 def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
     """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
     try:
-        return slope_readoffs(dev.tau, dev.sigma, edf)
+        return slope_readoffs(dev.tau, dev.sigma, edf, quantity=table_quantity(dev))
     except (ValueError, IndexError, AnalysisError):
         return {}
 
@@ -675,6 +709,7 @@ def analyse_allan(
     outliers: str = "flag",
     env_model=None,
     fill: int = 1,
+    accelerometers: bool = True,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -711,6 +746,10 @@ def analyse_allan(
     outliers : spike handling (:mod:`gyrotest.noise.outliers`): "flag" (default: detect and
         warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
         its running median) or "robust" (each spike clipped to the threshold). Never silent.
+    accelerometers : also analyse the log's accelerometer axes (extra channels named ax/ay/az,
+        acc_x ... with an acceleration unit: :func:`gyrotest.accel.accel_channels`), σ in
+        m/s², the terms in IEEE Std 1293 units (VRW m/s/√h, B µg, acceleration random walk
+        m/s/h/√h); ``axes`` may name them.
     fill : bridge gaps of at most this many missed samples before the analysis (default 1:
         single missed samples; 0 never bridges; :func:`gyrotest.gapfill.fill_gaps`, whose
         effect on σ is stated in the notes). Gaps left split the record into segments.
@@ -774,10 +813,13 @@ def analyse_allan(
                         f" of {format_duration(log.duration_s)}, which ends the τ range"))
     in_kind, in_note = input_kind_of(log)
     quantum = log.gyro.angle_quantum_arcsec
-    names = list(axes) if axes else log.axes
+    acc = _accelerometers(log, notes) if accelerometers and not streamed else None
+    acc_axes = list(acc.data) if acc else []
+    names = list(axes) if axes else log.axes + acc_axes
     for a in names:
-        if a not in log.axes:
-            raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
+        if a not in log.axes and a not in acc_axes:
+            raise InputError(f"{log.source}: no axis {a!r}; axes are "
+                             f"{', '.join(log.axes + acc_axes)}")
     results: list[AxisAnalysis] = []
     rates_used: dict[str, np.ndarray] = {}
     model_info = model_pred = None
@@ -812,22 +854,40 @@ def analyse_allan(
             finally:  # its error first, as in the serial order
                 out_info, out_warn = spike.result()
         else:
-            rate = np.asarray(log.rates[name], dtype=np.float64)
+            is_acc = name in acc_axes and name not in log.rates
+            rate = np.asarray(acc.data[name] if is_acc else log.rates[name], dtype=np.float64)
+            unit = ACCEL.sigma_unit if is_acc else "deg/h"
             det_info = None
             if outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN:  # rate stays as recorded
                 spike = run_on_thread(_outliers_flag, rate, log.tau0,
-                                      float(log.t[0]) if log.n else 0.0, segs, name,
+                                      float(log.t[0]) if log.n else 0.0, segs, name, unit,
                                       name="gyrotest-spikes")
             else:
-                out_info, out_warn, rate, rep = _outliers(rate, log, segs, name, outliers)
+                out_info, out_warn, rate, rep = _outliers(rate, log, segs, name, outliers, unit)
             try:
                 if model_info is not None and name == model_info["axis"]:
                     rate = rate - model_pred
                 if detrend not in (None, "none"):
                     rate, det_info = _detrend(rate, log.t, segs, detrend)
                 rates_used[name] = rate
-                res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
-                                    det_info=det_info, raw=raw, **common)
+                if is_acc:
+                    try:
+                        res = _analyse_axis(
+                            name, rate, log.tau0, segs, "rate",
+                            f"accelerometer output ({acc.units[name]}, read as m/s²): "
+                            "analysed as acceleration samples (average per interval), σ in "
+                            "m/s²; IEEE Std 1293 terms (N = velocity random walk)", None,
+                            det_info=det_info, raw=raw, unit=unit, **common)
+                    except (InputError, AnalysisError) as e:
+                        if axes:  # asked for by name: its error is the command's
+                            raise
+                        # found among the extra channels: a degenerate one is a note
+                        notes.append(f"accelerometer axis {name} not analysed: {e}")
+                        rates_used.pop(name, None)
+                        continue
+                else:
+                    res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
+                                        det_info=det_info, raw=raw, **common)
             finally:
                 if spike is not None:  # its error first, as in the serial order
                     out_info, out_warn, rep = spike.result()
@@ -859,7 +919,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
                   source, fit_model=True, ci="stable32", series=None,
-                  means=None, raw=None) -> AxisAnalysis:
+                  means=None, raw=None, unit: str = "deg/h") -> AxisAnalysis:
     notes: list[str] = []
     if series is not None:  # a streamed log: θ is all there is (the rate rebuilt from it)
         data = series
@@ -870,7 +930,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
         src = data if kind not in STREAM_DEVS else theta
         d = compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
                               confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                              unit="deg/h", **kw)
+                              unit=unit, **kw)
         if raw is None or kind == "gapadev":
             return d
         return _stitch_recorded(d, data[raw[0]], raw[1], stop_ratio, kw)
@@ -948,9 +1008,10 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
             edf=edf, sigma_lo=lo, sigma_hi=hi, fit=None,
             readoffs=_plain_readoffs(fit_dev, edf if fit_dev is table_dev
                                      else np.asarray(fit_dev.edf, float)),
+            quantity=table_quantity(table_dev),
             conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
             acf=acf, detrend=det_info, notes=notes, ci_conservative=ci_cols)
-    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
+    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf, quantity=fit.quantity)
     if fit_dev is table_dev:
         notes.extend(_undecided_alpha_note(table_dev, edf, fit.edf))
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
@@ -974,13 +1035,15 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
     if filt is not None:
         notes.append(filt["note"])
     best = diag.final if diag is not None else fit
-    impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
-                             record_s=record_s)
-    impact.model_terms = list(best.requested)
-    if best is not fit:
-        notes.append(f"the impact prediction uses the diagnosed model --terms "
-                     f"{','.join(best.requested)} (the requested terms misfit)")
-    return AxisAnalysis(
+    impact = None
+    if fit.quantity == "rate":  # the attitude error of three gyros; not for accelerometers
+        impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
+                                 record_s=record_s)
+        impact.model_terms = list(best.requested)
+        if best is not fit:
+            notes.append(f"the impact prediction uses the diagnosed model --terms "
+                         f"{','.join(best.requested)} (the requested terms misfit)")
+    return AxisAnalysis(quantity=fit.quantity,
         axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
         edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
         conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,

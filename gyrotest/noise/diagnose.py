@@ -300,7 +300,7 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         "tau": fit.tau, "sigma": fit.sigma, "edf": fit.edf, "sigma_lo": fit.sigma_lo,
         "sigma_hi": fit.sigma_hi, "tau0": fit.tau0, "min_edf": fit.min_edf,
         "bi_cutoff_hz": fit.bi_f0, "line_hints": list(line_hints),
-        "tau_range": fit.fit_range,
+        "tau_range": fit.fit_range, "quantity": fit.quantity,
     }
     regions = misfit_regions(fit)
     steps = [_step_record(fit, None)]

@@ -318,7 +318,7 @@ def components_from_fit(fit, *, conservative: bool = False) -> list[Component]:
             out.append(Component(t.key, 0.0, 1.0, None, t.label))
             continue
         if conservative and not t.identified and t.upper is not None:
-            c = _coef_from_value(t.key, t.upper, shape)
+            c = _coef_from_value(t.key, t.upper, shape, fit.q)
         f_hi = (t.bi_f0 if t.bi_f0 is not None else 0.5 / fit.tau0) if t.key == "B" else None
         out.append(Component(t.key, float(c), shape, f_hi, t.label))
     return out
@@ -334,7 +334,13 @@ def unshaped_bounds(fit) -> list[str]:
     return [t.label for t in fit.terms if t.key in _SHAPED and t.shape is None]
 
 
-def _coef_from_value(key: str, v: float, shape: float | None) -> float:
+def _coef_from_value(key: str, v: float, shape: float | None, q=None) -> float:
+    """The fit's coefficient c of a term from its reported main value (the inverse of
+    :func:`gyrotest.noise.fit._reported`; ``q`` the table's
+    :class:`~gyrotest.noise.quantity.Quantity`, default gyro)."""
+    if q is not None:
+        main = {"markov": "q_c", "sine": "Omega0", "blue": "alpha"}.get(key, key)
+        v = v / q.factor(main)
     if key == "N":
         return (60.0 * v) ** 2
     if key == "K":

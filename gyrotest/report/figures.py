@@ -58,6 +58,15 @@ def _close(figs) -> None:
         plt.close(f)
 
 
+def accel_figure(source: str, axis_analyses) -> Figure:
+    """The Allan figure of the accelerometer axes (all on one τ axis, σ in m/s²)."""
+    from ..noise.plots import figure_allan
+
+    png, w, h = _png_from_fig(figure_allan([(source, a) for a in axis_analyses],
+                                           size=SIZES["allan"]))
+    return Figure("accel", "", png, None, w, h)
+
+
 def allan_figure(source: str, axis_analysis) -> Figure:
     """Allan deviation, fitted model, its components and the residuals in CI units."""
     from ..noise.plots import figure_allan

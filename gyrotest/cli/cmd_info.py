@@ -69,6 +69,14 @@ def command(log, axis, display_unit, as_json, ingest_opts):
 
     gmap = gap_map(g) if g.timing.gaps else None
     summary["gap_map"] = gmap
+    from ..accel import accel_channels
+    from ..noise.resolution import output_resolution
+
+    acc = accel_channels(g)
+    summary["accelerometers"] = acc.to_dict() if (acc or acc.notes) else None
+    res = {a: output_resolution(g.rates[a], tau0=g.tau0, unit="deg/h") for a in axes}
+    res.update({a: output_resolution(v, unit="m/s^2") for a, v in acc.data.items()})
+    summary["resolution"] = {k: v for k, v in res.items() if v is not None}
     for r in reps:
         if r.found:
             warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
@@ -126,6 +134,19 @@ def command(log, axis, display_unit, as_json, ingest_opts):
         t.add_row(esc(name), esc(u), fmt_num(st["min"] * f), fmt_num(st["mean"] * f),
                   fmt_num(st["max"] * f), fmt_num(st["std"] * f))
     c.print(t)
+    if acc:
+        c.print("  accelerometers " + ", ".join(f"{esc(k)} ({esc(acc.units[k])})" for k in acc.data)
+                + ": read as m/s² (gyrotest allan analyses them: IEEE Std 1293 terms)")
+    for n_ in acc.notes:
+        c.print(f"  [yellow]{esc(n_)}[/yellow]")
+    from ..noise.resolution import resolution_text
+
+    for a, r in summary["resolution"].items():
+        if r["unit"] == "deg/h":
+            txt = resolution_text(r, unit.f, unit.rate)
+        else:
+            txt = resolution_text(r, 1e6 / 9.80665, "µg")
+        c.print(f"  {esc(a):<14} {esc(txt)}")
     if summary.get("positions"):
         c.print("  positions      " + esc(", ".join(f"{k}: {v}"
                                                   for k, v in summary["positions"].items())))

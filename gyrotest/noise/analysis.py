@@ -581,6 +581,7 @@ def _spike_guard(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float, in
                 s_raw = t.sigma.get(t.main) or 0.0
                 s_cln = tc.sigma.get(t.main) or 0.0
                 if abs(t.value - tc.value) > 2.0 * max(s_raw, s_cln, 1e-300):
+                    t.status_note = "spikes move it"
                     t.notes.append(f"without the {rep.n_outliers} flagged spike sample(s): "
                                    f"{tc.text()} (the spikes move it)")
                     marked.append(f"{t.label} moved: {t.value:.4g} with the spikes, "

@@ -258,7 +258,8 @@ class DriftSections:
         if "N_upper" in ro:
             lines.append(
                 "Graph read-offs for comparison (Krobka): "
-                f"N_upper = min σ√τ/60 = {s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
+                f"N_upper (95 % bound: min over τ of the upper confidence limit of σ × √τ/60) = "
+                f"{s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
                 f" (ray through the leftmost point); B_tangent = σ_min/0.664 = "
                 f"{s.t(base + ['slope_readoffs', 'B_tangent'], U_DPH)} (an upper bound "
                 "in a mixture); Allan floor σ_min = "

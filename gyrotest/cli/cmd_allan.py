@@ -52,7 +52,8 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Noise terms to fit: Q,N,B,K,R,markov,sine,blue (markov*2 for two; "
                    "+markov adds to the default).")
 @click.option("--axis", "axes", default=None,
-              help="Rate axes to analyse (comma-separated); default all.")
+              help="Axes to analyse (comma-separated: gyro rate columns and accelerometer "
+                   "columns); default all.")
 @click.option("--confidence", type=float, default=0.683, show_default=True,
               help="Confidence of the χ² intervals.")
 @click.option("--ci", "ci_kind", type=click.Choice(["stable32", "conservative"]),
@@ -120,6 +121,17 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
 
     Pulse-output logs are analysed as angle increments, rate logs as rate samples (from the
     ingest layer). Several LOGS (or axes) overlay on one τ axis in --plot.
+
+    Accelerometer axes of the log (ax/ay/az, acc_x ... with a unit: ax_g, acc_y_mps2) are
+    analysed beside the gyros, σ in m/s², with the IEEE Std 1293 terms: N = velocity random
+    walk (m/s/√h), B bias instability (µg), K acceleration random walk (m/s/h/√h), R (m/s/h/h),
+    Q (m/s); their plots go to NAME_accel.png.
+
+    A coefficient is identified only when its likelihood-ratio test passes and the τ that
+    carry it hold an estimate with at least 10 degrees of freedom; a prediction past the
+    record is marked extrapolated; gaps of ≤ --fill missed samples are bridged (the effect on
+    σ is stated); with --outliers flag a term identified only because of the flagged spikes
+    becomes an upper bound ("spike-driven").
 
     \b
     Examples:

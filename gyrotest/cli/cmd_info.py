@@ -36,6 +36,11 @@ def esc(x) -> str:
 def command(log, axis, display_unit, as_json, ingest_opts):
     """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps, spikes.
 
+    Also the gap map (gaps by missed samples, the longest gap-free stretch before and after
+    allan's --fill), the accelerometer axes and their units, and the output quantisation of
+    every axis read from its values (LSB, levels used, the rounding's share of the sample
+    noise, and the white rate noise N_q it adds).
+
     Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
     reported with their times (warning on stderr; "outliers" in --json).
 

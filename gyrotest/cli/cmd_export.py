@@ -176,24 +176,38 @@ def gyroparams_cmd(input, output, thermal_path, sf_path, constant_bias, range_dp
     INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
     analysed with the default Allan settings (--skip and the ingest options apply).
     """
-    from ..export.common import allan_axes, read_document, write_output
-    from ..export.matlab import UNITS, build_gyroparams, m_script, write_mat
+    from ..export.common import allan_axes, read_document
+    from ..export.matlab import build_gyroparams
 
-    suf = _check_suffix(output, (".m", ".mat"), "gyroparams")
-    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
-        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
-                         "(it is called by its name)")
+    suf = _matlab_suffix(output, "gyroparams")
     thermal = read_document(thermal_path, "envmodel") if thermal_path else None
     sf = read_document(sf_path, "scale-factor") if sf_path else None
     doc = _allan_document(input, skip, ingest_opts, as_json)
     gp = build_gyroparams(allan_axes(doc, _split(axes)), constant_bias_dph=constant_bias,
                           thermal=thermal, scale_factor=sf, range_dps=range_dps)
+    _write_matlab(output, suf, gp, as_json)
+
+
+def _matlab_suffix(output: str, kind: str) -> str:
+    """.m or .mat (a script's name must be a MATLAB identifier)."""
+    suf = _check_suffix(output, (".m", ".mat"), kind)
+    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
+        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
+                         "(it is called by its name)")
+    return suf
+
+
+def _write_matlab(output: str, suf: str, gp, as_json: bool) -> None:
+    """Write gyroparams/accelparams as a .m script or a .mat struct, and report it."""
+    from ..export.common import write_output
+    from ..export.matlab import m_script, write_mat
+
     if suf == ".m":
         write_output(output, m_script(gp))
     else:
         write_output(output, writer=lambda tmp: write_mat(tmp, gp))
-    _done(output, as_json, {"kind": "gyroparams", "axes": gp.axes, "values": gp.values,
-                            "units": {k: UNITS[k] for k in gp.values}}, [])
+    _done(output, as_json, {"kind": gp.kind, "axes": gp.axes, "values": gp.values,
+                            "units": {k: gp.units[k] for k in gp.values}}, [])
 
 
 @command.command("accelparams")
@@ -219,22 +233,14 @@ def accelparams_cmd(input, output, constant_bias, range_m_s2, axes, skip, as_jso
     INPUT is the --json output of 'gyrotest allan' (allan.json), or a log with accelerometer
     columns (ax/ay/az, acc_x ... with a unit), analysed with the default Allan settings.
     """
-    from ..export.common import allan_axes, write_output
-    from ..export.matlab import build_accelparams, m_script, write_mat
+    from ..export.common import allan_axes
+    from ..export.matlab import build_accelparams
 
-    suf = _check_suffix(output, (".m", ".mat"), "accelparams")
-    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
-        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
-                         "(it is called by its name)")
+    suf = _matlab_suffix(output, "accelparams")
     doc = _allan_document(input, skip, ingest_opts, as_json)
     gp = build_accelparams(allan_axes(doc, _split(axes)), constant_bias_m_s2=constant_bias,
                            range_m_s2=range_m_s2)
-    if suf == ".m":
-        write_output(output, m_script(gp))
-    else:
-        write_output(output, writer=lambda tmp: write_mat(tmp, gp))
-    _done(output, as_json, {"kind": "accelparams", "axes": gp.axes, "values": gp.values,
-                            "units": {k: gp.units[k] for k in gp.values}}, [])
+    _write_matlab(output, suf, gp, as_json)
 
 
 # ----------------------------------------------------------------------------- tables

@@ -115,6 +115,18 @@ def thermal_slope_dph_per_c(model: Document, at_c: float = MATLAB_T_REF_C) -> tu
     return slope, str(chan)
 
 
+def _noise_values(gp: GyroParams, axes: list[AllanAxis], table) -> None:
+    """The noise properties of ``table`` [(property, term key, conversion)] from the axes'
+    models (0 where an axis has no such term), with a note per property."""
+    for name, key, conv in table:
+        terms = [a.term(key) for a in axes]
+        if all(t is None for t in terms):
+            continue
+        gp.values[name] = [0.0 if t is None else conv(t.value) for t in terms]
+        gp.notes[name] = "; ".join(f"{a.axis}: " + (t.describe() if t else f"no {key} term")
+                                   for a, t in zip(axes, terms))
+
+
 def _one_or_three(axes: list[AllanAxis], what: str) -> None:
     if len(axes) not in (1, 3):
         raise InputError(f"{what} holds one value or three (x, y, z); the input has "
@@ -134,15 +146,9 @@ def build_accelparams(axes: list[AllanAxis], *, constant_bias_m_s2: float | None
     _one_or_three(acc, "accelparams")
     gp = GyroParams([a.axis for a in acc], sources=sorted({a.source for a in acc}),
                     kind="accelparams")
-    for name, key, conv in (("NoiseDensity", "N", vrw_m_s2_rt_hz),
+    _noise_values(gp, acc, (("NoiseDensity", "N", vrw_m_s2_rt_hz),
                             ("BiasInstability", "B", ug_m_s2),
-                            ("RandomWalk", "K", acrw_m_s3_rt_hz)):
-        terms = [a.term(key) for a in acc]
-        if all(t is None for t in terms):
-            continue
-        gp.values[name] = [0.0 if t is None else conv(t.value) for t in terms]
-        gp.notes[name] = "; ".join(f"{a.axis}: " + (t.describe() if t else f"no {key} term")
-                                   for a, t in zip(acc, terms))
+                            ("RandomWalk", "K", acrw_m_s3_rt_hz)))
     if "NoiseDensity" not in gp.values:
         raise InputError(f"{acc[0].source}: the accelerometer model has no N (velocity random "
                          "walk) term; re-run 'gyrotest allan' with N in --terms")
@@ -170,15 +176,9 @@ def build_gyroparams(axes: list[AllanAxis], *, constant_bias_dph: float | None =
                          f"{len(axes)} axes ({', '.join(a.label for a in axes)}): choose with "
                          "--axis")
     gp = GyroParams([a.axis for a in axes], sources=sorted({a.source for a in axes}))
-    for name, key, conv in (("NoiseDensity", "N", arw_rad_s_rt_hz),
-                            ("BiasInstability", "B", dph_rad_s),
-                            ("RandomWalk", "K", rrw_rad_s2_rt_hz)):
-        terms = [a.term(key) for a in axes]
-        if all(t is None for t in terms):
-            continue
-        gp.values[name] = [0.0 if t is None else conv(t.value) for t in terms]
-        gp.notes[name] = "; ".join(f"{a.axis}: " + (t.describe() if t else f"no {key} term")
-                                   for a, t in zip(axes, terms))
+    _noise_values(gp, axes, (("NoiseDensity", "N", arw_rad_s_rt_hz),
+                             ("BiasInstability", "B", dph_rad_s),
+                             ("RandomWalk", "K", rrw_rad_s2_rt_hz)))
     if "NoiseDensity" not in gp.values:
         raise InputError(f"{axes[0].source}: the noise model has no N term; re-run "
                          "'gyrotest allan' with N in --terms")

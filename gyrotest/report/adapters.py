@@ -193,13 +193,7 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
             bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False, env_model=env_model,
             accelerometers=False)  # the gyro section; [tests.accel] has the accelerometers
-        for ax in r.axes:  # the report needs the noise model (the CLI may print a bare table)
-            if ax.fit is None:
-                from ..errors import AnalysisError
-
-                raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
-                    (n for n in ax.notes if n.startswith("noise model not fitted")),
-                    "noise model not fitted"))
+        _need_fits(r)
         return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)
@@ -209,13 +203,23 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     return Analysis("allan", test.name, "allan", argv, res, obj, logs, dt)
 
 
+def _need_fits(r) -> None:
+    """The report needs the noise model of every axis (the CLI may print a bare table)."""
+    from ..errors import AnalysisError
+
+    for ax in r.axes:
+        if ax.fit is None:
+            raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
+                (n for n in ax.notes if n.startswith("noise model not fitted")),
+                "noise model not fitted"))
+
+
 # ----------------------------------------------------------------------------- accelerometers
 def run_accel(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest allan LOG --axis ax,ay,az ...``: the Allan analysis of the log's accelerometer
     axes (:func:`gyrotest.accel.accel_channels`; IEEE Std 1293 terms). An error when the log
     has none."""
     from ..accel import accel_channels
-    from ..errors import AnalysisError
     from ..noise.analysis import allan_document, analyse_allan, parse_taus
     from ..noise.fit import MIN_EDF, parse_terms
 
@@ -235,11 +239,7 @@ def run_accel(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             terms=parse_terms(test.opt("terms", "Q,N,B,K,R")), axes=list(acc.data),
             confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
             detrend=test.opt("detrend", "none"))
-        for ax in r.axes:
-            if ax.fit is None:
-                raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
-                    (n for n in ax.notes if n.startswith("noise model not fitted")),
-                    "noise model not fitted"))
+        _need_fits(r)
         return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)

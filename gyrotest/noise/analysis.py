@@ -402,7 +402,8 @@ def _outliers_streamed(log, name: str):
     from .streamed import detect_outliers_series
 
     rep = detect_outliers_series(log.series[name], log.means[name], log.tau0, channel=name)
-    return _outlier_report(rep, "flag"), None if not rep.found else _outlier_warning(rep, "flag")
+    return (_outlier_report(rep, "flag"),
+            None if not rep.found else _outlier_warning(rep, "flag"), rep)
 
 
 def _cross_streamed(log, names, notes: list[str]):
@@ -524,8 +525,75 @@ def _stitch_recorded(dev: DeviationResult, data_rec: np.ndarray, segs_rec, stop_
     return out
 
 
-def _spike_guard(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float, in_kind: str,
-                 confidence: float, stop_ratio: float | None) -> None:
+def _clean_dev(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float,
+               confidence: float, stop_ratio: float | None):
+    """The OADEV (the fit's τ) of ``rate`` with the flagged samples replaced by their running
+    median (the ``remove`` treatment), or the error text when it cannot be computed."""
+    from .outliers import apply_outliers
+
+    clean = apply_outliers(rate, rep, "remove", segments=segs)
+    data = clean * tau0 if res.input_kind == "increment" else clean
+    try:
+        return compute_deviation(data, tau0, input_kind=res.input_kind, kind="oadev",
+                                 taus=[float(t) for t in res.fit_dev.tau],
+                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                                 unit=res.dev.unit)
+    except (InputError, AnalysisError) as e:
+        return str(e)
+
+
+def _clean_dev_streamed(res: AxisAnalysis, series, means, segs, rep, confidence: float,
+                        stop_ratio: float | None):
+    """:func:`_clean_dev` of a streamed log, from its θ alone: each flagged sample's running
+    median is computed from the rate rebuilt around it (the same window as for a record read
+    whole), θ is shifted in place by the cumulative corrections, the OADEV computed, and θ
+    shifted back (no copy of the record)."""
+    from .outliers import _running_median, _seg_window
+    from .streamed import rate_segment
+
+    w_half = rep.window
+    theta = series.theta
+    step = 1.0 if series.input_kind != "increment" else series.tau0  # θ per rate unit
+    # per segment: θ indices just after the flagged samples and the running sum of their Δθ
+    fixes: list[tuple[int, int, np.ndarray, np.ndarray]] = []
+    for j, ((a, b), (p0, p1)) in enumerate(zip(segs, series.bounds)):
+        w = _seg_window(a, b, rep.window)
+        pos, dth = [], []
+        for e in rep.events:
+            if not (a <= e.start < b):
+                continue
+            lo, hi = max(a, e.start - w_half), min(b, e.stop + w_half)
+            x = rate_segment(series, means, j, lo - a, hi - a)
+            med = _running_median(x, w) if w >= 3 else x
+            i = np.arange(e.start, e.stop)
+            pos.append(i - a + 1)
+            dth.append((x[i - lo] - med[i - lo]) * step)
+        if pos:
+            q = np.concatenate(pos)
+            order = np.argsort(q, kind="stable")
+            fixes.append((p0, p1, q[order], np.cumsum(np.concatenate(dth)[order])))
+    if not fixes:
+        return "no flagged sample inside a segment"
+
+    def shift(sign: float) -> None:
+        for p0, p1, q, csum in fixes:  # θ after each flagged sample moves by the Δθ so far
+            ends = np.append(q[1:], p1 - p0)
+            for start, end, c in zip(q, ends, csum):
+                theta[p0 + start:p0 + end] -= sign * c
+
+    shift(1.0)
+    try:
+        return compute_deviation(series, series.tau0, input_kind=series.input_kind,
+                                 kind="oadev", taus=[float(t) for t in res.fit_dev.tau],
+                                 confidence=confidence, stop_ratio=stop_ratio,
+                                 unit=res.dev.unit)
+    except (InputError, AnalysisError) as e:
+        return str(e)
+    finally:
+        shift(-1.0)
+
+
+def _spike_guard(res: AxisAnalysis, rep, dev_c) -> None:
     """No term is identified from flagged spikes (``--outliers flag``, the rate analysed as
     recorded).
 
@@ -535,18 +603,12 @@ def _spike_guard(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float, in
     them: it becomes an upper bound (the 95 % bound of the refit, the sensor's own), with the
     reason in its notes and ``status_note``; a term identified both ways whose value moves by
     more than twice its 1σ gets the value without the spikes in its notes. The warnings are
-    recomputed with the new statuses. Modifies ``res`` in place."""
-    from .outliers import MAX_LISTED, apply_outliers
+    recomputed with the new statuses. Modifies ``res`` in place. ``dev_c`` is the cleaned
+    OADEV (:func:`_clean_dev`, :func:`_clean_dev_streamed`) or the reason it is missing."""
+    from .outliers import MAX_LISTED
 
-    clean = apply_outliers(rate, rep, "remove", segments=segs)
-    data = clean * tau0 if in_kind == "increment" else clean
-    try:
-        dev_c = compute_deviation(data, tau0, input_kind=in_kind, kind="oadev",
-                                  taus=[float(t) for t in res.fit_dev.tau],
-                                  confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                                  unit=res.dev.unit)
-    except (InputError, AnalysisError) as e:
-        res.notes.append(f"spike guard not applied: {e}")
+    if isinstance(dev_c, str):
+        res.notes.append(f"spike guard not applied: {dev_c}")
         return
     ev = sorted(rep.events, key=lambda e: -abs(e.peak_z))[:MAX_LISTED]
     where = ", ".join(f"t = {e.t_s:.6g} s ({e.peak_z:+.0f}σ)"
@@ -853,7 +915,11 @@ def analyse_allan(
                                     det_info=None, series=log.series[name],
                                     means=log.means[name], **common)
             finally:  # its error first, as in the serial order
-                out_info, out_warn = spike.result()
+                out_info, out_warn, rep = spike.result()
+            if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
+                _spike_guard(res, rep, _clean_dev_streamed(
+                    res, log.series[name], log.means[name], segs, rep, confidence,
+                    stop_ratio))
         else:
             is_acc = name in acc_axes and name not in log.rates
             rate = np.asarray(acc.data[name] if is_acc else log.rates[name], dtype=np.float64)
@@ -893,7 +959,8 @@ def analyse_allan(
                 if spike is not None:  # its error first, as in the serial order
                     out_info, out_warn, rep = spike.result()
             if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
-                _spike_guard(res, rate, rep, segs, log.tau0, in_kind, confidence, stop_ratio)
+                _spike_guard(res, rep, _clean_dev(res, rate, rep, segs, log.tau0, confidence,
+                                                  stop_ratio))
         results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:

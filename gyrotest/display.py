@@ -131,6 +131,10 @@ UNITS: dict[str, DisplayUnit] = {
                         "mdps²/Hz"),
 }
 DEFAULT = UNITS["deg/h"]
+#: an accelerometer axis (IEEE Std 1293): σ in m/s², the terms in their own units (VRW m/s/√h,
+#: acceleration random walk m/s/h/√h, ramp m/s/h/h, Q m/s); values are shown unchanged
+ACCEL_DISPLAY = DisplayUnit("m/s^2", 1.0, "m/s²", "m/s/√h", "m/s/h/√h", "m/s/h/h", "m/s",
+                            "(m/s²)²/Hz")
 
 _ALIASES = {
     "deg/h": "deg/h", "deg/hr": "deg/h", "°/h": "deg/h", "dph": "deg/h",

@@ -368,7 +368,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     if timing.gaps:
         tot = sum(gp.duration_s for gp in timing.gaps)
         notes.append(f"{len(timing.gaps)} gap(s) in the time axis ({tot:.4g} s in all); analyses "
-                     "work per contiguous segment and never bridge a gap")
+                     "work per contiguous segment (allan bridges gaps of ≤ --fill missed "
+                     "samples, default 1, and says so)")
     if timing.irregular:
         notes.append(f"irregular sampling: interval jitter {100 * timing.jitter_rel:.2g}% of the "
                      f"nominal {tau0:.6g} s; uniform-sampling analyses assume the nominal interval")
@@ -393,6 +394,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         units[c] = u
     for c in list(fields):
         u = _unit_for(c, prof, "uT", raw.units)
+        if c not in prof.units and not (raw.units or {}).get(c):
+            u = {"g": "G", "mg": "mG"}.get(u, u)  # hx_g: a field column's _g is gauss
         temps_u = to_internal(fields[c], u, "field", what=f"column {c!r}")
         fields[c] = temps_u
         units[c] = u

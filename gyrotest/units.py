@@ -11,10 +11,11 @@ time            s
 temperature     degC
 magnetic field  uT            H0 = 100 uT normalises magnetic coefficients (Antonova & Matveev)
 voltage         V
+acceleration    m/s²          g = 9.80665 m/s² (accelerometer columns: ``gyrotest.accel``)
 =============== ============= ==========================================================
 
-Unit strings are case-sensitive where it matters (``mT`` vs ``MT`` is not an issue here, but
-``G`` is gauss); common spellings (``°/h``, ``dph``, ``dps``, ``µT``, ``degC``) are accepted.
+Unit strings are case-sensitive where it matters (``G`` is gauss, ``g`` standard gravity;
+``mG`` milligauss, ``mg`` milli-g); common spellings (``°/h``, ``dph``, ``dps``, ``µT``, ``degC``) are accepted.
 """
 
 from __future__ import annotations
@@ -90,6 +91,28 @@ _FIELD = {
 # voltage -> V
 _VOLT = {"V": 1.0, "mV": 1e-3, "uV": 1e-6, "µV": 1e-6}
 
+#: standard gravity, m/s² (CGPM 1901; the g of accelerometer data sheets and IEEE Std 1293)
+G0 = 9.80665
+# acceleration -> m/s²
+_ACCEL = {
+    "m/s^2": 1.0,
+    "m/s2": 1.0,
+    "m/s²": 1.0,
+    "mps2": 1.0,
+    "ms2": 1.0,
+    "m/s/s": 1.0,
+    "mm/s^2": 1e-3,
+    "mm/s2": 1e-3,
+    "cm/s^2": 1e-2,
+    "gal": 1e-2,
+    "ft/s^2": 0.3048,
+    "g": G0,
+    "g0": G0,
+    "mg": G0 * 1e-3,
+    "ug": G0 * 1e-6,
+    "µg": G0 * 1e-6,
+}
+
 _TEMP = {"degC", "C", "°C", "celsius", "K", "degF", "F", "°F"}
 
 QUANTITIES = {
@@ -98,6 +121,7 @@ QUANTITIES = {
     "time": _TIME,
     "field": _FIELD,
     "voltage": _VOLT,
+    "acceleration": _ACCEL,
 }
 INTERNAL = {
     "rate": "deg/h",
@@ -106,6 +130,7 @@ INTERNAL = {
     "field": "uT",
     "voltage": "V",
     "temperature": "degC",
+    "acceleration": "m/s^2",
 }
 
 
@@ -132,7 +157,7 @@ def factor(unit: str, quantity: str, *, what: str = "") -> float:
     if u in table:
         return table[u]
     low = {k.lower(): v for k, v in table.items()}
-    if u.lower() in low and quantity != "field":
+    if u.lower() in low and quantity not in ("field", "acceleration"):
         return low[u.lower()]
     where = f" for {what}" if what else ""
     raise InputError(

@@ -1,5 +1,5 @@
 """Judgment calls of bias and allan: the bias ±1σ from the accepted (diagnosed) noise model,
-warm-up detection (randomized quick check with nulls), and KROBKA-M1's multiplicity allowance."""
+warm-up detection (randomized quick check with nulls). (KROBKA-M1's bound: test_allan_mems.py.)"""
 
 from __future__ import annotations
 
@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from gyrotest.bias import mean_uncertainty
-from gyrotest.noise.warnings import m1_threshold
 from gyrotest.simulate import simulate, write_log
 from gyrotest.warmup import detect_warmup
 
@@ -74,9 +73,3 @@ def test_bias_sigma_from_the_diagnosed_model_when_the_default_misfits():
     _, y = _sim({"N": 0.01}, hours=1.0, seed=6)
     v = mean_uncertainty(y, 0.1)
     assert v.default_rejected is None and v.model_terms == ["Q", "N", "B", "K"]
-
-
-def test_m1_multiplicity_threshold():
-    assert m1_threshold(1) == 3.0
-    assert m1_threshold(40) == pytest.approx(3.23, abs=0.01)
-    assert m1_threshold(40) > 3.1  # one point 3.1 CI off the N line among 40 τ: no warning

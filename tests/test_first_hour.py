@@ -177,29 +177,28 @@ def test_make_imu_files_lists_only_what_it_wrote(tmp_path):
 
 
 # ----------------------------------------------------------------------------- workbench hint (7)
-def _cand(term, spec, replaces=None, custom=None):
-    from gyrotest.envmodel.candidate import Candidate
+def _cand(spec, replaces=None):
+    from gyrotest.envmodel.selection import Candidate
 
-    return Candidate(term, "effect", replaces, 1.0, 1.0, 10.0, 5.0, 1e-6, 1e-6, 1, True,
-                     spec=spec, custom=custom)
+    return Candidate(spec.label, "effect", spec, replaces=replaces)
 
 
 def test_paste_hint_is_the_complete_model():
+    """The verdict's hint is the whole model to paste: the base terms (custom ones with their
+    expression), without those the new term replaces, plus the new term."""
     from gyrotest.envmodel.terms import TermSpec
-    from gyrotest.envmodel.verdict import paste_hint
 
     base = [TermSpec("bias"), TermSpec("T", ("T_case_C",)), TermSpec("dGdt", ("A", "B")),
             TermSpec("custom", (), "vib", "extra.vib_g**2")]
     new = TermSpec("hyst", ("T_case_C",))
-    assert paste_hint(base, _cand(new.label, new)) == (
+    assert _cand(new).add_hint(base) == (
         "--terms 'T(T_case_C),dGdt(A,B),hyst(T_case_C)' --term 'vib:extra.vib_g**2'")
     lag = TermSpec("Tlag", ("T_case_C",))
-    assert paste_hint(base, _cand(lag.label, lag, replaces="T(T_case_C)")).startswith(
+    assert _cand(lag, replaces="T(T_case_C)").add_hint(base).startswith(
         "--terms 'dGdt(A,B),Tlag(T_case_C)' ")
     own = TermSpec("custom", (), "rh", "extra.RH_pct")
-    assert paste_hint(base[:2], _cand("rh", own)) == "--terms 'T(T_case_C)' --term 'rh:extra.RH_pct'"
-    alt = paste_hint(base[:2], _cand("chan(RH)", TermSpec("chan", ("RH",)), custom="c:extra.RH"))
-    assert alt == "--terms 'T(T_case_C),chan(RH)' (or --terms 'T(T_case_C)' --term 'c:extra.RH')"
+    assert _cand(own).add_hint(base[:2]) == "--terms 'T(T_case_C)' --term 'rh:extra.RH_pct'"
+    assert _cand(own).add_hint(base[:1]) == "--term 'rh:extra.RH_pct'"
 
 
 def test_pasting_the_workbench_hint_fits_the_model_it_judged(tmp_path):
@@ -246,7 +245,15 @@ def test_thermal_fit_leads_with_what_the_data_determine(thermal_models):
     lines = out.splitlines()
     lead = next(i for i, ln in enumerate(lines) if "determined by this log" in ln)
     assert lead == 1, lines[:3]
-    assert "not determined" in lines[lead] and "w1" in lines[lead].split("not determined")[1]
+    det, undet = lines[lead].split("; not determined")
+    undet = undet.split(":", 1)[1].split("(")[0]
+    names = {n.strip(): True for n in det.split(":", 1)[1].split(",")}
+    names.update({n.strip(): False for n in undet.split(",")})
+    assert {"w0", "w1", "w2", "w_dV"} <= set(names) and not all(names.values())
+    # the lead line says what the table marks: |value| < 2·1σ is "not determined"
+    for name in ("w0", "w1", "w2", "w_dV"):
+        row = next(ln for ln in lines if ln.strip("│┃ ").startswith(name + " "))
+        assert ("not determined" in row) == (not names[name]), row
     assert out.index("IEEE 952 E terms") < out.index("Antonova–Matveev dw")
     assert out.index("D_T ") < out.index("w0 ")
 

@@ -133,7 +133,7 @@ def _read_for(data, where: str, profile, opts, specs=None, **kw) -> list:
 def allan_settings(*, dev="oadev", taus="10/decade", stop_ratio=None, terms="Q,N,B,K,R",
                    axis=None, confidence=0.683, ci="stable32", min_edf=None, detrend="none",
                    skip=0, outliers="flag", vehicle_rate=(), horizon="1h", bi_cutoff=None,
-                   diagnose=True, fit=True, allow_irregular=False) -> dict:
+                   diagnose=True, fit=True, allow_irregular=False, fill=1) -> dict:
     """:func:`allan`'s options as :func:`gyrotest.noise.analysis.analyse_allan` takes them
     (checked: an InputError names the option)."""
     from ..noise.analysis import parse_detrend, parse_taus
@@ -162,7 +162,7 @@ def allan_settings(*, dev="oadev", taus="10/decade", stop_ratio=None, terms="Q,N
                 detrend=detrend, run_diagnosis=bool(diagnose),
                 impact_horizon_s=parse_horizon(horizon), bi_cutoff_hz=bi_cutoff,
                 allow_irregular=allow_irregular, fit_model=bool(fit), ci=ci,
-                outliers=outliers)
+                outliers=outliers, fill=int(fill))
 
 
 def allan(data, *, dev: str = "oadev", taus: str | Sequence[float] = "10/decade",
@@ -172,7 +172,7 @@ def allan(data, *, dev: str = "oadev", taus: str | Sequence[float] = "10/decade"
           model=None, skip: float | str = 0, outliers: str = "flag",
           vehicle_rate: str | float | Sequence = (), horizon: float | str = "1h",
           bi_cutoff: float | None = None, diagnose: bool = True, fit: bool = True,
-          allow_irregular: bool = False, profile=None, sample_interval=None,
+          allow_irregular: bool = False, fill: int = 1, profile=None, sample_interval=None,
           unit: str | None = None, **read_options) -> AllanResult:
     r"""Allan noise analysis that explains itself (``gyrotest allan``).
 
@@ -252,6 +252,9 @@ def allan(data, *, dev: str = "oadev", taus: str | Sequence[float] = "10/decade"
         Fit the noise model (``--no-fit`` is ``fit=False``: the plain table).
     allow_irregular : bool, default False
         Analyse on the nominal τ0 even if the sample interval jitters by more than 10 %.
+    fill : int, default 1
+        Bridge gaps of at most this many missed samples before the analysis (0 never
+        bridges); the bridged samples serve only the longer τ (``--fill``).
     profile, sample_interval, unit, **read_options
         How to read ``data``: see :func:`read`.
 
@@ -304,7 +307,7 @@ def allan(data, *, dev: str = "oadev", taus: str | Sequence[float] = "10/decade"
                         confidence=confidence, ci=ci, min_edf=min_edf, detrend=detrend,
                         skip=skip, outliers=outliers, vehicle_rate=vehicle_rate,
                         horizon=horizon, bi_cutoff=bi_cutoff, diagnose=diagnose, fit=fit,
-                        allow_irregular=allow_irregular)
+                        allow_irregular=allow_irregular, fill=fill)
     from ..noise.analysis import analyse_allan
 
     env = _env_model(model)

@@ -52,7 +52,8 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Noise terms to fit: Q,N,B,K,R,markov,sine,blue (markov*2 for two; "
                    "+markov adds to the default).")
 @click.option("--axis", "axes", default=None,
-              help="Rate axes to analyse (comma-separated); default all.")
+              help="Axes to analyse (comma-separated: gyro rate columns and accelerometer "
+                   "columns); default all.")
 @click.option("--confidence", type=float, default=0.683, show_default=True,
               help="Confidence of the χ² intervals.")
 @click.option("--ci", "ci_kind", type=click.Choice(["stable32", "conservative"]),
@@ -78,6 +79,11 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
               help="Spikes (Hampel filter, robust scale): flag = warn with their times and "
                    "analyse as recorded; remove = replace each by its running median; robust = "
                    "clip each to the threshold.")
+@click.option("--fill", "fill", type=click.IntRange(0, 1000), default=1, show_default=True,
+              help="Bridge gaps of at most this many missed samples before the analysis "
+                   "(rate: linear interpolation, its effect on σ stated in a note; counter/"
+                   "angle: the gap's exact mean rate); 0 never bridges. Longer gaps split the "
+                   "record.")
 @click.option("--vehicle-rate", "vehicle_rates", multiple=True,
               help="Strapdown vehicle rate for the impact prediction, e.g. 10deg/s (repeatable).")
 @click.option("--horizon", default="1h", show_default=True,
@@ -102,7 +108,7 @@ _CI_COLS = ("alpha_ci", "edf_ci", "edf_ci_rule", "sigma_lo_ci", "sigma_hi_ci")
 @json_option
 @with_ingest
 def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, min_edf, detrend,
-            skip, outliers, model_path,
+            skip, outliers, model_path, fill,
             vehicle_rates, horizon, bi_cutoff, no_diagnose, no_fit, allow_irregular, csv_path,
             plot_path, psd_path, display_unit, jobs, as_json, ingest_opts):
     """Allan noise analysis that explains its answers.
@@ -117,6 +123,17 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
 
     Pulse-output logs are analysed as angle increments, rate logs as rate samples (from the
     ingest layer). Several LOGS (or axes) overlay on one τ axis in --plot.
+
+    Accelerometer axes of the log (ax/ay/az, acc_x ... with a unit: ax_g, acc_y_mps2) are
+    analysed beside the gyros, σ in m/s², with the IEEE Std 1293 terms: N = velocity random
+    walk (m/s/√h), B bias instability (µg), K acceleration random walk (m/s/h/√h), R (m/s/h/h),
+    Q (m/s); their plots go to NAME_accel.png.
+
+    A coefficient is identified only when its likelihood-ratio test passes and the τ that
+    carry it hold an estimate with at least 10 degrees of freedom; a prediction past the
+    record is marked extrapolated; gaps of ≤ --fill missed samples are bridged (the effect on
+    σ is stated); with --outliers flag a term identified only because of the flagged spikes
+    becomes an upper bound ("spike-driven").
 
     \b
     Examples:
@@ -158,7 +175,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
               axis=axis_list, confidence=confidence, stop_ratio=stop_ratio, min_edf=min_edf,
               detrend=detrend, diagnose=not no_diagnose,
               horizon=horizon, bi_cutoff=bi_cutoff, allow_irregular=allow_irregular,
-              fit=not no_fit, ci=ci_kind, outliers=outliers)
+              fit=not no_fit, ci=ci_kind, outliers=outliers, fill=fill)
     with deviation_progress():  # a bar on a terminal for τ loops longer than 2 s
         if model_path:
             from ..envmodel.model import EnvModel
@@ -179,14 +196,16 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     items = [(r.source, a) for r in results for a in r.axes]
     if csv_path:
         _write_csv(csv_path, results)
-    if plot_path:
-        from ..noise.plots import plot_allan
+    written = []
+    if plot_path or psd_path:
+        from ..noise.plots import plot_allan, plot_psd, split_by_quantity
 
-        plot_allan(items, plot_path, unit=unit)
-    if psd_path:
-        from ..noise.plots import plot_psd
-
-        plot_psd(items, psd_path, unit=unit)
+        for path, fn, what in ((plot_path, plot_allan, "plot"), (psd_path, plot_psd, "PSD plot")):
+            if not path:
+                continue
+            for group, p in split_by_quantity(items, path):  # gyros and accelerometers apart
+                fn(group, p, unit=unit)
+                written.append((p, what))
     if as_json:
         _warnings(results, as_json)
         emit_json(res.to_dict(csv=csv_path, plot=plot_path, psd=psd_path))
@@ -194,7 +213,7 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     for r in results:
         _render(r, unit)
     _warnings(results, as_json)
-    for p, what in ((csv_path, "table"), (plot_path, "plot"), (psd_path, "PSD plot")):
+    for p, what in [(csv_path, "table")] + written:
         if p:
             note(f"{what} written to {p}")
 
@@ -264,12 +283,22 @@ def _write_csv(path, results) -> None:
         fh.write(buf.getvalue())
 
 
+def axis_display(a, unit=DEFAULT_UNIT):
+    """The display unit of an analysed axis: ``unit`` for a gyro, the accelerometer's own
+    (σ in m/s², terms in IEEE 1293 units, unchanged) for an accelerometer."""
+    from ..display import ACCEL_DISPLAY
+
+    return ACCEL_DISPLAY if getattr(a, "quantity", "rate") == "acceleration" else unit
+
+
 def _render(r, unit=DEFAULT_UNIT) -> None:
     from rich.table import Table
 
-    f = unit.f  # σ: display rate per deg/h
+    gyro_unit = unit
     c = console()
     for a in r.axes:
+        unit = axis_display(a, gyro_unit)
+        f = unit.f  # σ: display rate per deg/h (1 for an accelerometer: m/s²)
         d = a.dev
         c.print(f"\n[bold]{escape(r.source)}[/bold] — axis {escape(str(a.axis))}: {len(a.dev.tau)} τ, "
                 f"{r.n_samples} samples at τ0 = {r.tau0:g} s ({format_duration(r.duration_s)})")
@@ -305,6 +334,9 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
                 row += [fmt_num(float(tab["model"][i]) * f), res]
             t.add_row(*row)
         c.print(t)
+        gf = (r.settings or {}).get("gap_fill")
+        if gf and (gf.get("filled_gaps") or gf.get("skipped")):
+            c.print(f"  gaps: {escape(gf['note'])}")
         if "residual_ci" in tab:
             c.print("  alpha: noise type per τ for the EDF (2 white angle … 0 white rate … −2 RRW); "
                     "nf = not fitted (EDF < floor)")
@@ -359,7 +391,8 @@ def _fit_table(f, title: str, unit=DEFAULT_UNIT):
         dom = "" if not term.dominant_tau else (f"{fmt_num(term.dominant_tau[0])}–"
                                                 f"{fmt_num(term.dominant_tau[1])}")
         lab = unit.convert(1.0, term.units[term.main])[1] if len(term.params) == 1 else ""
-        t.add_row(f"{term.label} {term.title}", _term_value(term, unit), lab, term.status, dom)
+        status = term.status + (f" ({term.status_note})" if term.status_note else "")
+        t.add_row(f"{term.label} {term.title}", _term_value(term, unit), lab, status, dom)
     return t
 
 
@@ -374,11 +407,18 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
     if a.diagnosis is not None and a.diagnosis.final is not f:
         c.print(_fit_table(a.diagnosis.final, "Diagnosed model", unit))
     ro = a.readoffs
-    if "N_upper" in ro:
+    if "N_upper" in ro and a.quantity == "acceleration":
+        c.print(f"  classic read-offs (for comparison): VRW slope-line {fmt_num(ro['N_slope'])} "
+                f"m/s/√h at τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper (95 % bound of white "
+                f"noise) = {fmt_num(ro['N_upper'])} m/s/√h; acceleration-RW slope-line "
+                f"{fmt_num(ro['K_slope'])} m/s/h/√h; B tangent σ_min/0.664 = "
+                f"{fmt_num(ro['B_tangent'])} µg (Allan floor {fmt_num(ro['allan_floor'])} m/s² "
+                f"at τ {fmt_num(ro['allan_floor_tau_s'])} s)")
+    elif "N_upper" in ro:
         u = unit
         c.print(f"  classic read-offs (for comparison): N slope-line "
                 f"{fmt_num(u.n_value(ro['N_slope']))} at "
-                f"τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper = min σ√τ/60 = "
+                f"τ {fmt_num(ro['N_slope_tau_s'])} s, N_upper (95 % bound of white noise) = "
                 f"{fmt_num(u.n_value(ro['N_upper']))} {u.n}; K slope-line "
                 f"{fmt_num(u.k_value(ro['K_slope']))} {u.k}; B tangent σ_min/0.664 = "
                 f"{fmt_num(u.rate_value(ro['B_tangent']))} {u.rate} (Allan floor "
@@ -397,7 +437,16 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
                 f"{s['added'] or 'base'} χ²/dof {s['chi2_per_dof']:.2f}" for s in dg.steps))
         c.print(f"  [bold]diagnosis:[/bold] {dg.verdict}")
     conv = a.conversions
-    if "N" in conv:
+    if "N" in conv and conv.get("quantity") == "acceleration":
+        n, kal, mat = conv["N"], conv["kalibr"], conv["matlab_accelparams"]
+        c.print(f"  conversions: VRW = {fmt_num(n['m_s2_per_rt_hz'])} m/s²/√Hz = "
+                f"{fmt_num(n['ug_per_rt_hz'])} µg/√Hz; Kalibr accelerometer_noise_density "
+                f"{fmt_num(kal['accelerometer_noise_density'])}, accelerometer_random_walk "
+                f"{fmt_num(kal['accelerometer_random_walk'])}; MATLAB accelparams NoiseDensity "
+                f"{fmt_num(mat['NoiseDensity'])}, BiasInstability {fmt_num(mat['BiasInstability'])}"
+                f", RandomWalk {fmt_num(mat['RandomWalk'])} (continuous-time; bounds exported as "
+                "bounds)")
+    elif "N" in conv:
         n = conv["N"]
         kal = conv["kalibr"]
         mat = conv["matlab_gyroparams"]
@@ -416,6 +465,8 @@ def _render_fit(a, unit=DEFAULT_UNIT) -> None:
         for w, s, q in zip(imp.rates_rad_s, imp.strapdown_sigma_deg, imp.ratio):
             line += (f"; strapdown at {math.degrees(w):g} deg/s {fmt_num(s * 3600)}″ "
                      f"(SINS/INS {q:.2f})")
+        if imp.extrapolated:
+            line += f" — extrapolated: {imp.extrapolation}"
         c.print(line)
         for fl in imp.flags:
             c.print(f"    {fl['text']}")

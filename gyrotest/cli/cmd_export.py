@@ -20,6 +20,7 @@ def command():
     \b
       kalibr       Kalibr imu.yaml (noise density, random walk, update rate, topic)
       gyroparams   MATLAB gyroparams as a .m script or a .mat struct
+      accelparams  MATLAB accelparams of the accelerometer axes (.m or .mat)
       stable32     Stable32-style deviation table (AF, tau, n, alpha, min/sigma/max)
       allan-csv    the Allan deviation table as CSV, units in the header
       env-model    drift model (thermal-fit/model fit -o) as .csv look-up table or .h C header
@@ -109,12 +110,14 @@ def _done(output: str, as_json: bool, summary: dict, warnings: list[str]) -> Non
 @click.option("--update-rate", type=float, default=None,
               help="IMU rate, Hz (default: the log's sample rate 1/tau0).")
 @click.option("--inflate", type=float, default=1.0, show_default=True,
-              help="Multiply the gyro densities by this factor (unmodelled effects).")
+              help="Multiply the measured densities (gyro, and accelerometer when measured) "
+                   "by this factor (unmodelled effects).")
 @click.option("--accel-noise-density", type=float, default=None,
-              help="Accelerometer noise density, m/s^2/sqrt(Hz) (default: a marked placeholder).")
+              help="Accelerometer noise density, m/s^2/sqrt(Hz) (default: measured from the "
+                   "log's accelerometer axes, else a marked placeholder).")
 @click.option("--accel-random-walk", type=float, default=None,
-              help="Accelerometer bias random walk, m/s^3/sqrt(Hz) (default: a marked "
-                   "placeholder).")
+              help="Accelerometer bias random walk, m/s^3/sqrt(Hz) (default: measured from "
+                   "the log's accelerometer axes, else a marked placeholder).")
 @_axes_option
 @_allan_input_options
 @json_option
@@ -126,7 +129,9 @@ def kalibr_cmd(input, output, rostopic, update_rate, inflate, accel_noise_densit
     gyroscope_noise_density = N·(π/180)/60 rad/s/√Hz, gyroscope_random_walk =
     K·(π/180)/216000 rad/s²/√Hz (continuous-time densities, Kalibr wiki "IMU Noise Model");
     the largest over the axes; upper-bound terms at their bound. update_rate is the log rate.
-    Accelerometer fields come from the options or are marked PLACEHOLDER.
+    accelerometer_noise_density = VRW/60 m/s²/√Hz and accelerometer_random_walk = K/216000
+    m/s³/√Hz come from the log's accelerometer axes (IEEE Std 1293 terms), or from the
+    options (which win); only without either they are marked PLACEHOLDER.
 
     INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
     analysed with the default Allan settings (--skip and the ingest options apply).
@@ -177,24 +182,71 @@ def gyroparams_cmd(input, output, thermal_path, sf_path, constant_bias, range_dp
     INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
     analysed with the default Allan settings (--skip and the ingest options apply).
     """
-    from ..export.common import allan_axes, read_document, write_output
-    from ..export.matlab import UNITS, build_gyroparams, m_script, write_mat
+    from ..export.common import allan_axes, read_document
+    from ..export.matlab import build_gyroparams
 
-    suf = _check_suffix(output, (".m", ".mat"), "gyroparams")
-    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
-        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
-                         "(it is called by its name)")
+    suf = _matlab_suffix(output, "gyroparams")
     thermal = read_document(thermal_path, "envmodel") if thermal_path else None
     sf = read_document(sf_path, "scale-factor") if sf_path else None
     doc = _allan_document(input, skip, ingest_opts, as_json)
     gp = build_gyroparams(allan_axes(doc, _split(axes)), constant_bias_dph=constant_bias,
                           thermal=thermal, scale_factor=sf, range_dps=range_dps)
+    _write_matlab(output, suf, gp, as_json)
+
+
+def _matlab_suffix(output: str, kind: str) -> str:
+    """.m or .mat (a script's name must be a MATLAB identifier)."""
+    suf = _check_suffix(output, (".m", ".mat"), kind)
+    if suf == ".m" and not Path(output).stem.replace("_", "a").isalnum():
+        raise InputError(f"-o {output}: a MATLAB script name must be letters, digits and _ "
+                         "(it is called by its name)")
+    return suf
+
+
+def _write_matlab(output: str, suf: str, gp, as_json: bool) -> None:
+    """Write gyroparams/accelparams as a .m script or a .mat struct, and report it."""
+    from ..export.common import write_output
+    from ..export.matlab import m_script, write_mat
+
     if suf == ".m":
         write_output(output, m_script(gp))
     else:
         write_output(output, writer=lambda tmp: write_mat(tmp, gp))
-    _done(output, as_json, {"kind": "gyroparams", "axes": gp.axes, "values": gp.values,
-                            "units": {k: UNITS[k] for k in gp.values}}, [])
+    _done(output, as_json, {"kind": gp.kind, "axes": gp.axes, "values": gp.values,
+                            "units": {k: gp.units[k] for k in gp.values}}, [])
+
+
+@command.command("accelparams")
+@click.argument("input", type=str)
+@click.option("-o", "--output", required=True, help="The .m script or .mat file to write.")
+@click.option("--constant-bias", type=float, default=None, help="ConstantBias, m/s^2.")
+@click.option("--range", "range_m_s2", type=float, default=None,
+              help="MeasurementRange, m/s^2.")
+@_axes_option
+@_allan_input_options
+@json_option
+@with_ingest
+def accelparams_cmd(input, output, constant_bias, range_m_s2, axes, skip, as_json,
+                    ingest_opts):
+    """MATLAB accelparams (imuSensor) from the accelerometer axes, as .m or .mat.
+
+    NoiseDensity = VRW/60 (m/s²)/√Hz, BiasInstability = B·9.80665e-6 m/s² (B in µg),
+    RandomWalk = K/216000 (m/s²)·√Hz from the Allan model of the accelerometer axes (IEEE
+    Std 1293 terms; upper bounds at their bound). One axis gives scalars, three axes 1×3
+    vectors. In MATLAB: run accel.m, or s = load('accel.mat'); c =
+    namedargs2cell(s.accelparams); p = accelparams(c{:}).
+
+    INPUT is the --json output of 'gyrotest allan' (allan.json), or a log with accelerometer
+    columns (ax/ay/az, acc_x ... with a unit), analysed with the default Allan settings.
+    """
+    from ..export.common import allan_axes
+    from ..export.matlab import build_accelparams
+
+    suf = _matlab_suffix(output, "accelparams")
+    doc = _allan_document(input, skip, ingest_opts, as_json)
+    gp = build_accelparams(allan_axes(doc, _split(axes)), constant_bias_m_s2=constant_bias,
+                           range_m_s2=range_m_s2)
+    _write_matlab(output, suf, gp, as_json)
 
 
 # ----------------------------------------------------------------------------- tables
@@ -212,7 +264,7 @@ def stable32_cmd(input, output, digits, axes, skip, as_json, ingest_opts):
 
     A header names the file, the data points, the data type, τ0, the sigma type, the
     confidence factor and the dead time, as Stable32 prints it; one block per axis. σ in the
-    unit of the analysis (deg/h).
+    unit of the analysis (deg/h for gyros, m/s² for accelerometer axes).
 
     INPUT is the --json output of 'gyrotest allan' (allan.json), or a log, which is then
     analysed with the default Allan settings (--skip and the ingest options apply).

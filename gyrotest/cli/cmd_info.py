@@ -41,6 +41,11 @@ def esc(x) -> str:
 def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
     """Summarise LOG: duration, sample rate, gyro output, channels with ranges, gaps, spikes.
 
+    Also the gap map (gaps by missed samples, the longest gap-free stretch before and after
+    allan's --fill), the accelerometer axes and their units, and the output quantisation of
+    every axis read from its values (LSB, levels used, the rounding's share of the sample
+    noise, and the white rate noise N_q it adds).
+
     Spikes in each rate axis are found with a Hampel filter (running median, robust scale) and
     reported with their times (warning on stderr; "outliers" in --json).
 
@@ -76,6 +81,18 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
     reps = [detect_outliers(g.rates[a], g.tau0, t0=float(g.t[0]) if g.n else 0.0, channel=a,
                             segments=g.segments, unit="deg/h") for a in axes if g.n >= 3]
     summary["outliers"] = {r.channel: r.to_dict() for r in reps}
+    from ..gapfill import gap_map
+
+    gmap = gap_map(g) if g.timing.gaps else None
+    summary["gap_map"] = gmap
+    from ..accel import accel_channels
+    from ..noise.resolution import output_resolution
+
+    acc = accel_channels(g)
+    summary["accelerometers"] = acc.to_dict() if (acc or acc.notes) else None
+    res = {a: output_resolution(g.rates[a], tau0=g.tau0, unit="deg/h") for a in axes}
+    res.update({a: output_resolution(v, unit="m/s^2") for a, v in acc.data.items()})
+    summary["resolution"] = {k: v for k, v in res.items() if v is not None}
     for r in reps:
         if r.found:
             warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
@@ -119,6 +136,14 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
         c.print(f"  gaps           {len(tm.gaps)}: " + "; ".join(
             f"at {gp.time_s:.6g} s for {gp.duration_s:.4g} s" for gp in tm.gaps[:5])
             + (" ..." if len(tm.gaps) > 5 else ""))
+        sizes = ", ".join(f"{v} × {k} missed" for k, v in gmap["by_missing_samples"].items())
+        c.print(f"  gap map        {sizes} ({gmap['missing_samples']} samples, "
+                f"{100 * gmap['missing_fraction']:.2g} %); longest gap-free stretch "
+                f"{format_duration(gmap['longest_gap_free_s'])}"
+                + (f"; allan --fill {gmap['fill_max_missing']} (default) bridges "
+                   f"{gmap['bridged_by_fill']} of them → longest "
+                   f"{format_duration(gmap['longest_after_fill_s'])}"
+                   if gmap["bridged_by_fill"] else ""))
     else:
         c.print("  gaps           none")
     if tm.irregular:
@@ -131,6 +156,19 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
         t.add_row(esc(name), esc(u), fmt_num(st["min"] * f), fmt_num(st["mean"] * f),
                   fmt_num(st["max"] * f), fmt_num(st["std"] * f))
     c.print(t)
+    if acc:
+        c.print("  accelerometers " + ", ".join(f"{esc(k)} ({esc(acc.units[k])})" for k in acc.data)
+                + ": read as m/s² (gyrotest allan analyses them: IEEE Std 1293 terms)")
+    for n_ in acc.notes:
+        c.print(f"  [yellow]{esc(n_)}[/yellow]")
+    from ..noise.resolution import resolution_text
+
+    for a, r in summary["resolution"].items():
+        if r["unit"] == "deg/h":
+            txt = resolution_text(r, unit.f, unit.rate)
+        else:
+            txt = resolution_text(r, 1e6 / 9.80665, "µg")
+        c.print(f"  {esc(a):<14} {esc(txt)}")
     if summary.get("positions"):
         c.print("  positions      " + esc(", ".join(f"{k}: {v}"
                                                   for k, v in summary["positions"].items())))

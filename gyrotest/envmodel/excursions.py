@@ -7,7 +7,7 @@ leaves at the working resolution (:func:`gyrotest.envmodel.floor.floor_rms`; or,
 |smoothed residual| > k·σ (k = 4 on the command line), runs closer than 3·w blocks are merged. Each
 excursion is described from the channels over the same time: temperature ramp up/down or
 turn-around (from the smoothed dT/dt), field steps per axis, supply or rate-table changes,
-and the warm-up period after power-on.
+and the warm-up period when the log starts at power-on.
 """
 
 from __future__ import annotations
@@ -62,8 +62,9 @@ def excursion_runs(resid: np.ndarray, resolution_s: float, k_sigma: float = 3.0,
     return runs, rs, sig
 
 
-def describe_interval(frame, refs, t1: float, t2: float) -> str:
-    """What the logged channels did between t1 and t2 (s): ramps, steps, warm-up."""
+def describe_interval(frame, refs, t1: float, t2: float, power_on: bool = False) -> str:
+    """What the logged channels did between t1 and t2 (s): ramps, steps, and the warm-up
+    when the log starts at the gyro's power-on (``power_on``)."""
     parts: list[str] = []
     t = frame.t
     pad = max(frame.dt, 0.5 * refs.smoothing_s)
@@ -119,7 +120,7 @@ def describe_interval(frame, refs, t1: float, t2: float) -> str:
         if float(seg.max() - seg.min()) > 1e-3 * max(1.0, float(np.abs(frame.table_rate).max())):
             parts.append("rate-table step")
     t_on = refs.t_on_s
-    if t1 - t_on < max(600.0, 0.03 * frame.duration_s):
+    if power_on and t1 - t_on < max(600.0, 0.03 * frame.duration_s):
         parts.append(f"warm-up ({(t1 - t_on) / 60:.0f}–{(t2 - t_on) / 60:.0f} min after power-on)")
     if not parts:
         return "no logged channel changes (noise, or an effect that is not logged)"
@@ -150,6 +151,6 @@ def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
     out = []
     for _, a, b, peak, mean in items:
         t1, t2 = float(t[a] - tb / 2), float(t[b - 1] + tb / 2)
-        out.append(Excursion(t1, t2, peak, mean, describe_interval(res.wd.frame, res.wd.refs,
-                                                                   t1, t2)))
+        out.append(Excursion(t1, t2, peak, mean, describe_interval(
+            res.wd.frame, res.wd.refs, t1, t2, power_on=bool(getattr(res.wd, "power_on", False)))))
     return out

@@ -160,16 +160,29 @@ class Candidate:
               f"candidates and their searched values, ΔBIC = {self.dbic:+.1f}")
         return s
 
-    def add_hint(self, base_terms: list[str] | None = None) -> str:
-        """The complete ``--terms`` (and ``--term``) to paste: the model's terms, without
-        those it replaces, plus this one."""
-        keep = [t for t in (base_terms or []) if t != "bias"
-                and t not in (self.replaces or "").split("; ")]
+    def add_hint(self, base_terms: list | None = None) -> str:
+        """The complete ``--terms`` (and ``--term``) to paste: the model's terms (labels, or
+        the :class:`TermSpec` of each, which keeps a custom term's expression), without those
+        it replaces, plus this one."""
+        replaced = set((self.replaces or "").split("; "))
+        lib: list[str] = []
+        own: list[str] = []
+        for t in base_terms or []:
+            label = t.label if isinstance(t, TermSpec) else str(t)
+            if label == "bias" or label in replaced:
+                continue
+            if isinstance(t, TermSpec) and t.key == "custom":
+                own.append(f"{t.name}:{t.expr}")
+            elif ":" in label:
+                own.append(label)
+            else:
+                lib.append(label)
         if self.spec is not None and self.spec.key == "custom":
-            lib = [t for t in keep if ":" not in t]
-            h = f"--term '{self.spec.name}:{self.spec.expr}'"
-            return (f"--terms '{','.join(lib)}' " + h) if lib else h
-        return f"--terms '{','.join(keep + [self.term])}'"
+            own.append(f"{self.spec.name}:{self.spec.expr}")
+        else:
+            lib.append(self.term)
+        parts = [f"--terms '{','.join(lib)}'"] if lib else []
+        return " ".join(parts + [f"--term '{o}'" for o in own])
 
     def to_dict(self) -> dict:
         return {"term": self.term, "effect": self.effect, "class": self.klass,

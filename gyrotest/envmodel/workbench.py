@@ -106,7 +106,7 @@ class Diagnosis:
             "replaces": ch.replaces if ch else None,
             "indistinguishable": ch.equivalents if ch else [],
             "remove_term": self.remove.to_dict() if self.remove else None,
-            "add": ch.add_hint(self.base.terms) if ch else None,
+            "add": ch.add_hint(self.base.specs) if ch else None,
             "verdict": self.verdict,
             "path": self.path,
             "rule": {"alpha_family_wise": self.alpha, "bic_tie": BIC_TIE,
@@ -178,7 +178,7 @@ def path_entry(c: Candidate, before: FitResult) -> dict:
     after = c._fit
     fl = after.floor.rms_dph if after is not None and after.floor is not None else math.nan
     return {"term": c.term, "effect": c.effect, "replaces": c.replaces,
-            "add": c.add_hint(before.terms), "lr": c.lr, "p_family": c.p_family,
+            "add": c.add_hint(before.specs), "lr": c.lr, "p_family": c.p_family,
             "rms_holdout_before_dph": before.rms_holdout,
             "rms_holdout_after_dph": c.rms_holdout,
             "noise_after": after.noise.params.to_dict() if after is not None else None,
@@ -214,7 +214,7 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
                   + (f": to separate them, {c.advice}" if c.advice else ""))
         if c._fit is not None:
             v += f"; residual noise after it: {_noise_text(c._fit.noise.params)}"
-        v += f"; add it with {c.add_hint(base.terms)}"
+        v += f"; add it with {c.add_hint(base.specs)}"
         if len(path) > 1:
             v += "; then " + ", then ".join(
                 f"{p['term']} (→ {p['rms_holdout_after_dph']:.3g} deg/h)" for p in path[1:])

@@ -134,6 +134,16 @@ class AllanAxis:
     def label(self) -> str:
         return f"{self.source} [{self.axis}]"
 
+    @property
+    def quantity(self) -> str:
+        """"rate" (a gyro axis) or "acceleration" (an accelerometer axis); documents written
+        before accelerometers were analysed hold gyro axes only."""
+        return str(self.doc.get("quantity") or "rate")
+
+    @property
+    def is_accel(self) -> bool:
+        return self.quantity == "acceleration"
+
     def model_fit(self) -> dict:
         """The noise model the analysis reports (the diagnosed one when the diagnosis changed
         it, as for the conversions of ``gyrotest allan``)."""
@@ -203,6 +213,31 @@ def rrw_rad_s2_rt_hz(k_deg_h_rt_h: float) -> float:
 def dph_rad_s(x_deg_h: float) -> float:
     """deg/h → rad/s (÷3600, ×π/180)."""
     return x_deg_h * DEG / 3600.0
+
+
+#: standard gravity, m/s² (as in :mod:`gyrotest.units`)
+G0 = 9.80665
+
+
+def vrw_m_s2_rt_hz(n_m_s_rt_h: float) -> float:
+    """Velocity random walk (m/s/√h) as a white-acceleration noise density in m/s²/√Hz.
+
+    1 m/s/√h = 1 m/s / √(3600 s) = (1/60) m/s/√s, and m/s/√s = (m/s²)/√Hz: Kalibr's
+    ``accelerometer_noise_density`` and MATLAB ``accelparams.NoiseDensity`` (IEEE Std 1293:
+    S_a = VRW², two-sided)."""
+    return n_m_s_rt_h / 60.0
+
+
+def acrw_m_s3_rt_hz(k_m_s_h_rt_h: float) -> float:
+    """Acceleration random walk (m/s/h/√h) in m/s³/√Hz = (m/s²)·√Hz: 1 m/s/h/√h =
+    (1/3600) m/s² / (60 √s) = 1/216000 m/s²/√s. Kalibr's ``accelerometer_random_walk`` and
+    MATLAB ``accelparams.RandomWalk``."""
+    return k_m_s_h_rt_h / 216000.0
+
+
+def ug_m_s2(x_ug: float) -> float:
+    """µg → m/s² (g = 9.80665 m/s²)."""
+    return x_ug * G0 * 1e-6
 
 
 # ----------------------------------------------------------------------------- writing

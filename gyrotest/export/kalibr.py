@@ -6,8 +6,11 @@ Keys and units (ethz-asl/kalibr wiki, "IMU Noise Model" and "YAML formats"):
   × (π/180)/60 (:func:`~gyrotest.export.common.arw_rad_s_rt_hz`);
 * ``gyroscope_random_walk`` — bias random walk, rad/s²/√Hz = K (deg/h/√h) × (π/180)/216000
   (:func:`~gyrotest.export.common.rrw_rad_s2_rt_hz`);
-* ``accelerometer_noise_density`` (m/s²/√Hz), ``accelerometer_random_walk`` (m/s³/√Hz) —
-  gyrotest does not measure accelerometers: from options, else marked placeholders;
+* ``accelerometer_noise_density`` (m/s²/√Hz) = VRW (m/s/√h) / 60, ``accelerometer_random_walk``
+  (m/s³/√Hz) = acceleration random walk K (m/s/h/√h) / 216000 — from the accelerometer axes
+  of the Allan document (IEEE Std 1293 terms; :mod:`gyrotest.accel`), or the options (which
+  win); only when the log had no accelerometer and no option gives them, a marked
+  placeholder;
 * ``update_rate`` — Hz, the log's sample rate (Kalibr derives the discrete σ = density·√rate
   from it), ``rostopic``.
 
@@ -22,7 +25,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InputError
-from .common import AllanAxis, arw_rad_s_rt_hz, banner, fnum, rrw_rad_s2_rt_hz
+from .common import (
+    AllanAxis,
+    acrw_m_s3_rt_hz,
+    arw_rad_s_rt_hz,
+    banner,
+    fnum,
+    rrw_rad_s2_rt_hz,
+    vrw_m_s2_rt_hz,
+)
 
 #: placeholder accelerometer values (rounded from the example in Kalibr's "YAML formats" wiki
 #: page); written only with a PLACEHOLDER comment and a warning on stderr
@@ -52,6 +63,11 @@ def kalibr_yaml(axes: list[AllanAxis], *, rostopic: str = "/imu0",
     lines_ax = []
     nd = rw = 0.0
     have_n = have_k = False
+    acc_axes = [a for a in axes if a.is_accel]
+    axes = [a for a in axes if not a.is_accel]
+    if not axes:
+        raise InputError(f"{acc_axes[0].source}: no gyro axis among {', '.join(a.axis for a in acc_axes)}; "
+                         "Kalibr's imu.yaml needs the gyro noise too")
     for a in axes:
         n, k = a.term("N"), a.term("K")
         parts = []
@@ -80,6 +96,29 @@ def kalibr_yaml(axes: list[AllanAxis], *, rostopic: str = "/imu0",
                          f"({', '.join(f'{r:g}' for r in sorted(rates))} Hz); choose one with "
                          "--axis or give --update-rate")
     acc_nd, acc_rw = accel_noise_density, accel_random_walk
+    lines_acc = []
+    meas_nd = meas_rw = None
+    for a in acc_axes:
+        n, k = a.term("N"), a.term("K")
+        parts = []
+        if n is not None:
+            meas_nd = max(meas_nd or 0.0, vrw_m_s2_rt_hz(n.value))
+            parts.append(f"VRW {n.describe()} -> {vrw_m_s2_rt_hz(n.value):.6g} m/s^2/sqrt(Hz)")
+        if k is not None:
+            meas_rw = max(meas_rw or 0.0, acrw_m_s3_rt_hz(k.value))
+            parts.append(f"acceleration RW {k.describe()} -> "
+                         f"{acrw_m_s3_rt_hz(k.value):.6g} m/s^3/sqrt(Hz)")
+        lines_acc.append(f"#   {a.label}: " + ("; ".join(parts) or "no N or K in the model"))
+    src_nd = src_rw = "option"
+    if acc_nd is None and meas_nd is not None:
+        acc_nd, src_nd = meas_nd, "measured"
+    if acc_rw is None and meas_rw is not None:
+        acc_rw, src_rw = meas_rw, "measured"
+    if acc_axes and meas_rw is None and accel_random_walk is None:
+        acc_rw, src_rw = 0.0, "measured"
+        warnings.append("the accelerometer model has no K (acceleration random walk) term: "
+                        "accelerometer_random_walk written as 0; add K to 'gyrotest allan "
+                        "--terms'")
     ph = []
     if acc_nd is None:
         acc_nd = ACCEL_PLACEHOLDER["accelerometer_noise_density"]
@@ -88,12 +127,21 @@ def kalibr_yaml(axes: list[AllanAxis], *, rostopic: str = "/imu0",
         acc_rw = ACCEL_PLACEHOLDER["accelerometer_random_walk"]
         ph.append("accelerometer_random_walk")
     if ph:
-        warnings.append(f"{' and '.join(ph)} are PLACEHOLDERS (gyrotest measures gyros only); "
-                        "give --accel-noise-density / --accel-random-walk")
-    p = KalibrParams(nd * inflate, rw * inflate, acc_nd, acc_rw, rate, rostopic)
+        warnings.append(f"{' and '.join(ph)} are PLACEHOLDERS (the log has no accelerometer "
+                        "columns: ax/ay/az, acc_x ... with a unit); give "
+                        "--accel-noise-density / --accel-random-walk")
+    # --inflate applies to what was measured (gyros, and accelerometers measured here)
+    p = KalibrParams(nd * inflate, rw * inflate,
+                     acc_nd * (inflate if src_nd == "measured" and "accelerometer_noise_density"
+                               not in ph else 1.0),
+                     acc_rw * (inflate if src_rw == "measured" and "accelerometer_random_walk"
+                               not in ph else 1.0), rate, rostopic)
 
     def tag(key):
-        return "; PLACEHOLDER, not measured: replace" if key in ph else ""
+        if key in ph:
+            return "; PLACEHOLDER, not measured: replace"
+        src = src_nd if key == "accelerometer_noise_density" else src_rw
+        return "; measured (Allan)" if src == "measured" else "; given as an option"
 
     head = [
         "# " + banner("Kalibr IMU noise parameters (imu.yaml)", sorted({a.source for a in axes})),
@@ -104,8 +152,13 @@ def kalibr_yaml(axes: list[AllanAxis], *, rostopic: str = "/imu0",
         "# from the Allan noise model of gyrotest (largest over the axes below):",
         *lines_ax,
     ]
+    if lines_acc:
+        head += ["#   accelerometer_noise_density = VRW [m/s/sqrt(h)] / 60     [m/s^2/sqrt(Hz)]",
+                 "#   accelerometer_random_walk   = K [m/s/h/sqrt(h)] / 216000 [m/s^3/sqrt(Hz)]",
+                 "# (IEEE Std 1293 terms of the accelerometer axes; options win):",
+                 *lines_acc]
     if inflate != 1.0:
-        head.append(f"# gyro values multiplied by --inflate {inflate:g} (unmodelled effects)")
+        head.append(f"# measured values multiplied by --inflate {inflate:g} (unmodelled effects)")
     body = [
         "",
         "#Accelerometers",

@@ -50,7 +50,8 @@ def stable32_block(a: AllanAxis, digits: int = 5) -> str:
     n = a.n_samples
     head = [f"# STATISTICS FOR FILE: {src} (axis {a.axis})",
             f"# Frequency Data Points 1 thru {n} of {n}" if n else "# Frequency Data",
-            f"# Data Type: frequency (gyro rate; sigma in {dev.get('unit', 'deg/h')}); "
+            f"# Data Type: frequency ({'acceleration' if a.is_accel else 'gyro rate'}; "
+            f"sigma in {dev.get('unit', 'deg/h')}); "
             f"{a.doc.get('input', '')}".rstrip("; "),
             f"# Tau0 = {a.tau0_s:g} s",
             f"# Sigma Type: {SIGMA_TYPES.get(kind, kind.upper())}",

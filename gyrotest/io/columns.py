@@ -63,8 +63,13 @@ _SUFFIX_UNITS = [
     (re.compile(r"_(ut|µt|microtesla)$", re.I), "uT"),
     (re.compile(r"_nt$", re.I), "nT"),
     (re.compile(r"_mt$"), "mT"),
-    (re.compile(r"_(g|gauss)$"), "G"),
-    (re.compile(r"_mg$"), "mG"),
+    (re.compile(r"_gauss$", re.I), "G"),
+    # ``_g`` is an acceleration in standard gravity (accelerometer columns ax_g, acc_z_g);
+    # a magnetic-field column named so is read in gauss (ingest: field_unit)
+    (re.compile(r"_g$"), "g"),
+    (re.compile(r"_mg$"), "mg"),
+    (re.compile(r"_(ug|µg)$"), "ug"),
+    (re.compile(r"_(mps2|ms2|m_?s2|mpss)$", re.I), "m/s^2"),
     (re.compile(r"_v$", re.I), "V"),
     (re.compile(r"_mv$", re.I), "mV"),
     (re.compile(r"_ms$", re.I), "ms"),

@@ -26,6 +26,7 @@ sample (arcsec), the form in which the quantization noise Q = S0/√12 is white 
 
 from __future__ import annotations
 
+import copy
 import math
 import re
 from collections.abc import Sequence
@@ -49,8 +50,10 @@ from .fit import (
     parse_terms,
     robust_edf_rules,
     slope_readoffs,
+    table_quantity,
 )
 from .impact import ImpactResult, attitude_impact
+from .quantity import ACCEL, RATE, quantity_of
 from .spectral import (
     Autocorrelation,
     CrossCorrelation,
@@ -168,6 +171,10 @@ class AxisAnalysis:
     notes: list[str] = field(default_factory=list)
     ci_conservative: dict[str, Any] | None = None
     outliers: dict[str, Any] | None = None
+    #: what the warnings were computed from (to recompute them when a term's status changes)
+    check_inputs: dict[str, Any] | None = field(default=None, repr=False)
+    #: "rate" (a gyro axis, IEEE 952) or "acceleration" (an accelerometer axis, IEEE 1293)
+    quantity: str = "rate"
 
     @property
     def best_fit(self) -> NoiseFit | None:
@@ -214,6 +221,9 @@ class AxisAnalysis:
         d = self.dev
         return {
             "axis": self.axis,
+            "quantity": self.quantity,
+            "sensor": quantity_of(self.quantity).sensor,
+            "units": axis_units(self.quantity),
             "input_kind": self.input_kind,
             "input": self.input_note,
             "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
@@ -250,6 +260,32 @@ def _num(v) -> float | None:
     return v if math.isfinite(v) else None
 
 
+def axis_units(quantity: str) -> dict[str, str]:
+    """The units of an axis' numbers in JSON (gyro: IEEE 952; accelerometer: IEEE 1293)."""
+    q = quantity_of(quantity)
+    out = {"sigma": q.sigma_unit, "tau": "s"}
+    for params in q.units.values():
+        out.update(params)
+    if q is RATE:
+        out["attitude"] = "deg"
+    return out
+
+
+def _accelerometers(log: GyroLog, notes: list[str]):
+    """The log's accelerometer axes in m/s² (:func:`gyrotest.accel.accel_channels`), their
+    notes added to ``notes``."""
+    from ..accel import accel_channels
+
+    acc = accel_channels(log)
+    notes.extend(acc.notes)
+    if acc:
+        notes.append("accelerometer axes " + ", ".join(
+            f"{k} ({acc.units[k]}, {acc.how[k]})" for k in acc.data)
+            + ": analysed in m/s² with the IEEE Std 1293 terms (velocity random walk, bias "
+            "instability, acceleration random walk)")
+    return acc
+
+
 @dataclass
 class AllanAnalysis:
     """The Allan analysis of one log: settings, one :class:`AxisAnalysis` per rate axis, the
@@ -284,10 +320,9 @@ class AllanAnalysis:
             "n_samples": self.n_samples,
             "duration_s": self.duration_s,
             "settings": self.settings,
-            "units": {"sigma": "deg/h", "tau": "s", "N": "deg/sqrt(h)", "B": "deg/h",
-                      "K": "deg/h/sqrt(h)", "R": "deg/h/h", "Q": "arcsec",
-                      "q_c": "deg/h/sqrt(h)", "T_c": "s", "Omega0": "deg/h", "f0": "Hz",
-                      "attitude": "deg"},
+            "units": axis_units("rate"),
+            **({"accelerometer_units": axis_units("acceleration")}
+               if any(a.quantity == "acceleration" for a in self.axes) else {}),
             "axes": [a.to_dict() for a in self.axes],
             "cross_correlation": None if self.cross is None else self.cross.to_dict(),
             "notes": list(self.notes),
@@ -367,7 +402,8 @@ def _outliers_streamed(log, name: str):
     from .streamed import detect_outliers_series
 
     rep = detect_outliers_series(log.series[name], log.means[name], log.tau0, channel=name)
-    return _outlier_report(rep, "flag"), None if not rep.found else _outlier_warning(rep, "flag")
+    return (_outlier_report(rep, "flag"),
+            None if not rep.found else _outlier_warning(rep, "flag"), rep)
 
 
 def _cross_streamed(log, names, notes: list[str]):
@@ -408,28 +444,223 @@ def _outlier_warning(rep, mode: str) -> KrobkaWarning:
                   "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
 
 
-def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str):
+def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str,
+              unit: str = "deg/h"):
     """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
     None, the rate after the ``mode`` treatment)."""
     from .outliers import apply_outliers, detect_outliers
 
     rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
-                          segments=segs)
+                          segments=segs, unit=unit)
     info = _outlier_report(rep, mode)
     warn = None
     if rep.found:
         warn = _outlier_warning(rep, mode)
         rate = apply_outliers(rate, rep, mode, segments=segs)
-    return info, warn, rate
+    return info, warn, rate, rep
 
 
-def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str):
+def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str,
+                   unit: str = "deg/h"):
     """:func:`_outliers` for ``--outliers flag`` (the rate stays as recorded), with plain
     arguments and only the small results, for a thread beside the analysis."""
     from .outliers import detect_outliers
 
-    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs)
-    return _outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None)
+    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs, unit=unit)
+    return (_outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None),
+            rep)
+
+
+def _stitch_recorded(dev: DeviationResult, data_rec: np.ndarray, segs_rec, stop_ratio,
+                     kw: dict[str, Any]) -> DeviationResult:
+    """``dev`` (computed across bridged gaps) with the rows at the τ that the recorded
+    samples' own gap-free segments support replaced by the deviation of those segments alone
+    (pooled, no difference spanning a gap): the filled samples then only serve the longer τ,
+    where their effect (:mod:`gyrotest.gapfill`) is far inside the confidence interval, and
+    leave the short τ, whose intervals are narrow, exactly as recorded."""
+    from .taus import max_averaging_factor
+
+    longest = max(b - a for a, b in segs_rec)
+    m_max = max_averaging_factor(longest, dev.kind, stop_ratio)
+    sel = np.flatnonzero(np.asarray(dev.m) <= m_max)
+    if sel.size == 0:
+        return dev
+    kw = {k: v for k, v in kw.items() if k != "reuse"}
+    try:
+        rec = compute_deviation(data_rec, dev.tau0, input_kind=dev.input_kind, kind=dev.kind,
+                                taus=[float(dev.tau[i]) for i in sel],
+                                confidence=dev.confidence, stop_ratio=stop_ratio,
+                                segments=segs_rec, unit=dev.unit, **kw)
+    except (InputError, AnalysisError):
+        return dev
+    pos = {int(m): j for j, m in enumerate(rec.m)}
+    out = copy.copy(dev)
+    for name in ("m", "tau", "n", "alpha", "edf", "sigma", "sigma_lo", "sigma_hi"):
+        arr = np.array(getattr(dev, name), copy=True)
+        src = getattr(rec, name)
+        for i in sel:
+            j = pos.get(int(dev.m[i]))
+            if j is not None:
+                arr[i] = src[j]
+        setattr(out, name, arr)
+    meth = list(dev.alpha_method)
+    for i in sel:
+        j = pos.get(int(dev.m[i]))
+        if j is not None and j < len(rec.alpha_method):
+            meth[i] = rec.alpha_method[j]
+    out.alpha_method = meth
+    if dev.alpha_fit is not None and rec.alpha_fit is not None:
+        af, ef = np.array(dev.alpha_fit, copy=True), np.array(dev.edf_fit, copy=True)
+        afm = list(dev.alpha_fit_method or [""] * len(af))
+        for i in sel:
+            j = pos.get(int(dev.m[i]))
+            if j is not None:
+                af[i], ef[i] = rec.alpha_fit[j], rec.edf_fit[j]
+                afm[i] = (rec.alpha_fit_method or [""] * len(rec.alpha_fit))[j]
+        out.alpha_fit, out.edf_fit, out.alpha_fit_method = af, ef, afm
+    t_split = float(max(dev.tau[i] for i in sel))
+    out.notes = list(dev.notes) + [
+        f"τ ≤ {t_split:.4g} s from the recorded samples' gap-free segments alone (pooled); "
+        "longer τ across the bridged gaps"]
+    return out
+
+
+def _clean_dev(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float,
+               confidence: float, stop_ratio: float | None):
+    """The OADEV (the fit's τ) of ``rate`` with the flagged samples replaced by their running
+    median (the ``remove`` treatment), or the error text when it cannot be computed."""
+    from .outliers import apply_outliers
+
+    clean = apply_outliers(rate, rep, "remove", segments=segs)
+    data = clean * tau0 if res.input_kind == "increment" else clean
+    try:
+        return compute_deviation(data, tau0, input_kind=res.input_kind, kind="oadev",
+                                 taus=[float(t) for t in res.fit_dev.tau],
+                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                                 unit=res.dev.unit)
+    except (InputError, AnalysisError) as e:
+        return str(e)
+
+
+def _clean_dev_streamed(res: AxisAnalysis, series, means, segs, rep, confidence: float,
+                        stop_ratio: float | None):
+    """:func:`_clean_dev` of a streamed log, from its θ alone: each flagged sample's running
+    median is computed from the rate rebuilt around it (the same window as for a record read
+    whole), θ is shifted in place by the cumulative corrections, the OADEV computed, and θ
+    shifted back (no copy of the record)."""
+    from .outliers import _running_median, _seg_window
+    from .streamed import rate_segment
+
+    w_half = rep.window
+    theta = series.theta
+    step = 1.0 if series.input_kind != "increment" else series.tau0  # θ per rate unit
+    # per segment: θ indices just after the flagged samples and the running sum of their Δθ
+    fixes: list[tuple[int, int, np.ndarray, np.ndarray]] = []
+    for j, ((a, b), (p0, p1)) in enumerate(zip(segs, series.bounds)):
+        w = _seg_window(a, b, rep.window)
+        pos, dth = [], []
+        for e in rep.events:
+            if not (a <= e.start < b):
+                continue
+            lo, hi = max(a, e.start - w_half), min(b, e.stop + w_half)
+            x = rate_segment(series, means, j, lo - a, hi - a)
+            med = _running_median(x, w) if w >= 3 else x
+            i = np.arange(e.start, e.stop)
+            pos.append(i - a + 1)
+            dth.append((x[i - lo] - med[i - lo]) * step)
+        if pos:
+            q = np.concatenate(pos)
+            order = np.argsort(q, kind="stable")
+            fixes.append((p0, p1, q[order], np.cumsum(np.concatenate(dth)[order])))
+    if not fixes:
+        return "no flagged sample inside a segment"
+
+    def shift(sign: float) -> None:
+        for p0, p1, q, csum in fixes:  # θ after each flagged sample moves by the Δθ so far
+            ends = np.append(q[1:], p1 - p0)
+            for start, end, c in zip(q, ends, csum):
+                theta[p0 + start:p0 + end] -= sign * c
+
+    shift(1.0)
+    try:
+        return compute_deviation(series, series.tau0, input_kind=series.input_kind,
+                                 kind="oadev", taus=[float(t) for t in res.fit_dev.tau],
+                                 confidence=confidence, stop_ratio=stop_ratio,
+                                 unit=res.dev.unit)
+    except (InputError, AnalysisError) as e:
+        return str(e)
+    finally:
+        shift(-1.0)
+
+
+def _spike_guard(res: AxisAnalysis, rep, dev_c) -> None:
+    """No term is identified from flagged spikes (``--outliers flag``, the rate analysed as
+    recorded).
+
+    The fitted models (requested and diagnosed) are refitted, same terms and τ, to the OADEV
+    of the rate with the flagged samples replaced by their running median (the ``remove``
+    treatment). A term identified on the record as it is but not without the spikes rests on
+    them: it becomes an upper bound (the 95 % bound of the refit, the sensor's own), with the
+    reason in its notes and ``status_note``; a term identified both ways whose value moves by
+    more than twice its 1σ gets the value without the spikes in its notes. The warnings are
+    recomputed with the new statuses. Modifies ``res`` in place. ``dev_c`` is the cleaned
+    OADEV (:func:`_clean_dev`, :func:`_clean_dev_streamed`) or the reason it is missing."""
+    from .outliers import MAX_LISTED
+
+    if isinstance(dev_c, str):
+        res.notes.append(f"spike guard not applied: {dev_c}")
+        return
+    ev = sorted(rep.events, key=lambda e: -abs(e.peak_z))[:MAX_LISTED]
+    where = ", ".join(f"t = {e.t_s:.6g} s ({e.peak_z:+.0f}σ)"
+                      for e in sorted(ev, key=lambda e: e.t_s))
+    models = [res.fit]
+    if res.diagnosis is not None and res.diagnosis.final is not res.fit:
+        models.append(res.diagnosis.final)
+    marked: list[str] = []
+    for model in models:
+        try:
+            ref = fit_deviation(dev_c, terms=model.requested, min_edf=model.min_edf,
+                                bi_cutoff_hz=model.bi_f0)
+        except AnalysisError:
+            continue
+        for t in model.terms:
+            if not t.identified:
+                continue
+            tc = ref.term(t.label)
+            if tc is None or not tc.identified:
+                bound = tc.upper if tc is not None and tc.upper is not None else t.value
+                t.notes.append(
+                    f"identified only with the {rep.n_outliers} flagged spike sample(s) "
+                    f"({where}): with them replaced by their running median the same model "
+                    f"gives {t.main} ≤ {bound:.4g} {t.units[t.main]} (not identified); "
+                    f"{t.main} = {t.value:.4g} with the spikes is theirs, not the sensor's")
+                t.status = "upper bound"
+                t.status_note = "spike-driven"
+                t.upper = bound
+                t.sigma = {k: None for k in t.sigma}
+                marked.append(f"{t.label} ({t.main} = {t.value:.4g} → ≤ {bound:.4g})")
+            else:
+                s_raw = t.sigma.get(t.main) or 0.0
+                s_cln = tc.sigma.get(t.main) or 0.0
+                if abs(t.value - tc.value) > 2.0 * max(s_raw, s_cln, 1e-300):
+                    t.status_note = "spikes move it"
+                    t.notes.append(f"without the {rep.n_outliers} flagged spike sample(s): "
+                                   f"{tc.text()} (the spikes move it)")
+                    marked.append(f"{t.label} moved: {t.value:.4g} with the spikes, "
+                                  f"{tc.value:.4g} without")
+    if not marked:
+        return
+    res.notes.append("spike guard (no term identified from flagged spikes): "
+                     + "; ".join(dict.fromkeys(marked))
+                     + " — --outliers remove analyses the rate without them")
+    if res.check_inputs is not None:
+        warns = krobka_checks(res.fit, res.readoffs, **res.check_inputs)
+        from .filtered import FILTER_STATUS
+
+        if any(t.status == FILTER_STATUS for m in models for t in m.terms):
+            warns = [w for w in warns if w.code not in ("KROBKA-M1", "KROBKA-M5")]
+        res.warnings = warns
+    res.conversions = conversions(res.best_fit)
 
 
 def _fold_filters(fit, diag, warns, tau0):
@@ -452,10 +683,33 @@ def _fold_filters(fit, diag, warns, tau0):
     return fit, diag, warns, info
 
 
+#: the table's (Stable32's) EDF is called out when it exceeds the fit's by this factor
+EDF_NOTE_RATIO = 2.0
+
+
+def _undecided_alpha_note(dev: DeviationResult, edf_table: np.ndarray,
+                          edf_fit: np.ndarray) -> list[str]:
+    """A note when Stable32's noise type at some τ (its lag-1 ACF from 30 points, or B1 from a
+    few averages) makes the printed EDF more than twice the conservative one of the fit: that
+    interval is then far too narrow to read."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        big = np.flatnonzero(np.asarray(edf_table, float)
+                             > EDF_NOTE_RATIO * np.asarray(edf_fit, float))
+    if big.size == 0:
+        return []
+    taus = ", ".join(f"{dev.tau[i]:.4g}" for i in big[:6]) + (" …" if big.size > 6 else "")
+    worst = int(big[np.argmax(np.asarray(edf_table)[big] / np.asarray(edf_fit)[big])])
+    return [f"α at τ = {taus} s is Stable32's identification from too few averages to be "
+            f"decisive (e.g. α = {int(dev.alpha[worst])}, EDF {edf_table[worst]:.3g} at τ = "
+            f"{dev.tau[worst]:.4g} s, against {edf_fit[worst]:.3g} for white rate noise): its "
+            "interval there is too narrow to read; the fit, N_upper and the warnings use the "
+            "conservative EDF (shown with --ci conservative)"]
+
+
 def _plain_readoffs(dev: DeviationResult, edf: np.ndarray) -> dict[str, Any]:
     """Slope-line read-offs of a table without a model fit ({} when the grid is too sparse)."""
     try:
-        return slope_readoffs(dev.tau, dev.sigma, edf)
+        return slope_readoffs(dev.tau, dev.sigma, edf, quantity=table_quantity(dev))
     except (ValueError, IndexError, AnalysisError):
         return {}
 
@@ -517,6 +771,8 @@ def analyse_allan(
     ci: str = "stable32",
     outliers: str = "flag",
     env_model=None,
+    fill: int = 1,
+    accelerometers: bool = True,
 ) -> AllanAnalysis:
     """Run the whole Allan analysis of ``log`` (module docstring) and return it. Pure: no
     printing, no files.
@@ -553,6 +809,13 @@ def analyse_allan(
     outliers : spike handling (:mod:`gyrotest.noise.outliers`): "flag" (default: detect and
         warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
         its running median) or "robust" (each spike clipped to the threshold). Never silent.
+    accelerometers : also analyse the log's accelerometer axes (extra channels named ax/ay/az,
+        acc_x ... with an acceleration unit: :func:`gyrotest.accel.accel_channels`), σ in
+        m/s², the terms in IEEE Std 1293 units (VRW m/s/√h, B µg, acceleration random walk
+        m/s/h/√h); ``axes`` may name them.
+    fill : bridge gaps of at most this many missed samples before the analysis (default 1:
+        single missed samples; 0 never bridges; :func:`gyrotest.gapfill.fill_gaps`, whose
+        effect on σ is stated in the notes). Gaps left split the record into segments.
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
         few usable points for the requested terms (e.g. ``taus=[1, 10, 100]``).
@@ -567,6 +830,11 @@ def analyse_allan(
         raise InputError(f"{log.source}: a streamed log supports no --skip, --detrend, --model, "
                          f"--outliers {outliers} or --dev {dev}; read it whole")
     log = _skip_warmup(log, skip_s) if not streamed else log
+    fill_rep = None
+    if not streamed and log.timing.gaps:
+        from ..gapfill import fill_gaps
+
+        log, fill_rep = fill_gaps(log, int(fill))
     if dev not in DEVIATION_KINDS:
         raise InputError(f"unknown deviation {dev!r}; choose one of {', '.join(DEVIATION_KINDS)}")
     tau_spec = parse_taus(taus)
@@ -592,15 +860,29 @@ def analyse_allan(
         notes.append(f"irregular timestamps (interval jitter {100 * tim.jitter_rel:.2g} % of τ0): "
                      f"analysed on the sample index with the nominal τ0 = {log.tau0:g} s")
     segs = log.segments
+    if streamed and fill > 0 and any(0 < g.missing <= fill for g in tim.gaps):
+        notes.append(f"streamed log: its gaps of ≤ {fill} missed sample(s) are not bridged "
+                     "(filling needs the samples in memory); they split the record")
+    if fill_rep is not None and (fill_rep.filled or fill_rep.skipped):
+        notes.append(fill_rep.note())
+    # the recorded samples and their gap-free segments: the τ these support are computed
+    # from them alone, the bridged record only adds the longer τ
+    raw = (None if fill_rep is None or fill_rep.present is None
+           else (fill_rep.present, fill_rep.segments_before))
     if len(segs) > 1:
         notes.append(f"{len(segs)} gap-free segments ({len(tim.gaps)} gap(s)): deviations pooled "
-                     "over segments (sums of squares and term counts; no difference spans a gap)")
+                     "over segments (sums of squares and term counts; no difference spans a gap)"
+                     + (f"; the longest is {format_duration(max(b - a for a, b in segs) * log.tau0)}"
+                        f" of {format_duration(log.duration_s)}, which ends the τ range"))
     in_kind, in_note = input_kind_of(log)
     quantum = log.gyro.angle_quantum_arcsec
-    names = list(axes) if axes else log.axes
+    acc = _accelerometers(log, notes) if accelerometers and not streamed else None
+    acc_axes = list(acc.data) if acc else []
+    names = list(axes) if axes else log.axes + acc_axes
     for a in names:
-        if a not in log.axes:
-            raise InputError(f"{log.source}: no axis {a!r}; axes are {', '.join(log.axes)}")
+        if a not in log.axes and a not in acc_axes:
+            raise InputError(f"{log.source}: no axis {a!r}; axes are "
+                             f"{', '.join(log.axes + acc_axes)}")
     results: list[AxisAnalysis] = []
     rates_used: dict[str, np.ndarray] = {}
     model_info = model_pred = None
@@ -627,32 +909,58 @@ def analyse_allan(
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:
             spike = run_beside(_outliers_streamed, log, name)
+            rep = None
             try:
                 res = _analyse_axis(name, None, log.tau0, segs, in_kind, in_note, quantum,
                                     det_info=None, series=log.series[name],
                                     means=log.means[name], **common)
             finally:  # its error first, as in the serial order
-                out_info, out_warn = spike.result()
+                out_info, out_warn, rep = spike.result()
+            if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
+                _spike_guard(res, rep, _clean_dev_streamed(
+                    res, log.series[name], log.means[name], segs, rep, confidence,
+                    stop_ratio))
         else:
-            rate = np.asarray(log.rates[name], dtype=np.float64)
+            is_acc = name in acc_axes and name not in log.rates
+            rate = np.asarray(acc.data[name] if is_acc else log.rates[name], dtype=np.float64)
+            unit = ACCEL.sigma_unit if is_acc else "deg/h"
             det_info = None
             if outliers == "flag" and rate.size >= SPIKE_BESIDE_MIN:  # rate stays as recorded
                 spike = run_on_thread(_outliers_flag, rate, log.tau0,
-                                      float(log.t[0]) if log.n else 0.0, segs, name,
+                                      float(log.t[0]) if log.n else 0.0, segs, name, unit,
                                       name="gyrotest-spikes")
             else:
-                out_info, out_warn, rate = _outliers(rate, log, segs, name, outliers)
+                out_info, out_warn, rate, rep = _outliers(rate, log, segs, name, outliers, unit)
             try:
                 if model_info is not None and name == model_info["axis"]:
                     rate = rate - model_pred
                 if detrend not in (None, "none"):
                     rate, det_info = _detrend(rate, log.t, segs, detrend)
                 rates_used[name] = rate
-                res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
-                                    det_info=det_info, **common)
+                if is_acc:
+                    try:
+                        res = _analyse_axis(
+                            name, rate, log.tau0, segs, "rate",
+                            f"accelerometer output ({acc.units[name]}, read as m/s²): "
+                            "analysed as acceleration samples (average per interval), σ in "
+                            "m/s²; IEEE Std 1293 terms (N = velocity random walk)", None,
+                            det_info=det_info, raw=raw, unit=unit, **common)
+                    except (InputError, AnalysisError) as e:
+                        if axes:  # asked for by name: its error is the command's
+                            raise
+                        # found among the extra channels: a degenerate one is a note
+                        notes.append(f"accelerometer axis {name} not analysed: {e}")
+                        rates_used.pop(name, None)
+                        continue
+                else:
+                    res = _analyse_axis(name, rate, log.tau0, segs, in_kind, in_note, quantum,
+                                        det_info=det_info, raw=raw, **common)
             finally:
                 if spike is not None:  # its error first, as in the serial order
-                    out_info, out_warn = spike.result()
+                    out_info, out_warn, rep = spike.result()
+            if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
+                _spike_guard(res, rep, _clean_dev(res, rate, rep, segs, log.tau0, confidence,
+                                                  stop_ratio))
         results.append(res)
         results[-1].outliers = out_info
         if out_warn is not None:
@@ -668,6 +976,7 @@ def analyse_allan(
         "detrend": detrend or "none", "model": model_info, "vehicle_rates_rad_s": [float(w) for w in vehicle_rates],
         "impact_horizon_s": impact_horizon_s, "bi_cutoff_hz": bi_cutoff_hz,
         "diagnosis": run_diagnosis, "fit": fit_model, "ci": ci, "outliers": outliers,
+        "fill": int(fill), "gap_fill": None if fill_rep is None else fill_rep.to_dict(),
     }
     return AllanAnalysis(source=log.source, tau0=log.tau0, n_samples=log.n,
                          duration_s=log.duration_s, settings=settings, axes=results, cross=cross,
@@ -678,7 +987,7 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                   vehicle_rates, confidence, stop_ratio, min_edf, run_diagnosis, spectral,
                   trend_check, horizon, bi_cutoff_hz, max_steps, record_s, det_info,
                   source, fit_model=True, ci="stable32", series=None,
-                  means=None) -> AxisAnalysis:
+                  means=None, raw=None, unit: str = "deg/h") -> AxisAnalysis:
     notes: list[str] = []
     if series is not None:  # a streamed log: θ is all there is (the rate rebuilt from it)
         data = series
@@ -687,9 +996,12 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
 
     def deviation(kind: str, grid, **kw) -> DeviationResult:
         src = data if kind not in STREAM_DEVS else theta
-        return compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
-                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                                 unit="deg/h", **kw)
+        d = compute_deviation(src, tau0, input_kind=in_kind, kind=kind, taus=grid,
+                              confidence=confidence, stop_ratio=stop_ratio, segments=segs,
+                              unit=unit, **kw)
+        if raw is None or kind == "gapadev":
+            return d
+        return _stitch_recorded(d, data[raw[0]], raw[1], stop_ratio, kw)
 
     try:
         # θ once for the table, the OADEV of the fit and the trend check (same numbers)
@@ -764,9 +1076,12 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
             edf=edf, sigma_lo=lo, sigma_hi=hi, fit=None,
             readoffs=_plain_readoffs(fit_dev, edf if fit_dev is table_dev
                                      else np.asarray(fit_dev.edf, float)),
+            quantity=table_quantity(table_dev),
             conversions={}, diagnosis=None, warnings=[], impact=None, psd=psd, lines=lines,
             acf=acf, detrend=det_info, notes=notes, ci_conservative=ci_cols)
-    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf)
+    readoffs = slope_readoffs(fit_dev.tau, fit_dev.sigma, fit.edf, quantity=fit.quantity)
+    if fit_dev is table_dev:
+        notes.extend(_undecided_alpha_note(table_dev, edf, fit.edf))
     diag = diagnose(fit, line_hints=hints, max_steps=max_steps) if run_diagnosis else None
     ak = oh = None
     if trend_check:
@@ -781,22 +1096,25 @@ def _analyse_axis(name, rate, tau0, segs, in_kind, in_note, quantum, *, dev, tau
                     oh = deviation("ohdev", long_t, noise_id=False)
             except (InputError, AnalysisError) as e:
                 notes.append(f"trend check skipped: {e}")
-    warns = krobka_checks(fit, readoffs, akdev=ak, ohdev=oh, quantum_arcsec=quantum,
-                          diagnosis=diag, record_s=record_s)
+    check_inputs = dict(akdev=ak, ohdev=oh, quantum_arcsec=quantum, diagnosis=diag,
+                        record_s=record_s)
+    warns = krobka_checks(fit, readoffs, **check_inputs)
     fit, diag, warns, filt = _fold_filters(fit, diag, warns, tau0)
     if filt is not None:
         notes.append(filt["note"])
     best = diag.final if diag is not None else fit
-    impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
-                             record_s=record_s)
-    impact.model_terms = list(best.requested)
-    if best is not fit:
-        notes.append(f"the impact prediction uses the diagnosed model --terms "
-                     f"{','.join(best.requested)} (the requested terms misfit)")
-    return AxisAnalysis(
+    impact = None
+    if fit.quantity == "rate":  # the attitude error of three gyros; not for accelerometers
+        impact = attitude_impact(best, horizon_s=horizon, vehicle_rates_rad_s=vehicle_rates,
+                                 record_s=record_s)
+        impact.model_terms = list(best.requested)
+        if best is not fit:
+            notes.append(f"the impact prediction uses the diagnosed model --terms "
+                         f"{','.join(best.requested)} (the requested terms misfit)")
+    return AxisAnalysis(quantity=fit.quantity,
         axis=name, input_kind=in_kind, input_note=in_note, dev=table_dev, fit_dev=fit_dev,
         edf=edf, sigma_lo=lo, sigma_hi=hi, fit=fit, readoffs=readoffs,
         conversions=conversions(best), diagnosis=diag, warnings=warns, impact=impact, psd=psd,
         lines=lines, acf=acf, akdev=ak, ohdev=oh, detrend=det_info,
         notes=notes + [f"{n} (fit weights only)" if n.startswith("EDF ") else n
-                       for n in fit.notes], ci_conservative=ci_cols)
+                       for n in fit.notes], ci_conservative=ci_cols, check_inputs=check_inputs)

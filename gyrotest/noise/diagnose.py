@@ -269,6 +269,26 @@ def _try(fit_kwargs: dict[str, Any], base: NoiseFit, term: str) -> Candidate:
                      added.identified, False)
 
 
+def _shape_hints(found: NoiseFit, terms: Sequence[str]) -> dict[str, float]:
+    """{label in a fit of ``terms``: shape} from the nonlinear terms of ``found`` (matched by
+    key and order: the k-th Markov term of one to the k-th of the other)."""
+    by_key: dict[str, list[float]] = {}
+    for t in found.terms:
+        if t.key not in LINEAR_KEYS and t.shape is not None and t.coef > 0:
+            by_key.setdefault(t.key, []).append(float(t.shape))
+    count = {k: sum(1 for x in terms if x == k) for k in set(terms)}
+    seen: dict[str, int] = {}
+    out: dict[str, float] = {}
+    for k in terms:
+        if k in LINEAR_KEYS:
+            continue
+        seen[k] = seen.get(k, 0) + 1
+        i = seen[k] - 1
+        if i < len(by_key.get(k, [])):
+            out[k if count[k] == 1 else f"{k}[{seen[k]}]"] = by_key[k][i]
+    return out
+
+
 def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
              line_hints: Sequence[float] = (), max_steps: int = 3,
              accept_dbic: float = ACCEPT_DBIC) -> Diagnosis:
@@ -280,7 +300,7 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         "tau": fit.tau, "sigma": fit.sigma, "edf": fit.edf, "sigma_lo": fit.sigma_lo,
         "sigma_hi": fit.sigma_hi, "tau0": fit.tau0, "min_edf": fit.min_edf,
         "bi_cutoff_hz": fit.bi_f0, "line_hints": list(line_hints),
-        "tau_range": fit.fit_range,
+        "tau_range": fit.fit_range, "quantity": fit.quantity,
     }
     regions = misfit_regions(fit)
     steps = [_step_record(fit, None)]
@@ -306,13 +326,20 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         if best is None or not best.accepted:
             break
         accepted_any = True
+        last = best
         added_terms.append(best.term)
         current = best.fit
         steps.append(_step_record(current, best.term, best))
     if accepted_any:
         # a restored requested term (e.g. N) is already in the requested list
         extra = [t for t in added_terms if not (t in LINEAR_KEYS and t in fit.requested)]
-        final = fit_noise_model(terms=list(fit.requested) + extra, with_bounds=True, **kw)
+        terms = list(fit.requested) + extra
+        # the full fit (elimination, bounds) of the accepted model, its shape search seeded
+        # with the ladder's shapes so that it reaches (at least) the optimum the ladder found
+        final = fit_noise_model(terms=terms, with_bounds=True,
+                                shape_hints=_shape_hints(current, terms), **kw)
+        # one model, one χ²: the last step of the ladder is this fit
+        steps[-1] = _step_record(final, steps[-1]["added"], last)
         # restored requested terms are named when the final fit identifies them
         back = [t for t in final.terms[:len(fit.requested)]
                 if t.key in added_terms and t.identified]
@@ -321,7 +348,7 @@ def diagnose(fit: NoiseFit, *, candidates: Sequence[str] = CANDIDATES,
         lastfit = final.terms[len(fit.requested):] + back
         desc = "; ".join(t.text() for t in lastfit)
         verdict = (f"missing term{'s' if len(added) > 1 else ''}: {', '.join(added)} ({desc}); "
-                   f"χ²/dof {steps[0]['chi2_per_dof']:.2f} → {steps[-1]['chi2_per_dof']:.2f}. "
+                   f"χ²/dof {fit.chi2_dof:.2f} → {final.chi2_dof:.2f}. "
                    f"Refit with --terms {','.join(final.requested)}")
         no_missing = False
     else:

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from statistics import NormalDist
 
 import numpy as np
 from scipy import special
@@ -577,6 +578,15 @@ def b1_noise_id(
 
 #: Points needed after averaging for the lag-1 method (Riley & Greenhall) and for B1.
 ACF_MIN_POINTS = 30
+#: Points from which a lag-1 identification of angle noise (α > 0) is decisive. Under white
+#: rate noise the lag-1 estimate ρ̂ of n averages has a standard error ≈ 1/√n, and the method
+#: reads α ≥ 1 when ρ̂ ≤ −0.25 (Riley & Greenhall 2004): that happens with probability
+#: Φ(−0.25·√n), ≤ 1 % from n = (z₀.₉₉/0.25)² = 87 points on; with 30 points it is 9 %, and the
+#: Greenhall EDF of a wrongly read α = +2 is the number of samples (thousands of times the
+#: white-rate EDF at long τ). Below this count an α > 0 is not trusted for the fit's EDF
+#: (:func:`gyrotest.noise.fit.robust_edf_rules`); Stable32's rule (30 points) is kept for the
+#: printed α.
+ACF_DECISIVE_POINTS = math.ceil((NormalDist().inv_cdf(0.99) / 0.25) ** 2)
 B1_MIN_POINTS = 8
 #: At most this many averaged points per segment enter the identification (the first ones);
 #: the lag-1 estimate then has a standard error of about 4e-3, far below the ±0.25 decision

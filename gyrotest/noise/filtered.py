@@ -48,27 +48,30 @@ def fold_filter(fit, tau0: float) -> tuple[Any, dict[str, Any] | None]:
     n_new = next(t for t in out.terms if t.key == "N")
     c_n = max(n_term.coef, 0.0)
     c_m = sum(max(t.coef, 0.0) for t in mk)
+    fN = fit.q.factor("N") if hasattr(fit, "q") else 1.0  # accelerometer units (VRW)
+    unit = "m/s/√h" if fN != 1.0 else "deg/√h"
     n_eq = math.sqrt(c_n + c_m) / 60.0
     # var(N_eq²·3600) = var(c_N) + Σ var(c_M); c = (60 N)², c_M = (q_c T_c)² / 3600
     var_c = 0.0
     if n_term.identified and n_term.sigma.get("N"):
-        var_c += (2 * 3600.0 * n_term.value * n_term.sigma["N"]) ** 2
+        var_c += (2 * 3600.0 * n_term.value * n_term.sigma["N"] / fN**2) ** 2
     for t in mk:
         q, T = t.params["q_c"], t.params["T_c"]
         sq, sT = t.sigma.get("q_c") or 0.0, t.sigma.get("T_c") or 0.0
         rel = math.hypot(sq / q if q else 0.0, sT / T if T else 0.0)
         var_c += (2 * rel * t.coef) ** 2
     sig = math.sqrt(var_c) / (2 * 3600.0 * n_eq) if n_eq > 0 else math.nan
+    n_eq, sig = n_eq * fN, sig * fN
     bound = n_term.upper if not n_term.identified else n_term.value
     filters = [(t.label, float(t.shape)) for t in mk]
     note = ("filtered white noise: " + ", ".join(
         f"{lab} T_c = {1000 * tc:.3g} ms" for lab, tc in filters)
         + f" is shorter than the sample interval τ0 = {1000 * tau0:.3g} ms — the sensor's own "
         f"output filter, not a noise source. N is quoted as the angle random walk N_eq = "
-        f"√(N² + Σ(q_c·T_c)²) = {n_eq:.4g} deg/√h (the ARW of datasheets); the filter lowers σ at "
-        "the first τ only")
+        f"√(N² + Σ(q_c·T_c)²) = {n_eq:.4g} {unit} (the ARW of datasheets); the filter lowers "
+        "σ at the first τ only")
     if bound is not None:
-        note += f" (white noise above the filter band: N ≤ {bound:.3g} deg/√h)"
+        note += f" (white noise above the filter band: N ≤ {bound:.3g} {unit})"
     n_new.params = {"N": n_eq}
     n_new.sigma = {"N": sig}
     n_new.status = "identified"

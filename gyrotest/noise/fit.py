@@ -78,6 +78,7 @@ from ..errors import AnalysisError, InputError
 from ..units import format_number
 from . import kinds as _kinds
 from .numerics import minimize_bounded, nelder_mead, nnls, root_bracketed  # no scipy.optimize
+from .quantity import ACCEL, RATE, Quantity, quantity_of
 from .terms import (
     BIAS_INSTABILITY_PLATEAU,
     blue_markov_derivative_avar,
@@ -106,6 +107,9 @@ __all__ = [
     "robust_edf_rules",
     "sanitize_edf",
     "slope_readoffs",
+    "carry_edf",
+    "MIN_EDF_IDENTIFY",
+    "n_upper_bound",
 ]
 
 DEFAULT_TERMS: tuple[str, ...] = ("Q", "N", "B", "K", "R")
@@ -136,9 +140,37 @@ UNCERTAINTY_METHOD = ("1 sigma from the sandwich covariance A^-1 B A^-1 of that 
                       "(weighted Jacobian A; B with the model-implied correlation of the Allan "
                       "variance estimates between tau); upper bounds: 95 % one-sided profile "
                       "likelihood with the Rao-Scott design-effect correction")
+#: degrees of freedom a term needs where it is carried (:func:`carry_edf`) to be identified:
+#: from ν = 10 on, the log of σ̂² ~ σ²·χ²_ν/ν, whose normal form the fit's likelihood, its
+#: sandwich covariance and the χ²₁ reference of the likelihood-ratio test rest on, has a
+#: skewness below 0.5 in magnitude (ψ''(ν/2)/ψ'(ν/2)^1.5: −0.47 at ν = 10, −0.78 at 4, −1.14
+#: at 2) and σ̂² is within ±45 % (1σ, √(2/ν)) of σ²; a term seen only through fewer degrees of
+#: freedom is an upper bound
+MIN_EDF_IDENTIFY = 10.0
 STATUS_RULE = ("identified when dropping the term raises -2 log-likelihood/design effect by >= "
-               "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue); else upper bound only (printed "
-               "with '<=')")
+               "chi2_k(0.95) (k = 1, or 2 for markov/sine/blue) and the tau that carry the term "
+               "(where its share of the model variance is at least half its largest share) "
+               f"hold an estimate with at least {MIN_EDF_IDENTIFY:g} degrees of freedom; else "
+               "upper bound only (printed with '<=')")
+
+
+def carry_edf(tau, nu, comp, total) -> tuple[float, tuple[float, float]]:
+    """(ν, (τ_lo, τ_hi)): the largest EDF among the τ that carry a term, and their span.
+
+    A term is carried by the fitted τ where its share of the model variance, comp/total, is
+    at least half of its largest share (where it is the dominant term, or near its largest
+    contribution when it never dominates). Its evidence comes from there: when no estimate
+    there has :data:`MIN_EDF_IDENTIFY` degrees of freedom, the χ² asymptotics of the fit do not
+    hold for it and it is not identified (STATUS_RULE)."""
+    t = np.asarray(tau, float)
+    e = np.asarray(nu, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(np.asarray(total, float) > 0, np.asarray(comp, float)
+                         / np.asarray(total, float), 0.0)
+    if t.size == 0 or not np.any(share > 0):
+        return 0.0, (math.nan, math.nan)
+    sel = share >= 0.5 * float(np.max(share))
+    return float(np.max(e[sel])), (float(t[sel].min()), float(t[sel].max()))
 
 
 def parse_terms(spec: str | Sequence[str] | None) -> list[str]:
@@ -354,7 +386,8 @@ class _Col:
 class _Engine:
     """σ̂² data on the fit range and the Gauss–Newton NNLS solver of the log-χ² objective."""
 
-    def __init__(self, tau, x, nu, bi_f0):
+    def __init__(self, tau, x, nu, bi_f0, q: Quantity = RATE):
+        self.q = q
         self.tau = np.asarray(tau, float)
         self.x = np.asarray(x, float)
         self.nu = np.asarray(nu, float)
@@ -455,10 +488,12 @@ def _solve_state(eng: _Engine, cols: list[_Col], s0: np.ndarray | None = None,
     return _State([_Col(k.key, k.label, k.shape, k.lo, k.hi) for k in cols], c, s, D)
 
 
-def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]) -> _State:
+def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float],
+                     shape_hints: dict[str, float] | None = None) -> _State:
     """Place each nonlinear term by a log-grid search of the profile deviance (one at a time,
     others fixed), then refine all shapes jointly (Nelder–Mead on log-shapes, clipped to their
-    ranges)."""
+    ranges). ``shape_hints`` (label → shape) join the grid of their term (the shapes of a
+    model already found, so that a refit of it reaches at least that optimum)."""
     nl = [i for i, c in enumerate(cols) if c.key in NONLINEAR_KEYS]
     placed: list[int] = []
     lin = [i for i in range(len(cols)) if i not in nl]
@@ -466,6 +501,9 @@ def _optimise_shapes(eng: _Engine, cols: list[_Col], line_hints: Sequence[float]
         col = cols[i]
         n_grid = 240 if col.key == "sine" else 48
         grid = list(np.geomspace(col.lo, col.hi, n_grid))
+        hint = (shape_hints or {}).get(col.label)
+        if hint is not None and col.lo <= hint <= col.hi:
+            grid.append(float(hint))
         if col.key == "sine":
             for f in line_hints:
                 if col.lo <= f <= col.hi:
@@ -614,47 +652,51 @@ class _Analysis:
 # Result types
 # ---------------------------------------------------------------------------------------------
 
-_UNITS = {
-    "Q": {"Q": "arcsec"},
-    "N": {"N": "deg/sqrt(h)"},
-    "B": {"B": "deg/h"},
-    "K": {"K": "deg/h/sqrt(h)"},
-    "R": {"R": "deg/h/h"},
-    "markov": {"q_c": "deg/h/sqrt(h)", "T_c": "s"},
-    "sine": {"Omega0": "deg/h", "f0": "Hz"},
-    "blue": {"alpha": "(deg/h)^2/Hz", "beta": "Hz"},
-}
-_TITLES = {
-    "Q": "quantization", "N": "ARW", "B": "bias instability", "K": "RRW", "R": "rate ramp",
-    "markov": "Gauss-Markov", "sine": "sinusoid", "blue": "blue, S(0)=0",
-}
+_UNITS = RATE.units  # the gyro units; an accelerometer fit's are ACCEL.units
+_TITLES = RATE.titles
 _MAIN = {"Q": "Q", "N": "N", "B": "B", "K": "K", "R": "R", "markov": "q_c", "sine": "Omega0",
          "blue": "alpha"}
 
 
-def _reported(key: str, c: float, shape: float | None) -> dict[str, float]:
+def _reported(key: str, c: float, shape: float | None, q: Quantity = RATE) -> dict[str, float]:
+    """The reported parameters of a term from its coefficient c (gyro formulas, each times
+    ``q.factor`` for an accelerometer: :mod:`gyrotest.noise.quantity`)."""
     rc = math.sqrt(max(c, 0.0))
     if key == "Q":
-        return {"Q": rc}
-    if key == "N":
-        return {"N": rc / 60.0}
-    if key == "B":
-        return {"B": rc}
-    if key == "K":
-        return {"K": rc * 60.0}
-    if key == "R":
-        return {"R": rc * 3600.0}
-    if key == "markov":
-        return {"q_c": 60.0 * rc / shape, "T_c": shape}
-    if key == "sine":
-        return {"Omega0": rc, "f0": shape}
-    if key == "blue":
-        return {"alpha": max(c, 0.0), "beta": shape}
-    raise KeyError(key)
+        out = {"Q": rc}
+    elif key == "N":
+        out = {"N": rc / 60.0}
+    elif key == "B":
+        out = {"B": rc}
+    elif key == "K":
+        out = {"K": rc * 60.0}
+    elif key == "R":
+        out = {"R": rc * 3600.0}
+    elif key == "markov":
+        out = {"q_c": 60.0 * rc / shape, "T_c": shape}
+    elif key == "sine":
+        out = {"Omega0": rc, "f0": shape}
+    elif key == "blue":
+        out = {"alpha": max(c, 0.0), "beta": shape}
+    else:
+        raise KeyError(key)
+    if q is not RATE:
+        out = {k: v * q.factor(k) if v is not None else v for k, v in out.items()}
+    return out
 
 
-def _derived(key: str, c: float, shape: float | None) -> dict[str, float]:
+def _derived(key: str, c: float, shape: float | None, q: Quantity = RATE) -> dict[str, float]:
     """Derived quantities users ask for (all from the same coefficients)."""
+    if q is not RATE:
+        if key == "markov":
+            return {"N_eq": _reported("N", c, None, q)["N"], "peak_tau_s": 1.89262 * shape}
+        if key == "sine":
+            return {"period_s": 1.0 / shape, "first_lobe_tau_s": 0.37101 / shape}
+        if key == "N":
+            return {"sigma_1s_m_s2": math.sqrt(max(c, 0.0))}
+        if key == "B":
+            return {"allan_floor_m_s2": math.sqrt(max(c, 0.0)) * BIAS_INSTABILITY_PLATEAU}
+        return {}
     if key == "markov":
         q_int = math.sqrt(max(c, 0.0)) / shape
         return {"N_eq_deg_rt_h": math.sqrt(max(c, 0.0)) / 60.0,
@@ -700,6 +742,12 @@ class FitTerm:
     bi_f0: float | None = None
     design_effect: float = 1.0
     notes: list[str] = field(default_factory=list)
+    carry_edf: float | None = None
+    #: why the status is what it is when a rule beyond the likelihood-ratio test set it
+    #: (e.g. "spike-driven": identified only because of flagged spikes)
+    status_note: str = ""
+    #: what the fitted table measures: "rate" (gyro, IEEE 952) or "acceleration" (IEEE 1293)
+    quantity: str = "rate"
 
     @property
     def registry(self) -> str:
@@ -707,11 +755,11 @@ class FitTerm:
 
     @property
     def units(self) -> dict[str, str]:
-        return dict(_UNITS[self.key])
+        return dict(quantity_of(self.quantity).units[self.key])
 
     @property
     def title(self) -> str:
-        return _TITLES[self.key]
+        return quantity_of(self.quantity).titles[self.key]
 
     @property
     def identified(self) -> bool:
@@ -780,6 +828,7 @@ class FitTerm:
             "title": self.title,
             "registry_key": self.registry,
             "status": self.status,
+            "status_note": self.status_note,
             "params": dict(self.params),
             "units": self.units,
             "sigma": dict(self.sigma),
@@ -787,6 +836,7 @@ class FitTerm:
             "display": self.text(),
             "delta_deviance": self.delta_deviance,
             "design_effect": self.design_effect,
+            "carry_edf": self.carry_edf,
             "derived": dict(self.derived),
             "dominant_tau_s": list(self.dominant_tau) if self.dominant_tau else None,
             "zero_dc_psd": self.zero_dc_psd,
@@ -832,6 +882,13 @@ class NoiseFit:
     notes: list[str] = field(default_factory=list)
     cov: np.ndarray | None = None
     cov_labels: list[str] = field(default_factory=list)
+    #: "rate" (a gyro's Allan table, σ in deg/h) or "acceleration" (σ in m/s²)
+    quantity: str = "rate"
+
+    @property
+    def q(self) -> Quantity:
+        """The :class:`~gyrotest.noise.quantity.Quantity` of the table (units, scales)."""
+        return quantity_of(self.quantity)
 
     # ---- evaluation ---------------------------------------------------------------------
     def model_avar(self, tau=None) -> np.ndarray:
@@ -882,7 +939,7 @@ class NoiseFit:
 
             for term in self.terms:
                 if not term.identified and term.upper and term.key in LINEAR_KEYS:
-                    cu = _coef_from_value(term.key, term.upper, term.shape)
+                    cu = _coef_from_value(term.key, term.upper, term.shape, self.q)
                     val = val + max(cu - term.coef, 0.0) * _basis(term.key, t, None, term.bi_f0)
         return val, np.sqrt(np.maximum(var, 0.0))
 
@@ -966,6 +1023,7 @@ class NoiseFit:
         r = self.residuals()
         lo, hi = self.fit_range
         return {
+            "quantity": self.quantity,
             "terms_requested": list(self.requested),
             "method": FIT_METHOD,
             "uncertainty_method": UNCERTAINTY_METHOD,
@@ -1007,6 +1065,7 @@ def fit_noise_model(
     tau0: float | None = None, min_edf: float = MIN_EDF, bi_cutoff_hz: float | None = None,
     line_hints: Sequence[float] = (), tau_range: tuple[float, float] | None = None,
     with_bounds: bool = True, confidence: float = 0.683, scan: bool = False,
+    shape_hints: dict[str, float] | None = None, quantity: str = "rate",
 ) -> NoiseFit:
     """Fit σ²_model(τ) = Σ c_j g_j(τ) jointly to an Allan deviation table (module docstring).
 
@@ -1026,6 +1085,10 @@ def fit_noise_model(
     confidence : of ``sigma_lo``/``sigma_hi`` (used where they are recomputed).
     scan : fast mode for the diagnosis: no backward elimination, no bounds, and only the last
         term is tested (the others get status "not tested").
+    shape_hints : {term label: shape} tried with the shape search (e.g. the T_c of a Markov
+        term the diagnosis found), so that refitting a found model reaches its optimum.
+    quantity : "rate" (gyro; σ in deg/h) or "acceleration" (accelerometer; σ in m/s²): the
+        units the coefficients are reported in (:mod:`gyrotest.noise.quantity`).
 
     The EDF is first made non-increasing in τ (:func:`sanitize_edf`).
 
@@ -1070,7 +1133,8 @@ def fit_noise_model(
             f"τ have EDF < {min_edf:g} (too few clusters: the confidence interval blows up) and are shown only")
     tu, xu, nuu = tau[used], sigma[used] ** 2, edf[used]
     tau0 = float(tau0) if tau0 else float(tu.min())
-    eng = _Engine(tu, xu, nuu, bi_cutoff_hz)
+    q = quantity_of(quantity)
+    eng = _Engine(tu, xu, nuu, bi_cutoff_hz, q)
     lo_t, hi_t = float(tu.min()), float(tu.max())
     cols: list[_Col] = []
     counts: dict[str, int] = {}
@@ -1088,7 +1152,7 @@ def fit_noise_model(
     thr = {k: special.chdtri(2 if k in NONLINEAR_KEYS else 1, 1 - _LRT_P) for k in KNOWN_TERMS}
     active = list(cols)
     dropped: dict[str, tuple[_Col, float, float]] = {}  # label -> (col, dD, coef) at drop time
-    st = (_optimise_shapes(eng, active, line_hints)
+    st = (_optimise_shapes(eng, active, line_hints, shape_hints)
           if any(c.key in NONLINEAR_KEYS for c in active) else _solve_state(eng, active))
     # terms at zero leave the model unchanged
     zero = [j for j in range(len(active)) if st.c[j] <= 0]
@@ -1138,7 +1202,7 @@ def fit_noise_model(
         sigma_hi=sigma_hi, edf=edf, used=used, deviance=st.D, chi2=chi2,
         dof=max(n_u - n_free, 0), n_free=n_free, n_eff=an.n_eff, satterthwaite=an.satt,
         tau0=tau0, bi_f0=bi_cutoff_hz, min_edf=min_edf, notes=notes, cov=an.cov,
-        cov_labels=an.labels,
+        cov_labels=an.labels, quantity=q.key,
     )
     pos = {c.label: j for j, c in enumerate(st.cols)}
     for col in cols:
@@ -1152,22 +1216,34 @@ def fit_noise_model(
             else:
                 dD = an.delta_deviance(j)
                 identified = c > 0 and dD >= thr[col.key]
-            params = _reported(col.key, c, fc.shape)
+            nu_j, span_j = carry_edf(eng.tau, eng.nu, an.G[:, j] * c, st.s)
+            thin = identified and nu_j < MIN_EDF_IDENTIFY
+            if thin:
+                identified = False
+            params = _reported(col.key, c, fc.shape, q)
             sig: dict[str, float | None] = {p: None for p in params}
             if identified and an.cov is not None:
-                sig = _param_sigma(fc, c, an.cov, an.idx_of, an.var_of)
+                sig = _param_sigma(fc, c, an.cov, an.idx_of, an.var_of, q)
             upper = None if identified or not with_bounds else _upper_bound(
                 eng, st, j, an.deff[j])
             term = FitTerm(key=col.key, label=col.label, params=params, sigma=sig, upper=upper,
                            status=("identified" if identified else
                                    "not tested" if math.isnan(dD) else "upper bound"),
                            delta_deviance=dD, coef=c, shape=fc.shape,
-                           derived=_derived(col.key, c, fc.shape), bi_f0=bi_cutoff_hz,
-                           design_effect=an.deff[j])
+                           derived=_derived(col.key, c, fc.shape, q), bi_f0=bi_cutoff_hz,
+                           design_effect=an.deff[j], carry_edf=nu_j, quantity=q.key)
+            if thin:
+                term.status_note = f"EDF < {MIN_EDF_IDENTIFY:g}"
+                term.notes.append(
+                    f"significant by the likelihood ratio (Δ = {dD:.3g}) but carried only by τ "
+                    f"{span_j[0]:.4g}–{span_j[1]:.4g} s, where no estimate has "
+                    f"{MIN_EDF_IDENTIFY:g} degrees of freedom (at most {nu_j:.3g}): not "
+                    "identified; the value shown is the 95 % upper bound")
         else:
             dcol, dD, c_drop = dropped[col.label]
             shape = dcol.shape if (c_drop > 0 or col.key not in NONLINEAR_KEYS) else None
-            params = _reported(col.key, 0.0, shape if shape is not None else (dcol.shape or 1.0))
+            params = _reported(col.key, 0.0, shape if shape is not None else (dcol.shape or 1.0),
+                               q)
             if col.key in NONLINEAR_KEYS and shape is None:
                 params[[k for k in params if k != _MAIN[col.key]][0]] = math.nan
             upper = None
@@ -1181,12 +1257,12 @@ def fit_noise_model(
                 # design effect with the term's own PSD in the correlation model
                 deff_j = _Analysis(eng, st2, tau0, bi_cutoff_hz).deff[len(ext) - 1]
                 upper = _upper_bound(eng, st2, len(ext) - 1, deff_j)
-            derived = {"estimate_in_full_model": _reported(col.key, c_drop, dcol.shape)[
+            derived = {"estimate_in_full_model": _reported(col.key, c_drop, dcol.shape, q)[
                 _MAIN[col.key]] if c_drop > 0 else 0.0}
             term = FitTerm(key=col.key, label=col.label, params=params,
                            sigma={p: None for p in params}, upper=upper, status="upper bound",
                            delta_deviance=dD, coef=0.0, shape=shape, derived=derived,
-                           bi_f0=bi_cutoff_hz, design_effect=deff_j)
+                           bi_f0=bi_cutoff_hz, design_effect=deff_j, quantity=q.key)
             term.notes.append("not significant: removed from the model (backward elimination); "
                               "the value shown is the 95 % upper bound")
         if col.key in NONLINEAR_KEYS and term.status != "identified" and term.coef <= 0:
@@ -1199,7 +1275,7 @@ def fit_noise_model(
 
 
 def _param_sigma(col: _Col, c: float, cov: np.ndarray, idx_of: dict[str, int],
-                 var_of: dict[str, float]) -> dict[str, float | None]:
+                 var_of: dict[str, float], q: Quantity = RATE) -> dict[str, float | None]:
     """Delta-method 1σ of the reported parameters from cov(c, ln shape)."""
     ic = idx_of.get(f"c:{col.label}")
     il = idx_of.get(f"ln:{col.label}")
@@ -1236,7 +1312,8 @@ def _param_sigma(col: _Col, c: float, cov: np.ndarray, idx_of: dict[str, int],
         elif col.key == "blue":
             out["alpha"] = math.sqrt(max(vc, 0.0))
             out["beta"] = T * math.sqrt(max(vl, 0.0))
-    return {k: (v if v is not None and math.isfinite(v) else None) for k, v in out.items()}
+    return {k: (v * q.factor(k) if v is not None and math.isfinite(v) else None)
+            for k, v in out.items()}
 
 
 def _upper_bound(eng: _Engine, st: _State, j: int, deff: float) -> float:
@@ -1277,7 +1354,7 @@ def _upper_bound(eng: _Engine, st: _State, j: int, deff: float) -> float:
                 cu = math.exp(root_bracketed(excess, lo, hi, xtol=1e-5))
         except (ValueError, RuntimeError):
             cu = c_hard
-        val = _reported(col.key, cu, shp)[_MAIN[col.key]]
+        val = _reported(col.key, cu, shp, eng.q)[_MAIN[col.key]]
         best = max(best, val)
     return best
 
@@ -1309,6 +1386,12 @@ def fit_alpha(dev) -> tuple[np.ndarray, np.ndarray, list[str]]:
     return np.asarray(dev.alpha, int), np.asarray(dev.edf, float), methods
 
 
+def _n_averages(segs, m: int) -> int:
+    """Non-overlapping m-sample averages over the segments: the points of a noise
+    identification at averaging factor m."""
+    return int(sum((b - a) // max(m, 1) for a, b in segs))
+
+
 def robust_edf(dev) -> tuple[np.ndarray, list[str]]:
     """(edf, notes) of :func:`robust_edf_rules`."""
     e, _, notes = robust_edf_rules(dev)
@@ -1319,7 +1402,9 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     """The EDF of a deviation table made safe for fitting and for the residuals.
 
     1. Where the noise type was identified from few averages (B1 ratio or reused, typically the
-       longest τ; Riley & Greenhall 2004) and came out as angle noise (α > 0), the EDF is capped
+       longest τ, or the lag-1 ACF from fewer than
+       :data:`~gyrotest.noise.edf.ACF_DECISIVE_POINTS` points; Riley & Greenhall 2004) and
+       came out as angle noise (α > 0), the EDF is capped
        at the white-rate (α = 0) value: an α = +1 at τ = T/10 gives a Greenhall EDF ~10× too
        large when the estimate is really a scattered rate-random-walk point.
     2. :func:`sanitize_edf`: non-increasing in τ.
@@ -1329,7 +1414,7 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
 
     Returns (edf, rules, notes): ``rules[i]`` is "" (the identified α's EDF), "white-rate cap"
     or "running minimum"."""
-    from .edf import edf_for
+    from .edf import ACF_DECISIVE_POINTS, edf_for
 
     alpha, e, methods = fit_alpha(dev)
     e = e.copy()
@@ -1339,7 +1424,9 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     kind = "mdev" if dev.kind == "tdev" else dev.kind
     capped = []
     for i, (a, meth) in enumerate(zip(alpha, methods)):
-        if a > 0 and meth in _WEAK_ID and math.isfinite(e[i]) and n_longest > 1:
+        weak = meth in _WEAK_ID or (meth == "acf" and _n_averages(segs, int(dev.m[i]))
+                                    < ACF_DECISIVE_POINTS)
+        if a > 0 and weak and math.isfinite(e[i]) and n_longest > 1:
             try:
                 cap, _ = edf_for(kind, 0, int(dev.m[i]), n_longest)
             except (InputError, AnalysisError):
@@ -1350,7 +1437,7 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     if capped:
         notes.append("EDF capped at the white-rate value at τ = "
                      + ", ".join(f"{t:.4g}" for t in capped)
-                     + " s (angle-noise type identified from few averages)")
+                     + " s (angle-noise type identified from too few averages to be decisive)")
     e2, changed = sanitize_edf(e)
     if changed:
         notes.append("EDF lowered to the running minimum at τ = "
@@ -1359,6 +1446,11 @@ def robust_edf_rules(dev) -> tuple[np.ndarray, list[str], list[str]]:
     for i in changed:
         rules[i] = "running minimum"
     return e2, rules, notes
+
+
+def table_quantity(dev) -> str:
+    """"acceleration" for a deviation table in m/s² (an accelerometer), else "rate"."""
+    return "acceleration" if str(getattr(dev, "unit", "")) == ACCEL.sigma_unit else "rate"
 
 
 def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=None,
@@ -1374,7 +1466,7 @@ def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=Non
     f = fit_noise_model(dev.tau, dev.sigma, edf, sigma_lo=lo, sigma_hi=hi, terms=terms,
                         tau0=dev.tau0, min_edf=min_edf, bi_cutoff_hz=bi_cutoff_hz,
                         line_hints=line_hints, tau_range=tau_range, with_bounds=with_bounds,
-                        confidence=dev.confidence)
+                        confidence=dev.confidence, quantity=table_quantity(dev))
     f.notes[:0] = notes
     return f
 
@@ -1384,7 +1476,49 @@ def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=Non
 # ---------------------------------------------------------------------------------------------
 
 
-def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, Any]:
+#: family-wise level of Krobka's white-noise bound N_upper (:func:`slope_readoffs`)
+N_UPPER_LEVEL = 0.95
+
+
+def n_upper_bound(tau, sigma, edf, *, level: float = N_UPPER_LEVEL) -> tuple[float, float, int]:
+    """Krobka's bound on white rate noise as a statistical upper limit: (N_upper deg/√h, the τ
+    that sets it, the number of τ it was taken over).
+
+    White rate noise N adds N²/τ to the Allan variance of any mixture of independent noises
+    (Krobka (Allan-graph topology) eq. 5.9), so σ²(τ) ≥ N²/τ at every τ: the −½ ray through the
+    leftmost point, lowered until it touches the graph. Read on the estimates σ̂(τ) this
+    construction is biased low (at long τ a few clusters scatter σ̂ far below σ), so each
+    σ̂(τ) is replaced by its one-sided upper confidence limit σ_U(τ) = σ̂·√(ν/χ²_ν(α/k)) from
+    its EDF ν (σ̂²ν/σ² ~ χ²_ν, NIST SP1065 §5.3), at the Bonferroni level α/k over the k τ
+    with an EDF: all k limits hold together with probability ≥ ``level`` = 1 − α, hence
+
+        N_upper = min_τ σ_U(τ)·√τ / 60   deg/√h (σ in deg/h, τ in s)
+
+    is an upper bound of N at that confidence. Without EDF it is the graph reading
+    min σ̂√τ/60."""
+    t = np.asarray(tau, float)
+    s = np.asarray(sigma, float)
+    ok = np.isfinite(t) & np.isfinite(s) & (s > 0) & (t > 0)
+    if edf is None:
+        v = np.where(ok, s * np.sqrt(t), np.inf)
+        i = int(np.argmin(v))
+        return float(v[i] / 60.0), float(t[i]), int(np.count_nonzero(ok))
+    e = np.asarray(edf, float)
+    ok &= np.isfinite(e) & (e > 0)
+    k = int(np.count_nonzero(ok))
+    if k == 0:
+        return math.nan, math.nan, 0
+    q = (1.0 - level) / k
+    with np.errstate(invalid="ignore", divide="ignore"):
+        chi = special.chdtri(np.where(ok, e, 1.0), 1.0 - q)  # lower q-quantile of χ²_ν
+        s_up = s * np.sqrt(np.where(ok, e, 1.0) / chi)
+    v = np.where(ok & np.isfinite(s_up), s_up * np.sqrt(t), np.inf)
+    i = int(np.argmin(v))
+    return float(v[i] / 60.0), float(t[i]), k
+
+
+def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0,
+                   quantity: str = "rate") -> dict[str, Any]:
     """The slope-line read-offs other tools report, for comparison (not fits).
 
     Local log–log slope by central differences (MATLAB "allanvar" example; allan_variance_ros),
@@ -1394,12 +1528,22 @@ def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, 
       through it read at τ = 1 s, /60 for deg/√h; IEEE 952 Annex C);
     * ``K_slope`` = 60·σ(τ_i)·√(3/τ_i) deg/h/√h at the slope closest to +½ (line read at τ = 3 s);
     * ``B_slope`` = σ(τ_i)/0.6643 deg/h at the slope closest to 0;
-    * ``N_upper`` = min_τ σ(τ)·√τ/60 deg/√h: Krobka's bound, the −½ ray through the leftmost
-      point lowered until it touches the graph (Krobka (Allan-graph topology) §5, rule 5);
+    * ``N_upper``: Krobka's bound on white rate noise, the −½ ray through the leftmost
+      point lowered until it touches the graph (Krobka (Allan-graph topology) §5, rule 5),
+      taken on the upper 95 % confidence limits of σ̂ (family-wise over the τ, from ``edf``;
+      :func:`n_upper_bound`), so that it is an upper bound of N at 95 %; ``N_upper_graph`` =
+      min σ̂√τ/60, the same construction on the estimates (biased low where few clusters
+      scatter σ̂);
     * ``B_tangent`` = σ_min/0.6643 deg/h: the zero-slope tangent at the minimum with the
       IEEE factor (an upper bound in a mixture; Krobka (Allan-graph topology) M3/M4); ``allan_floor`` = σ_min and
       its τ (what tools that omit 0.664 report as B).
+
+    The formulas are the gyro's (σ in deg/h); an accelerometer table (``quantity``
+    "acceleration", σ in m/s²) gets N, K in its units and B in µg
+    (:mod:`gyrotest.noise.quantity`).
     """
+    q = quantity_of(quantity)
+    fN, fK, fB = q.factor("N"), q.factor("K"), q.factor("B")
     t = np.asarray(tau, float)
     s = np.asarray(sigma, float)
     ok = np.isfinite(s) & (s > 0)
@@ -1420,19 +1564,30 @@ def slope_readoffs(tau, sigma, edf=None, *, min_edf: float = 10.0) -> dict[str, 
     iK = int(np.argmin(np.abs(slope - 0.5) + big))
     iB = int(np.argmin(np.abs(slope) + big))
     imin = int(np.argmin(s))
-    iup = int(np.argmin(s * np.sqrt(t)))
+    n_graph, t_graph, _ = n_upper_bound(t, s, None)
+    n_up, t_up, k_up = n_upper_bound(t, s, None if edf is None else e)
     out.update({
-        "N_slope": float(s[iN] * math.sqrt(t[iN]) / 60.0), "N_slope_tau_s": float(t[iN]),
+        "N_slope": float(s[iN] * math.sqrt(t[iN]) / 60.0) * fN, "N_slope_tau_s": float(t[iN]),
         "N_slope_local_slope": float(slope[iN]),
-        "K_slope": float(60.0 * s[iK] * math.sqrt(3.0 / t[iK])), "K_slope_tau_s": float(t[iK]),
+        "K_slope": float(60.0 * s[iK] * math.sqrt(3.0 / t[iK])) * fK,
+        "K_slope_tau_s": float(t[iK]),
         "K_slope_local_slope": float(slope[iK]),
-        "B_slope": float(s[iB] / BIAS_INSTABILITY_PLATEAU), "B_slope_tau_s": float(t[iB]),
-        "N_upper": float(s[iup] * math.sqrt(t[iup]) / 60.0), "N_upper_tau_s": float(t[iup]),
-        "N_leftmost": float(s[0] * math.sqrt(t[0]) / 60.0), "leftmost_tau_s": float(t[0]),
-        "B_tangent": float(s[imin] / BIAS_INSTABILITY_PLATEAU),
-        "allan_floor_dph": float(s[imin]), "allan_floor_tau_s": float(t[imin]),
-        "units": {"N": "deg/sqrt(h)", "K": "deg/h/sqrt(h)", "B": "deg/h"},
+        "B_slope": float(s[iB] / BIAS_INSTABILITY_PLATEAU) * fB, "B_slope_tau_s": float(t[iB]),
+        "N_upper": n_up * fN, "N_upper_tau_s": t_up,
+        "N_upper_rule": (f"min over {k_up} τ of the one-sided upper confidence limit of σ (EDF, "
+                         f"χ², Bonferroni) × √τ/60: {100 * N_UPPER_LEVEL:g} % upper bound of N"
+                         if edf is not None else "min σ√τ/60 (graph reading, no EDF)"),
+        "N_upper_graph": n_graph * fN, "N_upper_graph_tau_s": t_graph,
+        "N_leftmost": float(s[0] * math.sqrt(t[0]) / 60.0) * fN, "leftmost_tau_s": float(t[0]),
+        "B_tangent": float(s[imin] / BIAS_INSTABILITY_PLATEAU) * fB,
+        "allan_floor": float(s[imin]), "allan_floor_tau_s": float(t[imin]),
+        "units": {"N": q.unit("N"), "K": q.unit("K"), "B": q.unit("B"),
+                  "allan_floor": q.sigma_unit},
     })
+    if q is RATE:
+        out["allan_floor_dph"] = out["allan_floor"]
+    else:
+        out["allan_floor_m_s2"] = out["allan_floor"]
     return out
 
 
@@ -1459,6 +1614,8 @@ def conversions(fit: NoiseFit) -> dict[str, Any]:
             return None, None
         return (t.value if t.identified else t.upper), t.status
 
+    if fit.quantity == "acceleration":
+        return _accel_conversions(fit, val)
     N, Ns = val("N")
     K, Ks = val("K")
     B, Bs = val("B")
@@ -1494,5 +1651,58 @@ def conversions(fit: NoiseFit) -> dict[str, Any]:
         "RandomWalk": None if K is None else K / (60.0 * 3600.0) * _D2R,
         "units": {"NoiseDensity": "(rad/s)/sqrt(Hz)", "BiasInstability": "rad/s",
                   "RandomWalk": "(rad/s)*sqrt(Hz)"},
+    }
+    return out
+
+
+def _accel_conversions(fit: NoiseFit, val) -> dict[str, Any]:
+    """:func:`conversions` of an accelerometer table (IEEE Std 1293 terms; N = VRW in m/s/√h,
+    B in µg, K = acceleration random walk in m/s/h/√h):
+
+    * VRW → m/s²/√Hz = N/60 (1 m/s/√h = 1/60 m/s/√s, and m/s/√s = (m/s²)/√Hz), µg/√Hz =
+      that / 9.80665e-6; Kalibr ``accelerometer_noise_density`` (m/s²/√Hz), MATLAB
+      ``accelparams.NoiseDensity`` ((m/s²)/√Hz); discrete per-sample σ = density/√τ0.
+    * K → m/s³/√Hz = K/216000 (1 m/s/h/√h = 1/(3600·60) m/s²/√s); Kalibr
+      ``accelerometer_random_walk`` (m/s³/√Hz), MATLAB ``accelparams.RandomWalk``
+      ((m/s²)·√Hz); µg/√h = K/3600·60/9.80665e-6… as m/s²/√h: K/3600.
+    * B (µg) → m/s² (MATLAB ``accelparams.BiasInstability``, IEEE B, the flat level/0.664).
+    """
+    from ..units import G0
+
+    ug = G0 * 1e-6
+    N, Ns = val("N")
+    K, Ks = val("K")
+    B, Bs = val("B")
+    tau0 = fit.tau0
+    out: dict[str, Any] = {"quantity": "acceleration",
+                           "convention": "continuous-time densities (two-sided PSD: white "
+                           "acceleration S = VRW^2); discrete per-sample sigma = "
+                           "density/sqrt(tau0) for white noise, density*sqrt(tau0) for the "
+                           "bias random walk", "tau0_s": tau0}
+    if N is not None:
+        nd = N / 60.0
+        out["N"] = {"status": Ns, "m_s_per_rt_h": N, "m_s2_per_rt_hz": nd,
+                    "ug_per_rt_hz": nd / ug, "discrete_sigma_m_s2": nd / math.sqrt(tau0)}
+    if K is not None:
+        kd = K / 216000.0
+        out["K"] = {"status": Ks, "m_s_per_h_rt_h": K, "m_s3_per_rt_hz": kd,
+                    "ug_per_rt_h": K / 3600.0 / ug,
+                    "discrete_sigma_m_s2": kd * math.sqrt(tau0)}
+    if B is not None:
+        out["B"] = {"status": Bs, "ug": B, "m_s2": B * ug}
+    out["kalibr"] = {
+        "accelerometer_noise_density": None if N is None else N / 60.0,
+        "accelerometer_random_walk": None if K is None else K / 216000.0,
+        "units": {"accelerometer_noise_density": "m/s^2/sqrt(Hz)",
+                  "accelerometer_random_walk": "m/s^3/sqrt(Hz)"},
+        "note": "Kalibr's update_rate must be the log rate 1/tau0; it derives the discrete "
+                "sigma itself. The maintainers suggest inflating these for unmodelled effects.",
+    }
+    out["matlab_accelparams"] = {
+        "NoiseDensity": None if N is None else N / 60.0,
+        "BiasInstability": None if B is None else B * ug,
+        "RandomWalk": None if K is None else K / 216000.0,
+        "units": {"NoiseDensity": "(m/s^2)/sqrt(Hz)", "BiasInstability": "m/s^2",
+                  "RandomWalk": "(m/s^2)*sqrt(Hz)"},
     }
     return out

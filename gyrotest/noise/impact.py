@@ -266,6 +266,14 @@ class ImpactResult:
     flags: list[dict[str, Any]]
     assumptions: list[str] = field(default_factory=list)
     model_terms: list[str] = field(default_factory=list)
+    record_s: float | None = None
+    extrapolation: str | None = None
+
+    @property
+    def extrapolated(self) -> bool:
+        """The horizon lies beyond the record: the prediction extrapolates the noise model to
+        times (frequencies below 1/T) the log never measured."""
+        return self.extrapolation is not None
 
     def to_dict(self) -> dict[str, Any]:
         rows = []
@@ -283,6 +291,9 @@ class ImpactResult:
                       "3*S(0)*t, strapdown [S(0) + 2 S(f_w)]*t plus bounded S(0)=0 terms and "
                       "exact forms for RRW, ramp, sinusoid (Krobka)",
             "horizon_s": self.horizon_s,
+            "record_s": self.record_s,
+            "extrapolated": self.extrapolated,
+            "extrapolation": self.extrapolation,
             "model_terms": list(self.model_terms),
             "platform": {"sigma_att_deg": self.platform_sigma_deg,
                          "sigma_att_arcsec": self.platform_sigma_deg * 3600.0,
@@ -307,7 +318,7 @@ def components_from_fit(fit, *, conservative: bool = False) -> list[Component]:
             out.append(Component(t.key, 0.0, 1.0, None, t.label))
             continue
         if conservative and not t.identified and t.upper is not None:
-            c = _coef_from_value(t.key, t.upper, shape)
+            c = _coef_from_value(t.key, t.upper, shape, fit.q)
         f_hi = (t.bi_f0 if t.bi_f0 is not None else 0.5 / fit.tau0) if t.key == "B" else None
         out.append(Component(t.key, float(c), shape, f_hi, t.label))
     return out
@@ -323,7 +334,13 @@ def unshaped_bounds(fit) -> list[str]:
     return [t.label for t in fit.terms if t.key in _SHAPED and t.shape is None]
 
 
-def _coef_from_value(key: str, v: float, shape: float | None) -> float:
+def _coef_from_value(key: str, v: float, shape: float | None, q=None) -> float:
+    """The fit's coefficient c of a term from its reported main value (the inverse of
+    :func:`gyrotest.noise.fit._reported`; ``q`` the table's
+    :class:`~gyrotest.noise.quantity.Quantity`, default gyro)."""
+    if q is not None:
+        main = {"markov": "q_c", "sine": "Omega0", "blue": "alpha"}.get(key, key)
+        v = v / q.factor(main)
     if key == "N":
         return (60.0 * v) ** 2
     if key == "K":
@@ -337,6 +354,28 @@ def _coef_from_value(key: str, v: float, shape: float | None) -> float:
     if key == "blue":
         return v
     raise KeyError(key)
+
+
+def extrapolation_reason(fit, horizon_s: float, record_s: float) -> str | None:
+    """Why a prediction at ``horizon_s`` is an extrapolation, or None when it is not.
+
+    The attitude error at t integrates the rate noise down to frequencies ≈ 1/t; a record of
+    length T measured them down to 1/T, and the Allan fit only to τ_max (≈ T/4). Past T the
+    prediction rests on the fitted slopes continuing (a rate ramp or random walk read from a
+    few long-τ clusters grows as t² or t^1.5 there): it is printed as "extrapolated" with this
+    reason, never as a measurement."""
+    if not horizon_s > record_s * (1.0 + 1e-9):
+        return None
+    from ..units import format_duration
+
+    t_max = float(np.max(fit.tau[fit.used])) if np.any(fit.used) else float(np.max(fit.tau))
+    slow = [t.label for t in fit.terms if t.key in ("B", "K", "R", "markov", "sine")
+            and t.coef > 0]
+    return (f"the horizon {format_duration(horizon_s)} is {horizon_s / record_s:.3g}× the "
+            f"record ({format_duration(record_s)}; model fitted to τ ≤ "
+            f"{format_duration(t_max)}): the noise below 1/T was never measured"
+            + (f", and {', '.join(slow)} are extrapolated as their fitted slopes"
+               if slow else "") + "; shorten --horizon or record longer")
 
 
 def attitude_impact(fit, *, horizon_s: float = 3600.0,
@@ -397,6 +436,7 @@ def attitude_impact(fit, *, horizon_s: float = 3600.0,
                           "status": t.status,
                           "text": f"{t.label}: S(f_ω) < S(0), strapdown rotation averages it"})
     return ImpactResult(
+        record_s=rec, extrapolation=extrapolation_reason(fit, horizon_s, rec),
         model_terms=list(fit.requested), horizon_s=float(horizon_s), rates_rad_s=rates,
         platform_sigma_deg=math.sqrt(p0["platform"]) / ARCSEC_PER_DEG,
         strapdown_sigma_deg=sd, ratio=ratio,

@@ -85,11 +85,36 @@ def _components(ax, fit, tf, unit=None, k: float = 1.0) -> None:
                     + ("" if t.identified else " — not identified"), zorder=2)
             i += 1
         elif t.upper is not None and t.key in ("Q", "N", "B", "K", "R"):
-            cu = _coef_from_value(t.key, t.upper, t.shape)
+            cu = _coef_from_value(t.key, t.upper, t.shape, getattr(fit, "q", None))
             ax.plot(tf, np.sqrt(cu * _basis(t.key, tf, None, t.bi_f0)) * u.f, ls=":", lw=1.0,
                     color=cc, alpha=0.8, label=f"{t.label} ({t.title}) bound: {term_text(t, u)}",
                     zorder=2)
             i += 1
+
+
+def _unit_of(items, unit):
+    """The display unit of a figure: ``unit`` (default deg/h) for gyro axes, the
+    accelerometer's own for accelerometer axes; a figure holds one kind (ValueError)."""
+    from ..display import ACCEL_DISPLAY, DEFAULT
+
+    kinds = {getattr(a, "quantity", "rate") for _, a in items}
+    if len(kinds) > 1:
+        raise ValueError("one figure holds gyro or accelerometer axes, not both: plot them "
+                         "apart (split_by_quantity)")
+    return ACCEL_DISPLAY if kinds == {"acceleration"} else (unit or DEFAULT)
+
+
+def split_by_quantity(items, path):
+    """[(items, path)]: the gyro axes to ``path``, the accelerometer axes to ``path`` with
+    ``_accel`` before the suffix (one entry when the items are of one kind)."""
+    from pathlib import Path
+
+    gyro = [it for it in items if getattr(it[1], "quantity", "rate") == "rate"]
+    acc = [it for it in items if getattr(it[1], "quantity", "rate") != "rate"]
+    if not gyro or not acc:
+        return [(list(items), str(path))]
+    p = Path(path)
+    return [(gyro, str(p)), (acc, str(p.with_name(p.stem + "_accel" + p.suffix)))]
 
 
 def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
@@ -115,12 +140,10 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     """
     from pathlib import Path
 
-    from ..display import DEFAULT
-
-    u = unit or DEFAULT
+    items = list(items)
+    u = _unit_of(items, unit)
     fu = u.f
 
-    items = list(items)
     many_sources = len({s for s, _ in items}) > 1
     many_axes = len({a.axis for _, a in items}) > 1
     single = len(items) == 1 if show_components is None else show_components
@@ -229,11 +252,10 @@ def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | N
     (module docstring), ``size`` inches. ``items`` = [(source, AxisAnalysis), …]. Returns the
     matplotlib figure. ``unit``: a :class:`~gyrotest.display.DisplayUnit` for the PSD axis
     (default deg/h)."""
-    from ..display import DEFAULT
-
-    u = unit or DEFAULT
-    f2 = u.f * u.f
     items = list(items)
+    u = _unit_of(items, unit)
+    f2 = u.f * u.f
+    what = "acceleration" if u.name == "m/s^2" else "rate"
     many_sources = len({s for s, _ in items}) > 1
     many_axes = len({a.axis for _, a in items}) > 1
     fig, (ax, axc) = new_figure(2, 1, size=size, height_ratios=[2.4, 1.3])
@@ -266,8 +288,10 @@ def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | N
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("frequency f, Hz")
-    ax.set_ylabel(f"rate PSD S(f), {u.psd}\n(two-sided, IEEE 952)")
-    ax.set_title("Rate power spectral density (lines: sinusoids; knee: Markov 1/(2πT_c))")
+    ax.set_ylabel(f"{what} PSD S(f), {u.psd}\n(two-sided, "
+                  f"{'IEEE 1293' if what == 'acceleration' else 'IEEE 952'})")
+    ax.set_title(f"{what.capitalize()} power spectral density (lines: sinusoids; knee: Markov "
+                 "1/(2πT_c))")
     ax.legend(loc="best", fontsize=7.5)
     axc.set_xscale("log")
     axc.axhline(0, color="0.3", lw=0.7)

@@ -10,8 +10,10 @@ instability + RRW log:
 code           check
 =============  ===========================================================================
 KROBKA-M1      ARW is a ray through (or below) the leftmost point, not a −½ segment: the
-               fitted N line exceeds the measured curve beyond its CI, or the slope-line N
-               (read at the −½ point, MATLAB style) is above N_upper = min σ√τ/60.
+               fitted N exceeds N_upper, the 95 % upper bound of white rate noise from the
+               measured curve (min over τ of the upper confidence limit of σ × √τ/60,
+               Bonferroni over the τ; :func:`gyrotest.noise.fit.n_upper_bound`), or the
+               slope-line N (read at the −½ point, MATLAB style) is above N_upper.
 KROBKA-M4      B from the zero-slope tangent at the minimum: report B_fit and B_tangent =
                σ_min/0.664; warn when B_fit/B_tangent < 0.5 (the tangent over-estimates B
                in a mixture, ×4 and ×20 in the paper) or when there is no plateau (the
@@ -112,13 +114,21 @@ def local_slopes(tau, sigma, sigma_lo, sigma_hi, *, min_ratio: float = 1.5) -> l
     return out
 
 
-def m1_threshold(n_tested: int, alpha: float = 0.05) -> float:
-    """CI units a single τ must exceed for KROBKA-M1 when the N line is tested at ``n_tested``
-    τ: the two-sided Bonferroni level Φ⁻¹(1 − α/(2n)), at least 3 (CI half-widths are about
-    1σ of σ̂)."""
-    from statistics import NormalDist  # Φ⁻¹; not scipy.stats (≈ 0.5 s to import)
+#: display units of the numbers in the messages (gyro: IEEE 952; accelerometer: IEEE 1293)
+_UNITS = {"rate": {"N": "deg/√h", "B": "deg/h", "R": "deg/h/h", "sigma": "deg/h",
+                   "what": "rate"},
+          "acceleration": {"N": "m/s/√h", "B": "µg", "R": "m/s/h/h", "sigma": "m/s²",
+                           "what": "acceleration"}}
 
-    return max(3.0, -NormalDist().inv_cdf(alpha / (2.0 * max(n_tested, 1))))
+
+def _u(fit: NoiseFit, key: str) -> str:
+    return _UNITS.get(getattr(fit, "quantity", "rate"), _UNITS["rate"])[key]
+
+
+def _f(fit: NoiseFit, param: str) -> float:
+    """The accelerometer factor on a gyro-unit formula (1 for a gyro)."""
+    q = getattr(fit, "q", None)
+    return q.factor(param) if q is not None else 1.0
 
 
 def _arw_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) -> None:
@@ -127,30 +137,22 @@ def _arw_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) -> 
               "point; a −½ segment elsewhere is usually a Markov tail (Krobka §5–6, "
               "AIST-100 example: N over-read by one to two orders)")
     N_up = ro.get("N_upper")
-    if N is not None and N.coef > 0 and N_up is not None:
-        sig = np.sqrt(N.avar(fit.tau))
-        over = (sig > fit.sigma) & np.isfinite(fit.sigma_hi)
-        excess = np.where(over, (sig - fit.sigma) / np.maximum(fit.sigma_hi - fit.sigma, 1e-300),
-                          0.0)
-        k = int(np.argmax(excess))
-        # multiplicity: the line is tested at every τ, so one point beyond 3 CI among ~40 is
-        # expected by chance; fire on a point beyond the Bonferroni level of the tested τ or on
-        # two adjacent points beyond 3 CI
-        n_tested = int(np.count_nonzero(np.isfinite(fit.sigma_hi)))
-        z_mult = m1_threshold(n_tested)
-        big = excess > 3.0
-        adjacent = bool(np.any(big[1:] & big[:-1])) if big.size > 1 else False
-        if excess[k] > z_mult or adjacent:
-            out.append(KrobkaWarning(
-                "KROBKA-M1", "ARW line above the measured curve",
-                f"the fitted N = {_g(N.value)} deg/√h line lies above the measured σ at τ = "
-                f"{_g(fit.tau[k])} s by {excess[k]:.1f} CI; N cannot exceed N_upper = "
-                f"{_g(N_up)} deg/√h (−½ ray through the leftmost point, lowered to touch the "
-                "graph): treat N as ≤ N_upper and add the missing term (see the diagnosis)",
-                reason, {"N_fit": N.value, "N_upper": N_up, "tau_s": float(fit.tau[k]),
-                         "excess_ci": float(excess[k]), "threshold_ci": z_mult,
-                         "tau_tested": n_tested, "adjacent_beyond_3ci": adjacent}))
-            return
+    if N is not None and N.coef > 0 and N_up is not None and math.isfinite(N_up) \
+            and N.value > N_up:
+        # N_upper is the 95 % upper bound of white rate noise from the measured curve (the
+        # upper confidence limits of σ̂, family-wise over the τ): a fitted N above it is
+        # rejected by the measurement at 5 %, whatever τ the N line crosses the curve at
+        t_up = ro.get("N_upper_tau_s")
+        out.append(KrobkaWarning(
+            "KROBKA-M1", "ARW line above the measured curve",
+            f"the fitted N = {_g(N.value)} {_u(fit, 'N')} exceeds N_upper = {_g(N_up)} "
+            f"{_u(fit, 'N')}, the 95 % "
+            f"upper bound of white rate noise that the measured σ allows (−½ ray lowered onto "
+            f"the upper confidence limits of σ, set at τ = {_g(t_up)} s): treat N as ≤ N_upper "
+            "and add the missing term (see the diagnosis)",
+            reason, {"N_fit": N.value, "N_upper": N_up, "tau_s": t_up,
+                     "rule": ro.get("N_upper_rule")}))
+        return
     Ns = ro.get("N_slope")
     if Ns is not None and N_up:
         i = int(np.argmin(np.abs(fit.tau - ro["N_slope_tau_s"])))
@@ -160,10 +162,12 @@ def _arw_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) -> 
                                                                   Ns > 1.2 * N.value):
             out.append(KrobkaWarning(
                 "KROBKA-M1", "−½ segment not anchored at the left",
-                f"the −½ stretch at τ = {_g(ro['N_slope_tau_s'])} s gives N = {_g(Ns)} deg/√h "
+                f"the −½ stretch at τ = {_g(ro['N_slope_tau_s'])} s gives N = {_g(Ns)} "
+                f"{_u(fit, 'N')} "
                 f"(slope-line reading, as MATLAB's allanvar example or allan_variance_ros), "
-                f"{ratio:.1f}× the bound N_upper = {_g(N_up)} deg/√h from the leftmost points: "
-                f"that segment is not white rate noise; report N ≤ {_g(N_up)} deg/√h"
+                f"{ratio:.1f}× the bound N_upper = {_g(N_up)} {_u(fit, 'N')} from the leftmost "
+                f"points: that segment is not white {_u(fit, 'what')} noise; report N ≤ "
+                f"{_g(N_up)} {_u(fit, 'N')}"
                 + (f" (joint fit: {N.text()})" if N is not None else ""),
                 reason, {"N_slope": Ns, "N_slope_tau_s": ro["N_slope_tau_s"], "N_upper": N_up,
                          "ratio": ratio}))
@@ -185,9 +189,9 @@ def _bias_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) ->
     share = float(comps[B.label][0]) / total if total > 0 else 0.0
     shares = {k: float(v[0]) / total for k, v in comps.items() if total > 0 and v[0] / total > 0.1}
     ev = {"B_fit": B.value, "B_status": B.status, "B_upper": B.upper, "B_tangent": Bt,
-          "allan_floor_dph": ro["allan_floor_dph"], "allan_floor_tau_s": tmin,
+          "allan_floor": ro["allan_floor"], "allan_floor_tau_s": tmin,
           "ratio_fit_to_tangent": ratio, "B_share_at_minimum": share}
-    floor_txt = (f"σ_min = {_g(ro['allan_floor_dph'])} deg/h at τ = {_g(tmin)} s (tools that "
+    floor_txt = (f"σ_min = {_g(ro['allan_floor'])} {_u(fit, 'sigma')} at τ = {_g(tmin)} s (tools that "
                  "omit 1/0.664 report this as B)")
     if not B.identified or share < 0.5:
         parts = ", ".join(f"{k} {100 * v:.0f} %" for k, v in sorted(shares.items(),
@@ -200,14 +204,15 @@ def _bias_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning]) ->
                 f"{parts}")
         out.append(KrobkaWarning(
             "KROBKA-M4", "no bias-instability plateau",
-            f"{what}; B_tangent = σ_min/0.664 = {_g(Bt)} deg/h is only an upper bound; joint "
+            f"{what}; B_tangent = σ_min/0.664 = {_g(Bt)} {_u(fit, 'B')} is only an upper bound; "
+            "joint "
             f"fit: {B.text()}. {floor_txt}", reason, ev,
             severity="info" if falling and not B.identified else "warning"))
     elif ratio < B_RATIO_WARN:
         out.append(KrobkaWarning(
             "KROBKA-M4", "tangent over-estimates B",
-            f"B from the joint fit is {_g(Bv)} deg/h, {1 / ratio:.1f}× below B_tangent = "
-            f"σ_min/0.664 = {_g(Bt)} deg/h: report B_fit; B_tangent is an upper bound. "
+            f"B from the joint fit is {_g(Bv)} {_u(fit, 'B')}, {1 / ratio:.1f}× below B_tangent "
+            f"= σ_min/0.664 = {_g(Bt)} {_u(fit, 'B')}: report B_fit; B_tangent is an upper bound. "
             f"{floor_txt}", reason, ev))
 
 
@@ -271,7 +276,7 @@ def _hump_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning],
     n_left = ro.get("N_leftmost")
     s_eq = (N.coef if N is not None else 0.0) + sum(t.coef for t in best.terms
                                                      if t.key == "markov")
-    n_eq = math.sqrt(s_eq) / 60.0 if s_eq > 0 else None
+    n_eq = math.sqrt(s_eq) / 60.0 * _f(fit, "N") if s_eq > 0 else None
     where = (f"the graph flattens or rises after τ = {_g(fit.tau[hump[0]])} s (around τ = "
              f"{_g(fit.tau[hump[1]])} s) and falls again by τ = {_g(fit.tau[hump[2]])} s"
              if hump else "the fit needs a Markov term (" + "; ".join(t.text() for t in markovs)
@@ -290,9 +295,11 @@ def _hump_checks(fit: NoiseFit, ro: dict[str, Any], out: list[KrobkaWarning],
     else:
         msg = (f"{where}: a short-correlation (Markov) hump screens the white noise. White rate "
                f"noise up to the sampling frequency is bounded by the leftmost point: N ≤ "
-               f"{_g(n_left)} deg/√h (fit: {_g(n_white)}); the long-τ effective ARW, which "
+               f"{_g(n_left)} {_u(fit, 'N')} (fit: {_g(n_white)}); the long-τ effective ARW, "
+               "which "
                f"drives the angle random walk for t ≫ T_c, is N_eq = √(N² + Σ(q_c·T_c)²) = "
-               f"{_g(n_eq)} deg/√h. Quote both; to move the hump, re-run at a higher output rate "
+               f"{_g(n_eq)} {_u(fit, 'N')}. Quote both; to move the hump, re-run at a higher "
+               "output rate "
                "or with other loop/filter settings and overlay the runs (gyrotest allan a.csv "
                "b.csv)")
     title = ("slow hump: an environmental or periodic term" if peak >= LONG_HUMP_S
@@ -403,7 +410,7 @@ def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=Non
     rows = []
     for i, t, s_o in _trend_pairs(fit, akdev):
         diff = max(fit.sigma[i] ** 2 - s_o**2, 0.0)
-        R = math.sqrt(2.0 * diff) / t * 3600.0  # deg/h/h: a ramp adds ½(Rτ)²
+        R = math.sqrt(2.0 * diff) / t * 3600.0 * _f(fit, "R")  # deg/h/h: a ramp adds ½(Rτ)²
         row = {"tau_s": t, "allan": float(fit.sigma[i]), "allan_krobka": s_o,
                "ramp_deg_h_per_h": R}
         if ohdev is not None:
@@ -418,15 +425,17 @@ def _trend_checks(fit: NoiseFit, out: list[KrobkaWarning], akdev=None, ohdev=Non
     K = fit.term("K")
     T = float(record_s) if record_s else 4.0 * float(np.nanmax(fit.tau))
     # K: its value, or its upper bound when the fit could not establish it
-    k_int = (0.0 if K is None else K.value if K.identified else (K.upper or 0.0)) / 60.0
-    R_rrw = 3.0 * k_int * math.sqrt(6.0 / (5.0 * T)) * 3600.0
+    k_int = (0.0 if K is None else K.value if K.identified else (K.upper or 0.0)) / (
+        60.0 * _f(fit, "K"))
+    R_rrw = 3.0 * k_int * math.sqrt(6.0 / (5.0 * T)) * 3600.0 * _f(fit, "R")
     if R_est <= R_rrw:  # a rate random walk of the fitted size explains the trend
         return
     out.append(KrobkaWarning(
         "KROBKA-M7", "deterministic trend in the Allan variance",
         f"at τ {_g(rows[0]['tau_s'])}–{_g(rows[-1]['tau_s'])} s the Allan–Krobka dispersion is "
         f"below the Allan deviation's confidence interval at {len(rows)} τ: a deterministic "
-        f"drift (rate ramp ≈ {_g(R_est)} deg/h/h, or a thermal trend) leaks in and masquerades "
+        f"drift (ramp ≈ {_g(R_est)} {_u(fit, 'R')}, or a thermal trend) leaks in and "
+        "masquerades "
         "as rate random walk / rate ramp. Remove it first (--detrend linear or quadratic, "
         "--detrend sine:PERIOD for a periodic term such as a 24 h cycle, or --model m.json for "
         "a thermal/environmental model from gyrotest model fit) and compare",

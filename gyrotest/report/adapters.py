@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..errors import InputError
 from ..output import jsonable
 from .campaign import TESTS, Campaign, Test
 
@@ -196,14 +197,9 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
             confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
             detrend=test.opt("detrend", "none"),
             run_diagnosis=not test.opt("no_diagnose", False), impact_horizon_s=horizon_s,
-            bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False, env_model=env_model)
-        for ax in r.axes:  # the report needs the noise model (the CLI may print a bare table)
-            if ax.fit is None:
-                from ..errors import AnalysisError
-
-                raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
-                    (n for n in ax.notes if n.startswith("noise model not fitted")),
-                    "noise model not fitted"))
+            bi_cutoff_hz=test.opt("bi_cutoff_hz"), allow_irregular=False, env_model=env_model,
+            accelerometers=False)  # the gyro section; [tests.accel] has the accelerometers
+        _need_fits(r)
         return allan_document([r]), r, [g]
 
     res, obj, logs, dt = _timed(go)
@@ -211,6 +207,51 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     if test.opt("model"):
         argv += ["--model", campaign.rel(test.opt("model"))]
     return Analysis("allan", test.name, "allan", argv, res, obj, logs, dt)
+
+
+def _need_fits(r) -> None:
+    """The report needs the noise model of every axis (the CLI may print a bare table)."""
+    from ..errors import AnalysisError
+
+    for ax in r.axes:
+        if ax.fit is None:
+            raise AnalysisError(f"{r.source} [{ax.axis}]: " + next(
+                (n for n in ax.notes if n.startswith("noise model not fitted")),
+                "noise model not fitted"))
+
+
+# ----------------------------------------------------------------------------- accelerometers
+def run_accel(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
+    """``gyrotest allan LOG --axis ax,ay,az ...``: the Allan analysis of the log's accelerometer
+    axes (:func:`gyrotest.accel.accel_channels`; IEEE Std 1293 terms). An error when the log
+    has none."""
+    from ..accel import accel_channels
+    from ..noise.analysis import allan_document, analyse_allan, parse_taus
+    from ..noise.fit import MIN_EDF, parse_terms
+
+    opts, iargv = ingest_opts(test, campaign)
+
+    def go():
+        """The command body: returns (result, objects, logs)."""
+        g = cache.get(test.logs[0], opts)
+        acc = accel_channels(g)
+        if not acc:
+            raise InputError(f"{campaign.rel(test.logs[0])}: no accelerometer columns "
+                             "(ax/ay/az, acc_x ... with a unit: ax_g, acc_x_mps2 or [units] in "
+                             "the profile)" + (f"; {acc.notes[0]}" if acc.notes else ""))
+        r = analyse_allan(
+            g, skip_s=test.opt("skip", "0"), dev="oadev",
+            taus=parse_taus(test.opt("taus", "10/decade")),
+            terms=parse_terms(test.opt("terms", "Q,N,B,K,R")), axes=list(acc.data),
+            confidence=0.683, stop_ratio=None, min_edf=MIN_EDF,
+            detrend=test.opt("detrend", "none"))
+        _need_fits(r)
+        return allan_document([r]), r, [g]
+
+    res, obj, logs, dt = _timed(go)
+    argv = ["allan", campaign.rel(test.logs[0]), "--axis", ",".join(
+        a.axis for a in obj.axes), *iargv, *option_argv(test)]
+    return Analysis("accel", test.name, "allan", argv, res, obj, logs, dt)
 
 
 # ----------------------------------------------------------------------------- scale factor

@@ -47,6 +47,7 @@ from .layout import (  # noqa: F401 - re-exported for the section modules and ca
     _unit,
     dig,
 )
+from .sec_accel import AccelSections
 from .sec_drift import DriftSections
 from .sec_environment import EnvironmentSections
 from .sec_lab import LabSections
@@ -139,6 +140,8 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
                                   t, campaign, cache, tm, k, t_ref=t0))
         elif name == "magnetic":
             out[name] = step(name, lambda t=test: ad.run_magnetic(t, campaign, cache))
+        elif name == "accel":
+            out[name] = step(name, lambda t=test: ad.run_accel(t, campaign, cache))
         elif name == "supply":
             out[name] = step(name, lambda t=test: ad.run_model_fit(
                 t, campaign, cache, t.opt("terms", "V"), "supply"))
@@ -151,7 +154,7 @@ def run_campaign(campaign: Campaign, *, progress: Callable[[str], None] | None =
     return out
 
 
-class Builder(DriftSections, EnvironmentSections, LabSections):
+class Builder(DriftSections, EnvironmentSections, LabSections, AccelSections):
     """Builds the sections of one sheet."""
 
     def __init__(self, campaign: Campaign, analyses: dict[str, ad.Analysis], figures: bool,
@@ -232,10 +235,15 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                                            "§5.3.3.2, §8.3"))
         sec_ia = self.alignment(Section("5", "IA alignment", "§5.3.4"))
         self.model_equation(sec_model)  # after the others: it substitutes their numbers
-        sec_cond = self.conditions(Section("6", "Test conditions, equipment and traceability"))
+        extra = []
+        if "accel" in self.an:  # the campaign asks for the accelerometers ([tests.accel])
+            extra.append(self.accelerometers(Section("6", "Accelerometer noise",
+                                                     "IEEE Std 1293")))
+        sec_cond = self.conditions(Section(str(6 + len(extra)),
+                                           "Test conditions, equipment and traceability"))
         self.identity_checks()
         self.equipment_checks()
-        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, sec_cond]
+        sections = [sec_model, sec_sf, sec_drift, sec_env, sec_ia, *extra, sec_cond]
         n = len(sections)
         if self.eng:
             n += 1
@@ -307,6 +315,8 @@ class Builder(DriftSections, EnvironmentSections, LabSections):
                  "thermal": "thermal", "magnetic": "magnetic", "supply": "supply voltage",
                  "multiposition": "IA alignment (multi-position)"}
         tested = [v for k, v in names.items() if k in self.c.tests]
+        if "accel" in self.c.tests:
+            tested.append("accelerometer noise (IEEE Std 1293)")
         missing = [v for k, v in names.items() if k not in self.c.tests]
         ident.append(("Tests", (", ".join(tested) or "none")
                       + (f"; not tested: {', '.join(missing)}" if missing else "")))

@@ -174,6 +174,14 @@ TESTS: dict[str, dict[str, tuple[str, str | None, str]]] = {
         "terms": ("str", "--terms", "model terms (default V)"),
         "skip": ("duration", "--skip", "drop the start of the log"),
     },
+    "accel": {
+        "log": ("path", None, "static log with accelerometer columns (ax/ay/az, acc_x ... with "
+                "a unit): their noise per IEEE Std 1293"),
+        "skip": ("duration", "--skip", "warm-up trim"),
+        "terms": ("str", "--terms", "noise terms to fit, e.g. Q,N,B,K,R"),
+        "taus": ("str", "--taus", "tau grid: octave, decade, N/decade, all or a list"),
+        "detrend": ("str", "--detrend", "none, linear, quadratic or sine:PERIOD"),
+    },
 }
 
 #: limit keys per test: key -> (label, unit, what it limits)
@@ -199,6 +207,9 @@ LIMITS: dict[str, dict[str, tuple[str, str]]] = {
     "magnetic": {"wx": ("|w_x|", "°/h per 100 µT"), "wy": ("|w_y|", "°/h per 100 µT"),
                  "wz": ("|w_z|", "°/h per 100 µT")},
     "multiposition": {"azimuth_misalignment_deg": ("|IA azimuth misalignment|", "°")},
+    "accel": {"N": ("velocity random walk VRW", "m/s/√h"), "B": ("bias instability B", "µg"),
+              "K": ("acceleration random walk K", "m/s/h/√h"),
+              "R": ("acceleration ramp R", "m/s/h/h"), "Q": ("velocity quantization Q", "m/s")},
     "supply": {"supply_dph_per_v": ("|supply sensitivity|", "(°/h)/V")},
 }
 
@@ -395,21 +406,21 @@ def _check_option(err: _Err, where: str, test: str, key: str, typ: str, value: A
                     raise err(where, f"step {v!r}: {e}") from None
         return list(value)
     v = _scalar(err, where, value, typ)
-    if test == "allan" and key == "terms":
+    if test in ("allan", "accel") and key == "terms":
         from ..noise.fit import parse_terms
 
         try:
             parse_terms(v)
         except InputError as e:
             raise err(where, str(e)) from None
-    if test == "allan" and key == "taus":
+    if test in ("allan", "accel") and key == "taus":
         from ..noise.analysis import parse_taus
 
         try:
             parse_taus(v)
         except InputError as e:
             raise err(where, str(e)) from None
-    if test == "allan" and key == "detrend":
+    if test in ("allan", "accel") and key == "detrend":
         from ..noise.analysis import parse_detrend
 
         try:

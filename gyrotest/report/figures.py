@@ -58,6 +58,15 @@ def _close(figs) -> None:
         plt.close(f)
 
 
+def accel_figure(source: str, axis_analyses) -> Figure:
+    """The Allan figure of the accelerometer axes (all on one τ axis, σ in m/s²)."""
+    from ..noise.plots import figure_allan
+
+    png, w, h = _png_from_fig(figure_allan([(source, a) for a in axis_analyses],
+                                           size=SIZES["allan"]))
+    return Figure("accel", "", png, None, w, h)
+
+
 def allan_figure(source: str, axis_analysis, k: float = 2.0) -> Figure:
     """Allan deviation, fitted model, its components and the residuals in CI units; the
     terms' ± in the legend is the sheet's U = k·1σ, as in its tables."""

@@ -83,13 +83,13 @@ def _not_tested(section: Section, what: str) -> Section:
     return section
 
 
-def _check_table(checks: list[Check], title: str = "") -> Table:
+def _check_table(checks: list[Check], title: str = "", standard: str = "IEEE 952") -> Table:
     rows = []
     for c in checks:
         lim = "—" if c.limit is None else f"≤ {fmt_number(c.limit)} {c.unit}".strip()
         rows.append([c.label, c.ieee, c.measured if c.measured else "not tested", lim,
                      c.verdict])
-    return T(["item", "IEEE 952", "measured", "limit (|value| shall not exceed)",
+    return T(["item", standard, "measured", "limit (|value| shall not exceed)",
                   "verdict"], rows, title=title, widths=[3.2, 1.2, 2.6, 2.0, 1.3], key="checks")
 
 
@@ -106,7 +106,10 @@ def _unit(u: str) -> str:
            "deg/(h·degC)": "(°/h)/°C", "deg/(h·degC^2)": "(°/h)/°C²",
            "deg/degC = (deg/h)/(degC/h)": "(°/h)/(°C/h)", "(deg/h)/degC": "(°/h)/°C",
            "(deg/h)/(degC/h)": "(°/h)/(°C/h)", "deg/h per 100 uT": "°/h per 100 µT",
-           "(deg/h)/V": "(°/h)/V", "deg/s": "°/s", "degC": "°C"}
+           "(deg/h)/V": "(°/h)/V", "deg/s": "°/s", "degC": "°C",
+           # accelerometers (IEEE Std 1293 terms)
+           "m/s/sqrt(h)": "m/s/√h", "m/s/h/sqrt(h)": "m/s/h/√h", "ug": "µg",
+           "m/s^2": "m/s²"}
     return rep.get(u, u)
 
 

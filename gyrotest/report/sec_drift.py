@@ -259,7 +259,8 @@ class DriftSections:
         if "N_upper" in ro:
             lines.append(
                 "Graph read-offs for comparison (Krobka): "
-                f"N_upper = min σ√τ/60 = {s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
+                f"N_upper (95 % bound: min over τ of the upper confidence limit of σ × √τ/60) = "
+                f"{s.t(base + ['slope_readoffs', 'N_upper'], U_ARW)}"
                 f" (ray through the leftmost point); B_tangent = σ_min/0.664 = "
                 f"{s.t(base + ['slope_readoffs', 'B_tangent'], U_DPH)} (an upper bound "
                 "in a mixture); Allan floor σ_min = "
@@ -295,6 +296,8 @@ class DriftSections:
         if not imp.get("strapdown"):
             sec.add(P("No vehicle rates given ([tests.allan] vehicle_rates): only the "
                       "platform case is predicted.", "note"))
+        if imp.get("extrapolated"):
+            sec.add(P("Extrapolated: " + str(imp.get("extrapolation", "")), "note"))
         sec.add(T(["system", "vehicle rate", f"attitude error σ after {fmt_number(hz)} s",
                        "σ ratio strapdown/platform", "σ with the bounds at their limit"], rows,
                       title="Predicted attitude error of three such gyros (first order)",

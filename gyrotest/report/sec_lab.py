@@ -25,7 +25,8 @@ class LabSections:
         """Section 6: logs as read, input files with SHA-256, equivalent commands."""
         titles = {"bias": "bias runs", "allan": "Allan run", "scale_factor": "rate-table runs",
                   "thermal": "thermal-chamber run", "magnetic": "Helmholtz-coil run",
-                  "multiposition": "multi-position run", "supply": "supply-voltage run"}
+                  "multiposition": "multi-position run", "supply": "supply-voltage run",
+                  "accel": "accelerometer run"}
         self.environment_table(sec, titles)
         self.equipment_table(sec, titles)
         used: dict[str, list[str]] = {}

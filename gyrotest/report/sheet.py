@@ -326,8 +326,8 @@ class Section:
     def heading(self) -> str:
         """Number, title and IEEE 952 reference."""
         t = f"{self.number} {self.title}"
-        if self.ieee:
-            t += f" (IEEE 952 {self.ieee})"
+        if self.ieee:  # a reference naming its own standard (IEEE Std 1293) stands alone
+            t += f" ({self.ieee})" if self.ieee.startswith("IEEE") else f" (IEEE 952 {self.ieee})"
         return t
 
     def walk(self):

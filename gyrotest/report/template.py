@@ -119,6 +119,11 @@ profile = "multipos.profile.toml"
 settle = "30s"
 limits = { azimuth_misalignment_deg = 1.0 }
 
+# [tests.accel]                              # accelerometer noise (IEEE Std 1293), a log
+# log = "imu.csv"                            # with accelerometer columns (ax_g, acc_y ...)
+# skip = "10min"
+# limits = { N = 0.06, B = 50, K = 1.0 }     # VRW m/s/sqrt(h), B ug, K m/s/h/sqrt(h)
+
 # [tests.supply]                             # supply-voltage sensitivity
 # log = "supply.csv"
 # profile = "supply.profile.toml"

@@ -108,6 +108,9 @@ def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
     """
     if nan_policy not in ("error", "gap", "interpolate"):
         raise InputError(f"unknown NaN policy {nan_policy!r}; use error, gap or interpolate")
+    from .guard import declare_input
+
+    declare_input(path, "a log")  # no output of this run may replace it
     prof = merge(profile, overrides or {})
     source = _source_name(path)
     # names first (cheap) so that only the used columns are parsed

@@ -82,7 +82,9 @@ class LazyGroup(click.Group):
         if mod is None or not _module_exists(mod):
             return None
         module = importlib.import_module(f"{__name__}.{mod}")
-        return module.command
+        from .io_roles import guard_commands
+
+        return guard_commands(module.command)
 
     def format_commands(self, ctx, formatter):
         # the one-liners come from SHORT_HELP so that `gyrotest --help` imports no command

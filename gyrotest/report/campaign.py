@@ -344,6 +344,9 @@ def _check_file(err: _Err, root: Path, where: str, value: Any) -> Path:
                          f"{root})")
     if p.is_dir():
         raise err(where, f"{value!r} is a directory, expected a file")
+    from ..guard import declare_input
+
+    declare_input(p, f"the file {where} of the campaign")
     return p
 
 

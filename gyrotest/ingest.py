@@ -47,6 +47,7 @@ from .io.columns import (
     column_guesses,
     resolve_columns,
 )
+from .io.health import MAX_ABS, overflow_mask
 from .io.meta import (
     META_KEY,
     _from_gyrotest,
@@ -97,15 +98,25 @@ def _nan_runs(mask: np.ndarray) -> tuple[int, int, int]:
 
 def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
              overrides: dict[str, dict[str, Any]] | None = None,
-             nan_policy: str = "error") -> GyroLog:
+             nan_policy: str = "error", dead: str = "note") -> GyroLog:
     """Read a bench log into a :class:`GyroLog` (see the module docstring).
 
     ``overrides`` has the profile's shape (``{"columns": {...}, "gyro": {...}, "site": {...},
     "units": {...}}``) and wins key by key. ``nan_policy``: ``error`` (default) stops at the
     first missing value naming the row and column; ``gap`` drops rows with a missing value
     and treats them as gaps; ``interpolate`` fills auxiliary channels linearly (missing gyro
-    values still become gaps).
+    values still become gaps). Values beyond ±1e40 (a logger's overflow code) count as missing.
+    A dead or stuck gyro output (constant over the whole run) is a note, or with
+    ``dead="error"`` (every analysis command) an InputError (:mod:`gyrotest.io.health`).
     """
+    from .io.health import check_log
+
+    log = _read_log(path, profile, overrides, nan_policy)
+    check_log(log, dead=dead)
+    return log
+
+
+def _read_log(path, profile, overrides, nan_policy) -> GyroLog:
     if nan_policy not in ("error", "gap", "interpolate"):
         raise InputError(f"unknown NaN policy {nan_policy!r}; use error, gap or interpolate")
     from .guard import declare_input
@@ -284,19 +295,26 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     gyro_cols = {f"gyro output {c!r}": v for c, v in arrays.items()}
     drop = np.zeros(n_rows, dtype=bool)
     for label, v in {**gyro_cols, **aux}.items():
-        miss = ~np.isfinite(v)  # ±inf is a missing value too (an overflowed logger cell)
+        # ±inf is a missing value too (an overflowed logger cell), and so is a value beyond
+        # ±MAX_ABS (a logger's overflow code, gyrotest.io.health)
+        big = overflow_mask(v)
+        miss = ~np.isfinite(v) | big
         if not miss.any():
             continue
+        n_big = int(big.sum())
+        first_big = float(v[np.flatnonzero(big)[0]]) if n_big else None
         v[miss] = np.nan
         first, run, total = _nan_runs(miss)
+        over = (f" ({n_big} of them beyond ±{MAX_ABS:g}, e.g. {first_big:.6g}: a logger's "
+                "overflow code, where the arithmetic would overflow)" if n_big else "")
         if total == n_rows:
-            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf); check the column "
-                             "or leave it out")
+            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf){over}; check "
+                             "the column or leave it out")
         if nan_policy == "error":
             rng = raw.where(first) if run == 1 else f"{raw.where(first)} to {raw.where(first + run - 1)}"
             raise InputError(
-                f"{source}: {label} has {total} missing/NaN/±inf value(s), first at {rng}; fix the data, "
-                "or pass --nan gap (drop those rows as gaps) or --nan interpolate"
+                f"{source}: {label} has {total} missing/NaN/±inf value(s){over}, first at {rng}; "
+                "fix the data, or pass --nan gap (drop those rows as gaps) or --nan interpolate"
             )
         if nan_policy == "interpolate" and label in aux:
             idx = np.arange(n_rows)
@@ -306,7 +324,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
             drop |= miss
             notes.append(f"{label}: {total} row(s) with missing values dropped and treated as gaps")
     for c, v in extra.items():
-        miss = ~np.isfinite(v)
+        miss = ~np.isfinite(v) | overflow_mask(v)
         if miss.any():
             idx = np.arange(n_rows)
             v[miss] = np.nan

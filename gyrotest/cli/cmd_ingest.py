@@ -36,7 +36,7 @@ def command(log, output, force, as_json, ingest_opts):
     """
     check_output_path(output, LOG_SUFFIXES, "output file", formats=".parquet or .feather")
     t0 = time.perf_counter()
-    g = load_log(log, ingest_opts, announce=not as_json)
+    g = load_log(log, ingest_opts, announce=not as_json, dead="note")
     t1 = time.perf_counter()
     path = write_log(g, output)
     t2 = time.perf_counter()

@@ -214,7 +214,7 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
         ov = ingest_overrides(opts)
         ov["columns"] = {k: v for k, v in ov["columns"].items() if k not in aux}
         return read_log(path, profile=prof, overrides=ov,
-                        nan_policy=opts.get("nan_policy") or "error")
+                        nan_policy=opts.get("nan_policy") or "error", dead="error")
     except InputError as e:
         raise InputError(f"--reference: {e}") from None
 

@@ -264,10 +264,12 @@ def ingest_overrides(opts: dict) -> dict[str, dict[str, Any]]:
     return {"columns": cols, "gyro": gyro, "site": site}
 
 
-def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False):
+def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False,
+             dead: str = "error"):
     """Read one log with the shared ingest options; prints the column choices as notes.
     ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
-    (its angle series only; see that module)."""
+    (its angle series only; see that module). ``dead="note"``: a dead or stuck gyro output is
+    a note, not an error (``info``, ``ingest``: they describe and convert, they do not fit)."""
     from ..ingest import read_log
     from ..profile import load_profile
 
@@ -283,7 +285,7 @@ def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = Fal
 
         reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
         log = read_log(path, profile=prof, overrides=ingest_overrides(opts),
-                       nan_policy=opts.get("nan_policy") or "error")
+                       nan_policy=opts.get("nan_policy") or "error", dead=dead)
     if announce:
         for msg in log.notes:
             note(f"{log.source}: {msg}")

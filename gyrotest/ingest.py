@@ -124,8 +124,17 @@ def _read_log(path, profile, overrides, nan_policy) -> GyroLog:
     declare_input(path, "a log")  # no output of this run may replace it
     prof = merge(profile, overrides or {})
     source = _source_name(path)
+    from .documents import path_kind, read_fifo
+
+    if str(path) != "-" and path_kind(path) == "fifo":
+        # a named pipe (an acquisition program, `<(zcat log.csv.gz)`): read to its end, once,
+        # never blocking on a pipe with no writer; then parsed like stdin
+        data = read_fifo(path, "a log", hint=", or pipe it into gyrotest and pass '-'")
+        raw = read_table(path, _data=data)
+        roles, notes = resolve_columns(raw.table.column_names, prof, source)
+        notes.append(f"read {len(data):,} bytes from the named pipe to its end")
     # names first (cheap) so that only the used columns are parsed
-    if str(path) != "-":
+    elif str(path) != "-":
         select = prof.columns.get("topic")
         head = read_table(path, select=select, _names_only=True)
         if head.fmt in ("parquet", "feather"):

@@ -217,7 +217,11 @@ def _run(args: list[str], debug: bool) -> int:
     except GyrotestError as e:
         if debug:
             traceback.print_exc()
-        _err(str(e).replace("\n", " "))
+        problems = getattr(e, "problems", None) or [str(e)]  # a DocumentError: one per line
+        for line in problems[:20]:
+            _err(line.replace("\n", " "))
+        if len(problems) > 20:
+            _err(f"... and {len(problems) - 20} more problems")
         code = e.exit_code
     except BrokenPipeError:
         # downstream closed the pipe (e.g. `| head`): not an error

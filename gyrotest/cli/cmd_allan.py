@@ -151,6 +151,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
             from ..plotting import check_plot_path
 
             check_plot_path(p)
+    if csv_path:
+        from ..output import check_output_path
+
+        check_output_path(csv_path, (".csv", ".txt"), "--csv table", formats=".csv or .txt")
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     parse_detrend(detrend)
     kw = dict(skip_s=skip, dev=dev_kind, taus=tau_spec, terms=keys, vehicle_rates=rates,

@@ -47,7 +47,7 @@ from .io.columns import (
     column_guesses,
     resolve_columns,
 )
-from .io.health import MAX_ABS, overflow_mask
+from .io.health import MAX_ABS, PHYSICAL_RANGE, outside_physical, overflow_mask
 from .io.meta import (
     META_KEY,
     _from_gyrotest,
@@ -303,10 +303,21 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         aux[f"table rate {roles['table_rate']!r}"] = table
     gyro_cols = {f"gyro output {c!r}": v for c, v in arrays.items()}
     drop = np.zeros(n_rows, dtype=bool)
+    physical = {**{f"temperature {c!r}": (c, "temperature", "degC") for c in temps},
+                **{f"field {c!r}": (c, "field", "uT") for c in fields}}
     for label, v in {**gyro_cols, **aux}.items():
         # ±inf is a missing value too (an overflowed logger cell), and so is a value beyond
-        # ±MAX_ABS (a logger's overflow code, gyrotest.io.health)
+        # ±MAX_ABS (a logger's overflow code) or a temperature/field no sensor can read
+        # (gyrotest.io.health)
         big = overflow_mask(v)
+        why = f"beyond ±{MAX_ABS:g}, where the arithmetic would overflow"
+        if label in physical and not big.all():
+            c, quantity, default = physical[label]
+            unit = _unit_for(c, prof, default, raw.units)
+            outside = outside_physical(np.where(big, 0.0, v), unit, quantity)
+            if outside.any():
+                why = f"outside {PHYSICAL_RANGE[quantity][2]}"
+                big |= outside
         miss = ~np.isfinite(v) | big
         if not miss.any():
             continue
@@ -314,8 +325,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         first_big = float(v[np.flatnonzero(big)[0]]) if n_big else None
         v[miss] = np.nan
         first, run, total = _nan_runs(miss)
-        over = (f" ({n_big} of them beyond ±{MAX_ABS:g}, e.g. {first_big:.6g}: a logger's "
-                "overflow code, where the arithmetic would overflow)" if n_big else "")
+        over = (f" ({n_big} of them {why}, e.g. {first_big:.6g}: a logger's overflow or error "
+                "code)" if n_big else "")
         if total == n_rows:
             raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf){over}; check "
                              "the column or leave it out")

@@ -535,5 +535,5 @@ def test_env_model_bad_inputs(thermal_model, allan_json, tmp_path):
     b = tmp_path / "broken.json"
     b.write_text(json.dumps(broken))
     r = run_cli(["export", "env-model", b, "-o", tmp_path / "x.h"])
-    r.assert_clean_error("broken.json", "malformed model file")
+    r.assert_clean_error("broken.json", "terms[1].coefficients", "missing")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.json", "report.json"]

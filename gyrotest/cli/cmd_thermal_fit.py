@@ -16,6 +16,7 @@ from .cmd_model import (
     write_plot,
 )
 from .common import (
+    FiniteRange,
     console,
     emit_json,
     fmt_num,
@@ -44,7 +45,7 @@ def _coef_table(title, coefs):
 @click.argument("log", type=str, required=False)
 @click.option("--setpoints", type=click.Path(dir_okay=False), default=None,
               help="Table of steady-state set-points (CSV: temperature, dw[, sigma][, dTdt]).")
-@click.option("--t0", type=float, default=21.0, show_default=True,
+@click.option("--t0", type=FiniteRange(-273.15, 1000.0), default=21.0, show_default=True,
               help="Reference temperature t0, degC (ΔT = T − t0; the paper's lab: 21).")
 @click.option("--sensor", default=None,
               help="Temperature channel of the model (default: the one that fits held-out "

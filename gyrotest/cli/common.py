@@ -28,6 +28,16 @@ from ..errors import InputError
 from ..units import format_number
 
 
+class FiniteRange(click.FloatRange):
+    """``click.FloatRange`` that also refuses NaN (which compares false with both bounds)."""
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if v != v:
+            self.fail(f"{value!r} is not a number", param, ctx)
+        return v
+
+
 @dataclass
 class Settings:
     debug: bool = False

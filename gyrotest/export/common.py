@@ -70,6 +70,13 @@ def read_document(path: str | Path, want: str) -> Document:
             raise
         raise InputError(f"{e}; cannot parse it, give {PRODUCERS[want]}") from None
     kind = detect_kind(d)
+    if kind == "envmodel" and want == "envmodel":
+        from ..documents import DocumentError
+        from ..schemas import model_problems
+
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        if problems:
+            raise DocumentError(str(p), problems)
     if kind != want:
         if kind == "thermal-fit" and want == "envmodel":
             raise InputError(f"{p} is the --json report of 'gyrotest thermal-fit', which does not "

@@ -10,6 +10,9 @@ starts on a channel that cannot hold a result:
   float64's 1.8e308: |x|⁶·10⁹ < 1.8e308 needs |x| < 7e49; 1e40 leaves room for the unit
   factors (×3600, ×206265) applied after reading. Such cells are treated like ±inf (an
   overflowed cell): an error naming the column and row, or dropped/interpolated with ``--nan``.
+* **Out of physical range.** A temperature below absolute zero or above 10 000 °C, a magnetic
+  field beyond ±1 kT: no sensor reads that (:data:`PHYSICAL_RANGE`); an error code
+  (-9999, 9.9e37) treated like an overflow.
 * **Dead or stuck gyro output.** A rate that does not change over the whole run — all zeros, a
   constant, or values of 1e-300 whose squares underflow — carries no measurement: no noise,
   no bias uncertainty, no fit. A real gyro's output always moves
@@ -29,6 +32,25 @@ from ..errors import InputError
 MAX_ABS = 1e40
 #: smallest spread (max - min) of a gyro output that counts as a changing signal, deg/h
 MIN_SPREAD = 1e-40
+
+
+#: what a sensor of each quantity can read, in internal units, and why: below absolute zero no
+#: temperature exists and above 10 000 °C every sensor (and gyro) has melted (tungsten at
+#: 3422 °C); 1e9 µT = 1 kT is ten times the strongest pulsed magnet (≈ 100 T)
+PHYSICAL_RANGE = {
+    "temperature": (-273.15, 1e4, "-273.15…10000 degC, what any thermometer can read"),
+    "field": (-1e9, 1e9, "±1e9 uT (1 kT), beyond any magnet"),
+}
+
+
+def outside_physical(v: np.ndarray, unit: str, quantity: str) -> np.ndarray:
+    """Finite values of ``v`` (in ``unit``) outside :data:`PHYSICAL_RANGE` of ``quantity``."""
+    from ..units import to_internal
+
+    lo, hi, _ = PHYSICAL_RANGE[quantity]
+    with np.errstate(invalid="ignore", over="ignore"):
+        x = to_internal(np.array(v, dtype=float), unit, quantity)
+        return np.isfinite(x) & ((x < lo) | (x > hi))
 
 
 def overflow_mask(v: np.ndarray) -> np.ndarray:

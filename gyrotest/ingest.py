@@ -162,7 +162,12 @@ def describe_columns(path: str | os.PathLike, *, profile: Profile | None = None,
     prof = merge(profile, overrides or {})
     source = _source_name(path)
     select = prof.columns.get("topic")
-    head = read_table(path, select=select, _names_only=True)
+    from .documents import path_kind, read_fifo
+
+    if str(path) != "-" and path_kind(path) == "fifo":  # a named pipe: its text, to the end
+        head = read_table(path, _data=read_fifo(path, "a log"), _names_only=True)
+    else:
+        head = read_table(path, select=select, _names_only=True)
     names = (column_names(path) if head.fmt in ("parquet", "feather")
              else head.table.column_names)
     guesses = column_guesses(names)

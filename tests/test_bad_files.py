@@ -271,6 +271,7 @@ SLOTS = {
     "scenario": ["simulate", "{p}", "-o", "s.csv"],
     "campaign": ["report", "{p}"],
     "plateau table": ["scale-factor", "--table", "{p}"],
+    "columns": ["columns", "{p}"],
 }
 
 

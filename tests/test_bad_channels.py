@@ -114,3 +114,30 @@ def test_python_api_reports_the_dead_channel(tmp_path):
         read_log(log, overrides={"gyro": {"rate_unit": "deg/h"}}, dead="error")
     g = read_log(log, overrides={"gyro": {"rate_unit": "deg/h"}})
     assert any("constant" in n for n in g.notes)
+
+
+def test_saturated_gyro_output_is_a_finding(tmp_path, model_file):
+    rng = np.random.default_rng(7)
+    clipped = np.clip(rng.normal(0, 1, N), -5.0, 1.5)  # a rail at +1.5 deg/h
+    log = _write(tmp_path / "sat.csv", clipped)
+    for cmd in _commands(model_file).values():
+        argv = cmd[:1] + ([cmd[1]] if cmd[0] in ("model", "export") else [])
+        r = run_cli([*argv, log, *cmd[len(argv):]])
+        r.assert_clean_error("gyro output 'rate'", "sits at 1.5 deg/h", "saturated")
+    r = run_cli(["info", log, "--rate-unit", "deg/h"])
+    assert r.code == 0 and "saturated" in r.err, r.err
+
+
+def test_no_saturation_on_noise_quantised_or_not():
+    from gyrotest.io.health import saturation
+
+    rng = np.random.default_rng(8)
+    for seed in range(20):  # a continuous record and a coarsely quantised one: never flagged
+        x = np.random.default_rng(seed).normal(0, 1, 20000)
+        assert saturation(x) is None
+        assert saturation(np.round(x / 0.5) * 0.5) is None
+        assert saturation(np.round(x * 3)) is None
+    # a quantised record whose top level is held far longer than its repeats allow
+    q = np.round(rng.normal(0, 1, 20000) / 0.5) * 0.5
+    q[5000:5400] = q.max()
+    assert saturation(q)[1:] == (5000, 400)

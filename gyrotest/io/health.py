@@ -20,6 +20,12 @@ starts on a channel that cannot hold a result:
   counts as zero when it is below 8 units in the last place of the channel's magnitude (the
   rounding of the unit conversion) or below 1e-40 deg/h in absolute terms (the mirror of
   :data:`MAX_ABS`: its sixth power stays a normal float64).
+* **Saturated gyro output.** An output clipped at a rail sits at exactly its largest (or
+  smallest) value for a run of consecutive samples. Off the rails the record's own repeats
+  give the chance p that a sample equals the one before (0 for a continuous signal, large for
+  a coarsely quantised one); k repeats in a row then have a chance of about n·p^k anywhere in
+  n samples. A run at a rail with n·p^k < :data:`SATURATION_ALPHA` (10⁻⁶) is not noise: the
+  input exceeded the gyro's range, or the logger clipped.
 """
 
 from __future__ import annotations
@@ -32,6 +38,36 @@ from ..errors import InputError
 MAX_ABS = 1e40
 #: smallest spread (max - min) of a gyro output that counts as a changing signal, deg/h
 MIN_SPREAD = 1e-40
+#: family-wise chance below which a run of repeats at a rail is called saturation
+SATURATION_ALPHA = 1e-6
+
+
+def saturation(v: np.ndarray) -> tuple[float, int, int] | None:
+    """(rail value, first sample, run length) of the longest run of repeats at the largest or
+    smallest value of ``v`` when it is improbable under the record's own repeat rate (module
+    docstring), else None."""
+    n = v.size
+    if n < 3:
+        return None
+    lo, hi = float(np.min(v)), float(np.max(v))
+    at_rail = (v == hi) | (v == lo)
+    if at_rail.sum() < 2:
+        return None
+    eq = v[1:] == v[:-1]
+    rail_pair = eq & at_rail[1:]
+    if not rail_pair.any():
+        return None
+    off = ~(at_rail[1:] | at_rail[:-1])
+    m = int(off.sum())
+    p = float((eq & off).sum()) / m if m else 1.0
+    # the longest run of consecutive rail pairs: k repeats = k + 1 samples
+    idx = np.flatnonzero(np.diff(np.concatenate(([0], rail_pair.astype(np.int8), [0]))))
+    starts, ends = idx[::2], idx[1::2]
+    j = int(np.argmax(ends - starts))
+    k = int(ends[j] - starts[j])
+    if n * p**k >= SATURATION_ALPHA:
+        return None
+    return float(v[starts[j]]), int(starts[j]), k + 1
 
 
 #: what a sensor of each quantity can read, in internal units, and why: below absolute zero no
@@ -102,6 +138,19 @@ def check_log(log, *, dead: str = "error") -> None:
                 "check the unit and the scale factor")
     for axis, v in log.rates.items():
         if v.size < 2 or not is_constant(v):
+            sat = saturation(v)
+            if sat is None:
+                continue
+            col = names[0] if len(log.rates) == 1 and names else axis
+            level, i, run = sat
+            t = log.t
+            what = (f"the gyro output {col!r} sits at {_fmt(level)} deg/h, its "
+                    f"{'largest' if level == float(np.max(v)) else 'smallest'} value, for "
+                    f"{run:,} samples in a row from sample {i + 1} (t = {_fmt(float(t[i]))} s): "
+                    "saturated — the input exceeded the gyro's range, or the logger clipped")
+            if dead == "error":
+                raise InputError(f"{log.source}: {what}; cut that part or lower the input rate")
+            log.notes.append(f"warning: {what}")
             continue
         lo, hi, _ = _spread(v)
         col = names[0] if len(log.rates) == 1 and names else axis

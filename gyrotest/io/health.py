@@ -25,7 +25,11 @@ starts on a channel that cannot hold a result:
   give the chance p that a sample equals the one before (0 for a continuous signal, large for
   a coarsely quantised one); k repeats in a row then have a chance of about n·p^k anywhere in
   n samples. A run at a rail with n·p^k < :data:`SATURATION_ALPHA` (10⁻⁶) is not noise: the
-  input exceeded the gyro's range, or the logger clipped.
+  input exceeded the gyro's range, or the logger clipped. Pulse outputs (counts, up/down,
+  counters) are not checked: at a rate-table plateau whose noise is below one pulse per
+  sample the count is legitimately the same for hundreds of samples, which no statistic of
+  the record tells from a clipped one (a simulated low-rate campaign: 586 equal counts at
+  the fastest plateau); counters do not clip, they roll over.
 """
 
 from __future__ import annotations
@@ -136,9 +140,10 @@ def check_log(log, *, dead: str = "error") -> None:
                 f"{log.source}: {label} reaches {_fmt(float(v[i]))} at sample {i + 1} after "
                 f"the unit conversion, beyond ±{MAX_ABS:g} where the arithmetic overflows; "
                 "check the unit and the scale factor")
+    pulses = log.gyro.output_kind in ("counts", "updown", "counter")
     for axis, v in log.rates.items():
         if v.size < 2 or not is_constant(v):
-            sat = saturation(v)
+            sat = None if pulses else saturation(v)
             if sat is None:
                 continue
             col = names[0] if len(log.rates) == 1 and names else axis

@@ -20,8 +20,9 @@ Why not pydantic or jsonschema: what went wrong with these files was mostly not 
 TOML's own parser recursing past Python's limit, units that do not parse, a column in two
 roles, dates that do not exist, a coefficient count that does not match its term, resources
 out of reach — checks that are code in any validator; the type checks the schema libraries
-would add are a few lines here, and either library costs 0.1–0.3 s of start-up on every
-command that reads a profile (benchmarks/README.md, "Damaged-input campaign").
+would add are a few lines here, and either library costs 0.06–0.11 s CPU of start-up on
+every command that reads a profile, a third to a half of `gyrotest info` (benchmarks/README.md,
+"Damaged-input campaign").
 """
 
 from __future__ import annotations

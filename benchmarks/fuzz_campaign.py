@@ -1,12 +1,22 @@
-"""Random bad-input campaign (issue 15): many generated inputs through the CLI in-process;
-counts exit codes and keeps every case that exits 1 or prints a traceback.
+"""Random bad-input campaigns (issues 15 and 62): many generated inputs through the CLI
+in-process; counts exit codes and keeps every case that exits 1, prints a traceback, hangs,
+changes an input or leaves a file behind.
 
-Cases: random text tables (names, tokens, delimiters, BOM, comments, spliced bytes), byte-level
-mutations of a good small log (flip, delete, duplicate, insert), each with random ingest options,
-through ``gyrotest info`` (every 10th case also ``ingest -o``). Failing inputs are written to
-``--keep DIR`` for the regression corpus (tests/data/bad/).
+Default (issue 15): random text tables (names, tokens, delimiters, BOM, comments, spliced
+bytes) and byte-level mutations of a good small log (flip, delete, duplicate, insert), each
+with random ingest options, through ``gyrotest info`` (every 10th case also ``ingest -o``).
+Failing inputs are written to ``--keep DIR`` for the regression corpus (tests/data/bad/).
+
+``--families`` (issue 62): the damaged-input families of ``tests/fuzzcases.py`` through every
+command — value families of a log column (all-zero, constant, tiny, huge, overflow codes,
+mixed extremes, NaN/inf, one column in two roles), damaged profiles, campaigns, scenarios,
+model and history files and set-point tables (deep nesting, wrong types, missing and unknown
+keys, bad units and dates, hex overflow, gzip, binary, empty), options with wild values, an
+output that is an input, FIFOs with no writer, devices and directories — each case in a fresh
+directory with a time limit (a hang is a case that does not end within ``--limit`` s).
 
     python benchmarks/fuzz_campaign.py --cases 100000 --seconds 600 --seed 1
+    python benchmarks/fuzz_campaign.py --families --cases 100000 --seconds 36000 --seed 1
 """
 
 from __future__ import annotations
@@ -15,6 +25,7 @@ import argparse
 import collections
 import contextlib
 import io
+import json
 import sys
 import tempfile
 import time
@@ -136,16 +147,77 @@ def campaign(cases: int, seconds: float, seed: int, keep: Path | None) -> dict:
             "failures": failures[:20], "n_failures": len(failures)}
 
 
+def families(cases: int, seconds: float, seed: int, keep: Path | None, limit_s: float,
+             report_every: int = 0) -> dict:
+    """The issue-62 campaign (module docstring)."""
+    import os
+    import shutil
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from fuzzcases import RngDraw, build_case, log_text, run_case
+
+    os.environ.setdefault("GYROTEST_FIFO_WAIT", "0.2")  # a FIFO with no writer: refused fast
+    rng = np.random.default_rng(seed)
+    codes: collections.Counter = collections.Counter()
+    by_family: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    failures = []
+    slowest: list[tuple[float, str]] = []
+    t0 = time.perf_counter()
+    n = 0
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        base, _, _ = log_text(RngDraw(np.random.default_rng(0)), n=120)
+        (d / "base.csv").write_text(base)
+        code, err = run(["model", "fit", str(d / "base.csv"), "--rate-unit", "deg/h",
+                         "--terms", "T", "-o", str(d / "good.json"), "--no-history", "-q"])
+        assert code == 0, err
+        good_model = (d / "good.json").read_bytes()
+        for n in range(1, cases + 1):
+            case = build_case(RngDraw(rng), good_model)
+            work = d / f"c{n}"
+            with contextlib.redirect_stdout(io.StringIO()):
+                out = run_case(case, work, limit_s=limit_s)
+            key = "hang" if out.code is None else out.code
+            codes[key] += 1
+            by_family[case.family.split(":")[0]][key] += 1
+            slowest = sorted([*slowest, (out.seconds, repr(case))], reverse=True)[:5]
+            if out.problem:
+                failures.append((repr(case), out.problem, out.err.strip()[-300:]))
+                if keep is not None:
+                    dest = keep / f"fail_{seed}_{n}"
+                    shutil.copytree(work, dest, symlinks=True, ignore=lambda *a: [
+                        x for x in a[1] if (Path(a[0]) / x).is_fifo()])
+                    (dest / "argv.txt").write_text(" ".join(case.argv) + "\n")
+            shutil.rmtree(work, ignore_errors=True)
+            if report_every and n % report_every == 0:
+                print(json.dumps({"cases": n, "seconds": round(time.perf_counter() - t0),
+                                  "exit_codes": {str(k): v for k, v in codes.items()},
+                                  "failures": len(failures)}), file=sys.stderr, flush=True)
+            if time.perf_counter() - t0 > seconds:
+                break
+    return {"cases": n, "seconds": time.perf_counter() - t0,
+            "exit_codes": {str(k): v for k, v in codes.items()},
+            "by_family": {f: {str(k): v for k, v in c.items()} for f, c in by_family.items()},
+            "slowest": slowest, "failures": failures[:30], "n_failures": len(failures)}
+
+
 def cli() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=100_000)
     ap.add_argument("--seconds", type=float, default=600.0)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--keep", type=Path, default=None)
+    ap.add_argument("--families", action="store_true",
+                    help="the issue-62 damaged-input families through every command")
+    ap.add_argument("--limit", type=float, default=60.0,
+                    help="seconds after which a --families case counts as a hang")
+    ap.add_argument("--report-every", type=int, default=0,
+                    help="print running tallies to stderr every N cases")
     a = ap.parse_args()
-    res = campaign(a.cases, a.seconds, a.seed, a.keep)
-    import json
-
+    if a.families:
+        res = families(a.cases, a.seconds, a.seed, a.keep, a.limit, a.report_every)
+    else:
+        res = campaign(a.cases, a.seconds, a.seed, a.keep)
     json.dump(res, sys.stdout, indent=2)
     sys.stdout.write("\n")
 

@@ -47,6 +47,7 @@ from .io.columns import (
     column_guesses,
     resolve_columns,
 )
+from .io.health import MAX_ABS, PHYSICAL_RANGE, outside_physical, overflow_mask
 from .io.meta import (
     META_KEY,
     _from_gyrotest,
@@ -97,21 +98,43 @@ def _nan_runs(mask: np.ndarray) -> tuple[int, int, int]:
 
 def read_log(path: str | os.PathLike, *, profile: Profile | None = None,
              overrides: dict[str, dict[str, Any]] | None = None,
-             nan_policy: str = "error") -> GyroLog:
+             nan_policy: str = "error", dead: str = "note") -> GyroLog:
     """Read a bench log into a :class:`GyroLog` (see the module docstring).
 
     ``overrides`` has the profile's shape (``{"columns": {...}, "gyro": {...}, "site": {...},
     "units": {...}}``) and wins key by key. ``nan_policy``: ``error`` (default) stops at the
     first missing value naming the row and column; ``gap`` drops rows with a missing value
     and treats them as gaps; ``interpolate`` fills auxiliary channels linearly (missing gyro
-    values still become gaps).
+    values still become gaps). Values beyond ±1e40 (a logger's overflow code) count as missing.
+    A dead or stuck gyro output (constant over the whole run) is a note, or with
+    ``dead="error"`` (every analysis command) an InputError (:mod:`gyrotest.io.health`).
     """
+    from .io.health import check_log
+
+    log = _read_log(path, profile, overrides, nan_policy)
+    check_log(log, dead=dead)
+    return log
+
+
+def _read_log(path, profile, overrides, nan_policy) -> GyroLog:
     if nan_policy not in ("error", "gap", "interpolate"):
         raise InputError(f"unknown NaN policy {nan_policy!r}; use error, gap or interpolate")
+    from .guard import declare_input
+
+    declare_input(path, "a log")  # no output of this run may replace it
     prof = merge(profile, overrides or {})
     source = _source_name(path)
+    from .documents import path_kind, read_fifo
+
+    if str(path) != "-" and path_kind(path) == "fifo":
+        # a named pipe (an acquisition program, `<(zcat log.csv.gz)`): read to its end, once,
+        # never blocking on a pipe with no writer; then parsed like stdin
+        data = read_fifo(path, "a log", hint=", or pipe it into gyrotest and pass '-'")
+        raw = read_table(path, _data=data)
+        roles, notes = resolve_columns(raw.table.column_names, prof, source)
+        notes.append(f"read {len(data):,} bytes from the named pipe to its end")
     # names first (cheap) so that only the used columns are parsed
-    if str(path) != "-":
+    elif str(path) != "-":
         select = prof.columns.get("topic")
         head = read_table(path, select=select, _names_only=True)
         if head.fmt in ("parquet", "feather"):
@@ -139,7 +162,12 @@ def describe_columns(path: str | os.PathLike, *, profile: Profile | None = None,
     prof = merge(profile, overrides or {})
     source = _source_name(path)
     select = prof.columns.get("topic")
-    head = read_table(path, select=select, _names_only=True)
+    from .documents import path_kind, read_fifo
+
+    if str(path) != "-" and path_kind(path) == "fifo":  # a named pipe: its text, to the end
+        head = read_table(path, _data=read_fifo(path, "a log"), _names_only=True)
+    else:
+        head = read_table(path, select=select, _names_only=True)
     names = (column_names(path) if head.fmt in ("parquet", "feather")
              else head.table.column_names)
     guesses = column_guesses(names)
@@ -198,6 +226,15 @@ CONTAINER_FORMATS = ("mat", "hdf5", "rosbag")
 def _time_unit_from_name(col: str) -> str | None:
     u = _unit_from_name(col)
     return u if u in ("ms", "us", "ns") else None
+
+
+def _field_unit(c: str, prof: Profile, file_units: dict | None) -> str:
+    """Unit of a magnetic-field column: as :func:`_unit_for`, a name's ``_g``/``_mg`` suffix
+    read as gauss/milligauss (``hx_g``; on an accelerometer it is standard gravity)."""
+    u = _unit_for(c, prof, "uT", file_units)
+    if c not in prof.units and not (file_units or {}).get(c):
+        u = {"g": "G", "mg": "mG"}.get(u, u)
+    return u
 
 
 def _unit_for(col: str, prof: Profile, default: str, stated: dict[str, str] | None = None
@@ -280,20 +317,39 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         aux[f"table rate {roles['table_rate']!r}"] = table
     gyro_cols = {f"gyro output {c!r}": v for c, v in arrays.items()}
     drop = np.zeros(n_rows, dtype=bool)
+    physical = {**{f"temperature {c!r}": (c, "temperature", "degC") for c in temps},
+                **{f"field {c!r}": (c, "field", "uT") for c in fields}}
     for label, v in {**gyro_cols, **aux}.items():
-        miss = ~np.isfinite(v)  # ±inf is a missing value too (an overflowed logger cell)
+        # ±inf is a missing value too (an overflowed logger cell), and so is a value beyond
+        # ±MAX_ABS (a logger's overflow code) or a temperature/field no sensor can read
+        # (gyrotest.io.health)
+        big = overflow_mask(v)
+        why = f"beyond ±{MAX_ABS:g}, where the arithmetic would overflow"
+        if label in physical and not big.all():
+            c, quantity, default = physical[label]
+            unit = (_field_unit(c, prof, raw.units) if quantity == "field"
+                    else _unit_for(c, prof, default, raw.units))
+            outside = outside_physical(np.where(big, 0.0, v), unit, quantity)
+            if outside.any():
+                why = f"outside {PHYSICAL_RANGE[quantity][2]}"
+                big |= outside
+        miss = ~np.isfinite(v) | big
         if not miss.any():
             continue
+        n_big = int(big.sum())
+        first_big = float(v[np.flatnonzero(big)[0]]) if n_big else None
         v[miss] = np.nan
         first, run, total = _nan_runs(miss)
+        over = (f" ({n_big} of them {why}, e.g. {first_big:.6g}: a logger's overflow or error "
+                "code)" if n_big else "")
         if total == n_rows:
-            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf); check the column "
-                             "or leave it out")
+            raise InputError(f"{source}: {label} has no values (all empty/NaN/±inf){over}; check "
+                             "the column or leave it out")
         if nan_policy == "error":
             rng = raw.where(first) if run == 1 else f"{raw.where(first)} to {raw.where(first + run - 1)}"
             raise InputError(
-                f"{source}: {label} has {total} missing/NaN/±inf value(s), first at {rng}; fix the data, "
-                "or pass --nan gap (drop those rows as gaps) or --nan interpolate"
+                f"{source}: {label} has {total} missing/NaN/±inf value(s){over}, first at {rng}; "
+                "fix the data, or pass --nan gap (drop those rows as gaps) or --nan interpolate"
             )
         if nan_policy == "interpolate" and label in aux:
             idx = np.arange(n_rows)
@@ -303,7 +359,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
             drop |= miss
             notes.append(f"{label}: {total} row(s) with missing values dropped and treated as gaps")
     for c, v in extra.items():
-        miss = ~np.isfinite(v)
+        miss = ~np.isfinite(v) | overflow_mask(v)
         if miss.any():
             idx = np.arange(n_rows)
             v[miss] = np.nan
@@ -393,9 +449,7 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
         temps[c] = to_internal(temps[c], u, "temperature", what=f"column {c!r}")
         units[c] = u
     for c in list(fields):
-        u = _unit_for(c, prof, "uT", raw.units)
-        if c not in prof.units and not (raw.units or {}).get(c):
-            u = {"g": "G", "mg": "mG"}.get(u, u)  # hx_g: a field column's _g is gauss
+        u = _field_unit(c, prof, raw.units)
         temps_u = to_internal(fields[c], u, "field", what=f"column {c!r}")
         fields[c] = temps_u
         units[c] = u

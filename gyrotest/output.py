@@ -76,6 +76,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
             pq.write_table(table, tmp)
     """
     dest = Path(path)
+    from .guard import check_write
+
+    check_write(dest)  # never over a file this run reads (gyrotest.guard)
     directory = dest.parent if str(dest.parent) else Path(".")
     if not directory.exists():
         raise InputError(f"cannot write {dest}: directory {directory} does not exist")
@@ -124,6 +127,10 @@ def write_text(path: str | os.PathLike, text: str) -> None:
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:
     write_text(path, dumps(obj) + "\n")
+
+
+#: suffixes of the logs gyrotest writes (Parquet; Feather/Arrow IPC)
+LOG_SUFFIXES = (".parquet", ".pq", ".feather", ".arrow")
 
 
 def check_output_path(path: str | os.PathLike, suffixes: tuple[str, ...], what: str, *,

@@ -45,7 +45,6 @@ Unknown sections or keys are an error (a misspelt key would otherwise be silentl
 from __future__ import annotations
 
 import copy
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -136,59 +135,116 @@ class Profile:
         return kinds[0] if kinds else None
 
 
-def _check(section: str, key: str, value: Any, src: str) -> Any:
-    spec = SCHEMA[section]
-    if section == "units":
-        if not isinstance(value, str):
-            raise InputError(f"{src}: [units] {key!r} must be a unit string like \"deg/s\"")
-        return value
-    if key not in spec:
-        raise InputError(
-            f"{src}: unknown key {key!r} in [{section}]; known keys: {', '.join(spec)}"
-        )
-    typ = spec[key]
-    types = typ if isinstance(typ, tuple) else (typ,)
-    if float in types and isinstance(value, bool):
-        raise InputError(f"{src}: [{section}] {key} must be a number, got {value!r}")
-    if not isinstance(value, types):
-        want = " or ".join("list of strings" if t is list else t.__name__ for t in types)
-        raise InputError(f"{src}: [{section}] {key} must be {want}, got {value!r}")
-    if isinstance(value, list):
-        if not all(isinstance(v, str) for v in value):
-            raise InputError(f"{src}: [{section}] {key} must be a list of column names (strings)")
-    if key in LIST_KEYS and isinstance(value, str):
-        value = [value]
-    return value
+#: the profile as a document schema (gyrotest.documents): types and closed key sets
+DOC_SCHEMA = {
+    "columns": {k: ("str|strs" if k in ("rate", "counts", "counter", "voltage", "delta_angle",
+                                        "angle", "temperature", "field", "extra") else "str")
+                for k in SCHEMA["columns"]},
+    "units": {"*": "str"},
+    "gyro": {"rate_unit": "str", "angle_unit": "str", "output_kind": "str",
+             "scale_factor": "num", "offset_v": "num", "counter_bits": "int",
+             "sample_rate_hz": "pos", "time_unit": "str", "model": "str", "serial": "str",
+             "type": "str"},
+    "site": {"latitude_deg": "num", "ia": "str", "ia_azimuth_deg": "num",
+             "ia_elevation_deg": "num"},
+    "display": {"unit": "str"},
+}
+#: the quantity of each column role (for the [units] of a column named in [columns])
+_ROLE_QUANTITY = {"time": "time", "rate": "rate", "delta_angle": "angle", "angle": "angle",
+                  "temperature": "temperature", "field": "field", "supply": "voltage",
+                  "table_rate": "rate"}
+
+
+def _unit_problem(unit: str, quantity: str) -> str | None:
+    from .units import factor, to_internal
+
+    try:
+        if quantity == "temperature":
+            to_internal(0.0, unit, "temperature")
+        else:
+            factor(unit, quantity)
+    except InputError as e:
+        return str(e)
+    return None
+
+
+def profile_problems(data: dict) -> list[str]:
+    """Every problem of a parsed profile, one line each naming its key path
+    (``[columns].temperature[1]``): types, unknown sections and keys, units that do not parse,
+    a column named in two roles, values out of range."""
+    from .documents import check_schema, keypath
+
+    problems = check_schema(data, DOC_SCHEMA, toml=True)
+    if problems:
+        return problems
+    cols, gyro = data.get("columns", {}), data.get("gyro", {})
+    for key, quantity in (("rate_unit", "rate"), ("angle_unit", "angle"), ("time_unit", "time")):
+        if key in gyro:
+            bad = _unit_problem(gyro[key], quantity)
+            if bad:
+                problems.append(f"[gyro].{key}: {bad}")
+    roles: dict[str, tuple[str, str]] = {}  # column -> (key path, role)
+    for role, value in cols.items():
+        if role == "topic":
+            continue
+        items = [(keypath(("columns", role)), value)] if isinstance(value, str) else [
+            (keypath(("columns", role, i)), c) for i, c in enumerate(value)]
+        for where, col in items:
+            if not col.strip():
+                problems.append(f"{where}: an empty column name")
+            elif col in roles:
+                problems.append(f"{where}: column {col!r} is also {roles[col][0]}; a column has "
+                                "one role")
+            else:
+                roles[col] = (where, role)
+    for col, unit in data.get("units", {}).items():
+        role = roles.get(col, (None, None))[1]
+        quantities = ([_ROLE_QUANTITY[role]] if role in _ROLE_QUANTITY else
+                      ["rate", "angle", "time", "temperature", "field", "voltage"])
+        if all(_unit_problem(unit, q) for q in quantities):
+            want = quantities[0] if len(quantities) == 1 else "any quantity"
+            problems.append(f"{keypath(('units', col))}: {unit!r} is not a {want} unit"
+                            + (f" ({_unit_problem(unit, quantities[0])})"
+                               if len(quantities) == 1 else ""))
+    if gyro.get("output_kind") not in (None, *READ_AS_KINDS):
+        problems.append(f"[gyro].output_kind: must be one of {', '.join(READ_AS_KINDS)}, got "
+                        f"{gyro['output_kind']!r}")
+    if "counter_bits" in gyro and not 1 <= gyro["counter_bits"] <= 64:
+        problems.append(f"[gyro].counter_bits: must be 1 to 64 bits, got {gyro['counter_bits']}")
+    if gyro.get("scale_factor") == 0:
+        problems.append("[gyro].scale_factor: must be non-zero")
+    site = data.get("site", {})
+    if "latitude_deg" in site and not -90 <= site["latitude_deg"] <= 90:
+        problems.append(f"[site].latitude_deg: must be within -90...90, got "
+                        f"{site['latitude_deg']}")
+    field_cols = cols.get("field")
+    if field_cols is not None and len([field_cols] if isinstance(field_cols, str)
+                                      else field_cols) not in (1, 2, 3):
+        problems.append("[columns].field: must list 1 to 3 columns (X, Y, Z)")
+    if bool(cols.get("up")) != bool(cols.get("down")):
+        problems.append("[columns].up: up/down pulse pairs need both 'up' and 'down' columns")
+    return problems
 
 
 def profile_from_dict(data: dict, source: str = "profile") -> Profile:
-    """Validate a parsed TOML profile (unknown sections/keys and wrong types are errors)."""
+    """Validate a parsed TOML profile: every problem (unknown sections/keys, wrong types,
+    units that do not parse, a column in two roles) is reported, one line each
+    (:class:`gyrotest.documents.DocumentError`)."""
+    from .documents import DocumentError
+
+    problems = profile_problems(data)
+    if problems:
+        raise DocumentError(source, problems)
     prof = Profile(source=source)
     for section, body in data.items():
-        if section not in SCHEMA:
-            raise InputError(
-                f"{source}: unknown section [{section}]; known sections: "
-                + ", ".join(f"[{s}]" for s in SCHEMA)
-            )
-        if not isinstance(body, dict):
-            raise InputError(f"{source}: [{section}] must be a table of key = value lines")
         target = getattr(prof, section)
         for key, value in body.items():
-            target[key] = _check(section, key, value, source)
+            target[key] = [value] if key in LIST_KEYS and isinstance(value, str) else value
     prof.output_kind()  # validates that at most one output kind is named
-    if prof.gyro.get("output_kind") not in (None, *READ_AS_KINDS):
-        raise InputError(f"{source}: [gyro] output_kind must be one of "
-                         f"{', '.join(READ_AS_KINDS)}, got {prof.gyro['output_kind']!r}")
     if "unit" in prof.display:
         from .display import parse_display_unit
 
         parse_display_unit(prof.display["unit"], what=f"{source}: [display] unit")
-    if "field" in prof.columns and len(prof.columns["field"]) not in (1, 2, 3):
-        raise InputError(f"{source}: [columns] field must list 1 to 3 columns (X, Y, Z)")
-    if prof.columns.get("up") and not prof.columns.get("down") or (
-        prof.columns.get("down") and not prof.columns.get("up")
-    ):
-        raise InputError(f"{source}: up/down pulse pairs need both 'up' and 'down' columns")
     return prof
 
 
@@ -197,19 +253,11 @@ def read_toml(path: str | Path, *, not_found: str, expected: str, kind: str
     """Parse a TOML file; returns (data, raw bytes). InputErrors start with the path:
     ``<not_found>``, ``is a directory, expected <expected>``, ``not a text file; <kind> is
     TOML text``, ``invalid TOML: ...``."""
-    p = Path(path)
-    try:
-        raw = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{p}: {not_found}") from None
-    except IsADirectoryError:
-        raise InputError(f"{p}: is a directory, expected {expected}") from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a text file; {kind} is TOML text") from None
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"{p}: invalid TOML: {e}") from None
+    from .documents import load_document
+
+    data, raw = load_document(Path(path), fmt="toml", what=kind, not_found=not_found)
+    if not isinstance(data, dict):  # pragma: no cover - a TOML document is a table
+        raise InputError(f"{path}: not a table of keys; {kind} is TOML text")
     return data, raw
 
 

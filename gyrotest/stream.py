@@ -36,6 +36,7 @@ import numpy as np
 
 from .data import Gap, GyroConstants, Timing
 from .errors import AnalysisError, InputError
+from .io.health import MAX_ABS, overflow_mask
 from .io.tables import RawTable
 from .noise.deviations import CHUNK, AngleSeries
 
@@ -328,10 +329,12 @@ def _stream_converted(pf, rows: int, source: str, gmeta: dict, prof) -> Streamed
         inside = [c - pos for c in cuts if pos < c < pos + k]
         for axis, c in rate_cols.items():
             x = float64_values(batch.column(c))
-            if not np.isfinite(x).all():
-                i = int(np.flatnonzero(~np.isfinite(x))[0])
-                raise InputError(f"{source}: rate column {c!r} holds {x[i]} at row {pos + i + 1} "
-                                 "(a converted file never has NaN/inf); re-create the file with "
+            bad = ~np.isfinite(x) | overflow_mask(x)
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise InputError(f"{source}: rate column {c!r} holds {x[i]:.6g} at row "
+                                 f"{pos + i + 1} (a converted file never has NaN/inf or values "
+                                 f"beyond ±{MAX_ABS:g}); re-create the file with "
                                  "'gyrotest ingest'")
             _append_split(integ[axis], x, inside, pos, cuts, tau0 if increment else 1.0)
         pos += k

@@ -232,12 +232,20 @@ _DUR_UNITS = {
 }
 
 
+#: longest duration accepted anywhere: 1000 years, a finite bound beyond any bench record or
+#: option (a larger one is a typo or an overflow, e.g. 1e999h)
+MAX_DURATION_S = 1000 * 365.25 * 86400.0
+
+
 def parse_duration(text: str | float | int, *, what: str = "duration") -> float:
     """Parse a duration such as ``"40min"``, ``"2h"``, ``"90 s"``, ``"1.5h"`` or a number of
     seconds into seconds."""
     if isinstance(text, (int, float)):
-        if text < 0:
+        if not text >= 0:  # NaN too
             raise InputError(f"{what} must not be negative, got {text}")
+        if not math.isfinite(text) or text > MAX_DURATION_S:
+            raise InputError(f"{what} {text!r} s is longer than any record (more than "
+                             f"{MAX_DURATION_S:.3g} s, 1000 years)")
         return float(text)
     s = str(text).strip().lower()
     bad = InputError(f"cannot read {what} {text!r}; write e.g. 40min, 2h, 90s or 1h30min")
@@ -254,6 +262,9 @@ def parse_duration(text: str | float | int, *, what: str = "duration") -> float:
         pos = m.end()
     if total < 0:
         raise InputError(f"{what} must not be negative, got {text!r}")
+    if not math.isfinite(total) or total > MAX_DURATION_S:
+        raise InputError(f"{what} {text!r} is longer than any record (more than "
+                         f"{MAX_DURATION_S:.3g} s, 1000 years); write e.g. 40min, 2h, 30d")
     return total
 
 

@@ -29,7 +29,10 @@ A bench profile (TOML, --profile) names the columns and constants of one bench: 
 position, extra), [units] (per-column units), [gyro] (scale_factor, offset_v, rate_unit,
 counter_bits, sample_rate_hz, model, serial) and [site] (latitude_deg, ia or ia_azimuth_deg +
 ia_elevation_deg). Command-line options override it key by key. A campaign file (TOML) lists the
-tests of a campaign for gyrotest report; see sample_data/campaign.toml.
+tests of a campaign for gyrotest report; see sample_data/campaign.toml. Every file is checked
+against its schema before use, one line per problem naming its key; no output is ever written
+over an input. Any file argument may be a named pipe (FIFO), read to its end; with no data for
+GYROTEST_FIFO_WAIT seconds (default 10) it is refused.
 """
 
 UNITS = """\

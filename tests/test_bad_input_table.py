@@ -221,10 +221,11 @@ def test_unreadable_file(tmp_path, monkeypatch, converted):
     run_cli(["info", converted]).assert_clean_error("log.parquet", "permission denied")
 
 
-def test_fifo_device_directory(tmp_path):
+def test_fifo_device_directory(tmp_path, monkeypatch):
     fifo = tmp_path / "pipe.csv"
     os.mkfifo(fifo)
-    run_cli(["info", fifo]).assert_clean_error("pipe.csv", "fifo", "'-'")
+    monkeypatch.setenv("GYROTEST_FIFO_WAIT", "0.3")  # no writer: refused after the wait
+    run_cli(["info", fifo]).assert_clean_error("pipe.csv", "fifo", "no data", "'-'")
     if os.path.exists("/dev/zero"):
         run_cli(["info", "/dev/zero"]).assert_clean_error("/dev/zero", "device")
     run_cli(["info", tmp_path]).assert_clean_error("directory")

@@ -96,7 +96,7 @@ def test_a_constant_log_prints_a_plain_number(tmp_path):
     p.write_text("time,rate_dph\n" + "".join(f"{i * 0.1:.1f},5.0\n" for i in range(3000)))
     for cmd in ("allan", "bias"):
         r = run_cli([cmd, p])
-        r.assert_clean_error("const.csv", "constant (5 in every sample)")
+        r.assert_clean_error("const.csv", "constant (5 deg/h)")
         assert "np." not in r.err
 
 

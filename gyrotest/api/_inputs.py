@@ -149,9 +149,11 @@ def _sim_run(obj):
 
 
 def read_log_from(data, *, profile=None, opts: dict | None = None, sample_interval=None,
-                  unit: str | None = None, name: str | None = None, stream: bool = False):
+                  unit: str | None = None, name: str | None = None, stream: bool = False,
+                  dead: str = "note"):
     """The engine of :func:`gyrotest.read` (arguments as there; ``opts`` under the command
-    line's keys)."""
+    line's keys; ``dead``: a dead or stuck gyro output in a file is a note, or with
+    ``"error"`` an InputError, :mod:`gyrotest.io.health`)."""
     opts = dict(opts or {})
     nan_policy = opts.pop("nan_policy", None) or "error"
     if is_log(data):
@@ -174,7 +176,7 @@ def read_log_from(data, *, profile=None, opts: dict | None = None, sample_interv
         if sample_interval is not None or unit is not None:
             raise OptionError("sample_interval/unit are for arrays",
                               fix="for a file use sample_rate=HZ and rate_unit=UNIT")
-        return _from_path(os.fspath(data), prof, opts, nan_policy, stream)
+        return _from_path(os.fspath(data), prof, opts, nan_policy, stream, dead)
     if _is_frame(data):
         if unit is not None:
             opts.setdefault("rate_unit", unit)
@@ -200,7 +202,8 @@ def _positive_seconds(value, what: str) -> float:
     return s
 
 
-def _from_path(path: str, prof, opts: dict, nan_policy: str, stream: bool):
+def _from_path(path: str, prof, opts: dict, nan_policy: str, stream: bool,
+               dead: str = "note"):
     over = ingest_overrides(opts)
     if stream:
         from ..stream import stream_log
@@ -210,7 +213,7 @@ def _from_path(path: str, prof, opts: dict, nan_policy: str, stream: bool):
             return log
     from ..ingest import read_log
 
-    return read_log(path, profile=prof, overrides=over, nan_policy=nan_policy)
+    return read_log(path, profile=prof, overrides=over, nan_policy=nan_policy, dead=dead)
 
 
 def _from_frame(frame, prof, opts: dict, nan_policy: str, source: str):

@@ -46,7 +46,7 @@ def read_reference(reference, profile=None, opts: dict | None = None):
 
             ov = ingest_overrides(o)
             return read_log(os.fspath(reference), profile=prof, overrides=ov,
-                            nan_policy=o.get("nan_policy") or "error")
+                            nan_policy=o.get("nan_policy") or "error", dead="error")
         return read_log_from(reference, profile=prof, opts=o)
     except InputError as e:
         raise InputError(f"--reference: {e}") from None

@@ -103,7 +103,9 @@ class LazyGroup(SuggestingGroup):
         if mod is None or not _module_exists(mod):
             return None
         module = importlib.import_module(f"{__name__}.{mod}")
-        return module.command
+        from .io_roles import guard_commands
+
+        return guard_commands(module.command)
 
     def format_commands(self, ctx, formatter):
         # the one-liners come from SHORT_HELP so that `gyrotest --help` imports no command
@@ -243,7 +245,11 @@ def _run(args: list[str], debug: bool) -> int:
     except GyrotestError as e:
         if debug:
             traceback.print_exc()
-        _err(str(e).replace("\n", " "))
+        problems = getattr(e, "problems", None) or [str(e)]  # a DocumentError: one per line
+        for line in problems[:20]:
+            _err(line.replace("\n", " "))
+        if len(problems) > 20:
+            _err(f"... and {len(problems) - 20} more problems")
         code = e.exit_code
     except BrokenPipeError:
         # downstream closed the pipe (e.g. `| head`): not an error

@@ -169,6 +169,10 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
             from ..plotting import check_plot_path
 
             check_plot_path(p)
+    if csv_path:
+        from ..output import check_output_path
+
+        check_output_path(csv_path, (".csv", ".txt"), "--csv table", formats=".csv or .txt")
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
     parse_detrend(detrend)
     kw = dict(skip=skip, dev=dev_kind, taus=taus, terms=terms, vehicle_rate=vehicle_rates,
@@ -347,8 +351,8 @@ def _render(r, unit=DEFAULT_UNIT) -> None:
         if a.fit is not None:
             _render_fit(a, unit)
         else:
-            for n in a.notes:
-                note(n)
+            for n in a.notes:  # a fit asked for and not made is a warning, not a note
+                (warn if n.startswith("noise model not fitted") else note)(n)
     if r.cross is not None:
         ct = Table(title="Axis cross-correlation ρ of τ-averaged rates (zero within ±b, 95 %)",
                    title_justify="left")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 from rich.markup import escape
 
+from ..output import LOG_SUFFIXES
 from .cmd_model import check_output, write_plot
 from .common import (
     console,
@@ -28,11 +29,14 @@ from .common import (
               help="Write the compensated log (.parquet or .feather, with metadata and the "
                    "model drift as column model_drift_dph).")
 @click.option("--keep-bias", is_flag=True, help="Do not subtract the model's constant bias.")
+@click.option("--force", is_flag=True,
+              help="Allow -o to replace LOG itself with the compensated log; without it an "
+                   "output that is one of the inputs is refused.")
 @plot_option("Drift and Allan deviation before/after (.png/.svg/.pdf).")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts):
+def command(log, model_path, output, keep_bias, force, plot_path, as_json, ingest_opts):
     """Subtract a model's drift from LOG and report the drift before and after.
 
     The transfer test a lab does before trusting a compensation: fit on one run, apply to
@@ -50,7 +54,7 @@ def command(log, model_path, output, keep_bias, plot_path, as_json, ingest_opts)
     from ..api.workbench import compensate
     from ..envmodel.model import EnvModel
 
-    out_path = check_output(output, (".parquet", ".feather", ".arrow"), "output file")
+    out_path = check_output(output, LOG_SUFFIXES, "output file")
     if plot_path:
         from ..plotting import check_plot_path
 

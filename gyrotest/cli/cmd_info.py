@@ -69,7 +69,7 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
         check_plot_path(plot_path)
     unit = resolve_display_unit(display_unit, ingest_opts)
     try:
-        g = load_log(log, ingest_opts, announce=not as_json)
+        g = load_log(log, ingest_opts, announce=not as_json, dead="note")
     except RoleError:
         _list_columns(log, as_json)  # the columns and the guesses, then the error itself
         raise

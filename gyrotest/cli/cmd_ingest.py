@@ -7,6 +7,7 @@ import time
 import click
 
 from ..ingest import write_log
+from ..output import LOG_SUFFIXES, check_output_path
 from ..units import format_duration
 from .common import emit_json, ingest_options, json_option, load_log, note, with_ingest
 
@@ -14,11 +15,14 @@ from .common import emit_json, ingest_options, json_option, load_log, note, with
 @click.command("ingest")
 @click.argument("log", type=str)
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help="Output file: .parquet (default) or .feather.")
+              help="Output file: .parquet or .feather (.arrow).")
+@click.option("--force", is_flag=True,
+              help="Allow the output to replace LOG itself (a Parquet/Feather log converted "
+                   "in place); without it an output that is one of the inputs is refused.")
 @ingest_options
 @json_option
 @with_ingest
-def command(log, output, as_json, ingest_opts):
+def command(log, output, force, as_json, ingest_opts):
     """Validate LOG and convert it to Parquet (or Feather) in internal units.
 
     The file keeps the metadata (units, sample interval, site, gyro constants, timing, column
@@ -30,8 +34,9 @@ def command(log, output, as_json, ingest_opts):
       gyrotest ingest sample_data/multipos.csv --profile sample_data/multipos.profile.toml \\
           -o multipos.parquet
     """
+    check_output_path(output, LOG_SUFFIXES, "output file", formats=".parquet or .feather")
     t0 = time.perf_counter()
-    g = load_log(log, ingest_opts, announce=not as_json)
+    g = load_log(log, ingest_opts, announce=not as_json, dead="note")
     t1 = time.perf_counter()
     path = write_log(g, output)
     t2 = time.perf_counter()

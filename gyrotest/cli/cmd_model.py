@@ -15,6 +15,7 @@ from rich.markup import escape
 from ..errors import InputError
 from ..units import format_duration
 from .common import (
+    FiniteRange,
     console,
     emit_json,
     fmt_num,
@@ -41,9 +42,9 @@ def prep_options(f):
                      help="Drop the start of the log: a duration, e.g. 10min, 90s (a plain "
                           "number is seconds); the warm-up term then counts time from the true "
                           "power-on."),
-        click.option("--t-ref", "t_ref", type=float, default=None,
+        click.option("--t-ref", "t_ref", type=FiniteRange(-273.15, 1000.0), default=None,
                      help="Reference temperature T_ref, degC (default: mean of each sensor)."),
-        click.option("--v-ref", "v_ref", type=float, default=None,
+        click.option("--v-ref", "v_ref", type=FiniteRange(-1e4, 1e4), default=None,
                      help="Reference supply voltage, V (default: mean)."),
         click.option("--resolution", default="auto", show_default=True,
                      help="Working resolution: block length (e.g. 30s) or 'auto' (from the "

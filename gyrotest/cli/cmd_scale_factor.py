@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import click
 
@@ -117,9 +116,9 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
 
         check_plot_path(plot_path)
     if points_path:
-        parent = Path(points_path).parent
-        if str(parent) and not parent.is_dir():
-            raise InputError(f"points file {points_path}: directory {parent} does not exist")
+        from ..output import check_output_path
+
+        check_output_path(points_path, (".csv", ".txt"), "points file", formats=".csv or .txt")
     sfm.check_settings(settle_s=settle, trim_end_s=trim_end, min_dwell_s=min_dwell, alpha=alpha,
                        snap_tol=snap_tol, full_scale_dps=full_scale)
     rate_list = sfm.parse_rates(rates)

@@ -20,8 +20,11 @@ from .common import console, emit_json, fmt_num, json_option, note
 @click.option("--seed", type=click.IntRange(min=0), default=None,
               help="Random seed (default: the scenario's [scenario] seed, else random; the "
                    "seed used is in the truth file).")
+@click.option("--force", is_flag=True,
+              help="Replace a .truth.json or .profile.toml beside the output that 'gyrotest "
+                   "simulate' did not write (without it such a file is never overwritten).")
 @json_option
-def command(scenario, output, fmt, seed, as_json):
+def command(scenario, output, fmt, seed, force, as_json):
     """Simulate a gyro bench log from SCENARIO (TOML) and write it to OUTPUT.
 
     The model is IEEE 952 §8.3: S0·ΔN/Δt = [I + E + D]·[1 + 1e-6·ε_K]^-1 with earth rate
@@ -39,9 +42,13 @@ def command(scenario, output, fmt, seed, as_json):
       gyrotest ingest fog.csv --profile fog.profile.toml -o fog.parquet
     """
     from ..api.campaign import simulate
+    from ..simulate.scenario import load_scenario
+    from ..simulate.writer import check_planned
 
     t0 = time.perf_counter()
-    sim = simulate(scenario, seed=seed)
+    sc = load_scenario(scenario)
+    check_planned(output, fmt, sc.runs.count)  # before any sample is drawn
+    sim = simulate(sc, seed=seed)
     res = sim.core
     t1 = time.perf_counter()
     written = sim.write(output, format=fmt)

@@ -16,6 +16,7 @@ from .cmd_model import (
     write_plot,
 )
 from .common import (
+    FiniteRange,
     console,
     emit_json,
     fmt_num,
@@ -68,10 +69,10 @@ def determined_line(coefs) -> str:
 @click.argument("log", type=str, required=False)
 @click.option("--setpoints", type=click.Path(dir_okay=False), default=None,
               help="Table of steady-state set-points (CSV: temperature, dw[, sigma][, dTdt]).")
-@click.option("--t-ref", "t_ref", type=float, default=None,
+@click.option("--t-ref", "t_ref", type=FiniteRange(-273.15, 1000.0), default=None,
               help="Reference temperature T_ref, degC (ΔT = T − T_ref; default 21, the "
                    "paper's lab), as in 'gyrotest model fit --t-ref'.")
-@click.option("--t0", "t0_alias", type=float, default=None, hidden=True,
+@click.option("--t0", "t0_alias", type=FiniteRange(-273.15, 1000.0), default=None, hidden=True,
               help="Old name of --t-ref.")
 @click.option("--sensor", default=None,
               help="Temperature channel of the model (default: the one that fits held-out "

@@ -30,6 +30,16 @@ from ..errors import InputError
 from ..units import format_number
 
 
+class FiniteRange(click.FloatRange):
+    """``click.FloatRange`` that also refuses NaN (which compares false with both bounds)."""
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if v != v:
+            self.fail(f"{value!r} is not a number", param, ctx)
+        return v
+
+
 @dataclass
 class Settings:
     debug: bool = False
@@ -294,26 +304,39 @@ def pop_ingest_kwargs(kwargs: dict) -> dict:
 ingest_overrides = _api_ingest_overrides
 
 
-def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False):
+def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False,
+             dead: str = "error"):
     """Read one log with the shared ingest options; prints the column choices as notes.
     ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
-    (its angle series only; see that module)."""
-    from ..api.analyses import read
+    (its angle series only; see that module). ``dead="note"``: a dead or stuck gyro output is
+    a note, not an error (``info``, ``ingest``: they describe and convert, they do not fit)."""
+    from ..api._inputs import read_log_from, split_read_options
 
     if not stream or not _parquet(path):  # a streamed log sets its own heap settings
         from ..heap import reuse_freed_memory
 
         reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
-    log = read(path, stream=stream, **api_read_options(opts))
-    if announce:
-        for msg in log.notes:
+    o = api_read_options(opts)
+    prof = o.pop("profile", None)
+    log = read_log_from(path, profile=prof, opts=split_read_options(o, "read"), stream=stream,
+                        dead=dead)
+    for msg in log.notes:  # a finding about the data (a dead or saturated output) is a warning
+        if msg.startswith("warning: "):
+            warn(f"{log.source}: {msg[len('warning: '):]}")
+        elif announce:
             note(f"{log.source}: {msg}")
     unused_unit_warning(log, opts)
     return log
 
 
 def _parquet(path: str) -> bool:
+    """A regular file starting with Parquet's magic (a pipe or device is never opened here:
+    opening a FIFO with no writer would block)."""
+    import stat
+
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
         with open(path, "rb") as fh:
             return fh.read(4) == b"PAR1"
     except OSError:

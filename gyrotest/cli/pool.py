@@ -107,6 +107,10 @@ def prefetch_log(paths: Sequence[str], opts: dict):
     there, after the options have been checked, as without the prefetch."""
     if len(paths) != 1 or paths[0] == "-":
         return None
+    from ..documents import path_kind
+
+    if path_kind(paths[0]) != "file":  # a FIFO is never opened here (it would block)
+        return None
     try:
         with open(paths[0], "rb") as fh:
             if fh.read(4) == b"PAR1":

@@ -231,15 +231,19 @@ def read_setpoints(path: str | Path) -> dict[str, np.ndarray]:
     """Read a set-point table (CSV/TSV with a header): temperature °C, drift deviation deg/h,
     optional σ deg/h and dT/dt °C/h. Columns are recognised by name (temperature / thermostat
     / setpoint; dw / drift / delta_omega; sigma / std / rms; dTdt)."""
+    from ..documents import read_table_text
+
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"set-point table {p} not found")
-    text = p.read_text(encoding="utf-8-sig")
+    text = read_table_text(p, "the set-point table")  # FIFO, device, gzip, encoding: one line
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if len(lines) < 2:
         raise InputError(f"{p}: set-point table needs a header and at least one row")
-    dialect = csv.Sniffer().sniff(lines[0], delimiters=",;\t ") if len(lines[0]) else None
-    rows = list(csv.reader(io.StringIO("\n".join(lines)), dialect) if dialect else [])
+    try:
+        dialect = csv.Sniffer().sniff(lines[0], delimiters=",;\t ")
+    except csv.Error:
+        raise InputError(f"{p}: no delimiter found in the header {lines[0][:60]!r}; separate the "
+                         "columns with commas, e.g. temperature,dw,sigma") from None
+    rows = list(csv.reader(io.StringIO("\n".join(lines)), dialect))
     header = [h.strip() for h in rows[0]]
     cols: dict[str, int] = {}
     for i, h in enumerate(header):
@@ -260,10 +264,14 @@ def read_setpoints(path: str | Path) -> dict[str, np.ndarray]:
     for n, row in enumerate(rows[1:], 2):
         for k, i in cols.items():
             try:
-                out[k].append(float(row[i]))
+                x = float(row[i])
             except (ValueError, IndexError):
                 raise InputError(f"{p}: row {n}, column {header[i]!r}: not a number "
                                  f"({row[i] if i < len(row) else ''!r})") from None
+            if not math.isfinite(x) or abs(x) > 1e40:  # gyrotest.io.health.MAX_ABS
+                raise InputError(f"{p}: row {n}, column {header[i]!r}: {row[i].strip()!r} is not "
+                                 "a finite measured value; fix or remove the row")
+            out[k].append(x)
     return {k: np.asarray(v) for k, v in out.items()}
 
 

@@ -10,7 +10,6 @@ model file, a history file or a session directory.
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -77,17 +76,20 @@ def resolve_history(path: str | Path) -> Path:
 
 def load_history(path: str | Path) -> list[HistoryStep]:
     """Read the steps (oldest first); InputError when there is no readable history."""
+    from ..documents import DocumentError, load_document, path_kind
+    from ..schemas import history_problems
+
     hp = resolve_history(path)
-    if not hp.is_file():
+    if path_kind(hp) == "missing":
         raise InputError(f"no model history at {hp} (fit with -o MODEL.json or --session DIR "
                          "first)")
-    try:
-        d = json.loads(hp.read_text(encoding="utf-8"))
-    except ValueError as e:
-        raise InputError(f"{hp}: cannot parse the history ({e})") from None
-    if not isinstance(d, dict) or d.get("format") != HISTORY_FORMAT:
-        raise InputError(f"{hp}: not a gyrotest model history")
-    return [HistoryStep.from_dict(s) for s in d.get("steps", [])]
+    # not declared an input: 'model fit -o' reads it to append a step (the command line
+    # declares it for 'model history', gyrotest.cli.io_roles)
+    d, _ = load_document(hp, fmt="json", what="a model history", declare=False)
+    problems = history_problems(d)  # every problem, naming its key (gyrotest.schemas)
+    if problems:
+        raise DocumentError(str(hp), problems)
+    return [HistoryStep.from_dict(s) for s in d["steps"]]
 
 
 def _f(x: Any) -> float:

@@ -12,7 +12,6 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -137,16 +136,15 @@ class EnvModel:
 
     @staticmethod
     def load(path: str | Path) -> EnvModel:
+        from ..documents import DocumentError, load_document
+        from ..schemas import model_problems
+
         p = Path(path)
-        if not p.is_file():
-            raise InputError(f"model file {p} not found")
-        try:
-            if p.suffix.lower() == ".toml":
-                d = tomllib.loads(p.read_text(encoding="utf-8"))
-            else:
-                d = json.loads(p.read_text(encoding="utf-8"))
-        except (ValueError, tomllib.TOMLDecodeError) as e:
-            raise InputError(f"model file {p}: cannot parse ({e})") from None
+        d, _ = load_document(p, what="the model file", not_found="model file not found; give a "
+                             "file written by 'gyrotest model fit -o' (or thermal-fit/mag-fit)")
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        if problems:
+            raise DocumentError(str(p), problems)
         return EnvModel.from_dict(d, str(p))
 
     # ------------------------------------------------------------------ prediction

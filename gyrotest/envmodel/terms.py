@@ -580,9 +580,13 @@ def build_term(frame: EnvFrame, spec: TermSpec, theta: dict[str, float], refs: R
                                    refs.t_ref_c.get(ch[0], 0.0))
     elif k == "custom":
         x = compiled(spec.expr or "").evaluate(frame, smoothing_s=W, raw_ddt=to_be_smoothed)
-        if not np.all(np.isfinite(x)):
-            raise InputError(f"term {spec.name!r}: expression {spec.expr!r} gives NaN/inf "
-                             "values on this log (e.g. log or sqrt of a negative number)")
+        from ..io.health import MAX_ABS
+
+        if not np.all(np.isfinite(x)) or np.max(np.abs(x), initial=0.0) > MAX_ABS:
+            raise InputError(f"term {spec.name!r}: expression {str(spec.expr)[:60]!r} gives "
+                             f"NaN/inf values, or values beyond ±{MAX_ABS:g} where the fit "
+                             "overflows, on this log (log or sqrt of a negative number, a huge "
+                             "constant); rescale the expression")
     else:  # pragma: no cover
         raise InputError(f"unknown term {k!r}")
     return np.asarray(x, dtype=np.float64).reshape(-1, 1)

@@ -210,7 +210,7 @@ def channel_ranges(log) -> dict[str, list[float]]:
 def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
     """Window W of the working smoother S_W (moving mean over W, applied twice).
 
-    Rule: W = max(60 s, 4·dt_f, W_noise), W_noise = the window at which the derivative noise of
+    Rule: W = max(min(60 s, duration/20), 4·dt_f, W_noise), W_noise = the window at which the derivative noise of
     the noisiest temperature sensor, σ_T·√(2·dt/W³)·3600 degC/h (σ_T from second differences
     on the fine grid), falls to a fraction f of the RMS of that sensor's dT/dt (sensors whose
     dT/dt is at the noise level are ignored); at most duration/20. f is the largest of 5, 3, 2
@@ -221,9 +221,9 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
     Because S_W is applied to the gyro rate and to every regressor alike, W costs time
     resolution but never biases a coefficient.
     """
-    w0 = max(60.0, 4.0 * frame.dt)
+    w0 = max(min(60.0, duration_s / 20.0), 4.0 * frame.dt)
     need = w0
-    why = "at least 60 s"
+    why = "at least 60 s" if w0 >= 60.0 else "a log shorter than 20 min: 1/20 of its length"
     s1 = _white_sigma(frame)
     for name, x in frame.temperature.items():
         x = np.asarray(x, float)

@@ -10,9 +10,7 @@ The inputs are the documents gyrotest already writes: ``gyrotest allan --json`` 
 
 from __future__ import annotations
 
-import json
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -60,16 +58,25 @@ def detect_kind(d: Any) -> str | None:
 
 def read_document(path: str | Path, want: str) -> Document:
     """Read a JSON (or, for models, TOML) result and check it is of kind ``want``."""
+    from ..documents import load_document
+
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: file not found; give {PRODUCERS[want]}")
     try:
-        text = p.read_text(encoding="utf-8-sig")
-        d = tomllib.loads(text) if p.suffix.lower() == ".toml" else json.loads(text)
-    except (ValueError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
-        raise InputError(f"{p}: cannot parse ({type(e).__name__}: "
-                         f"{str(e).splitlines()[0]}); give {PRODUCERS[want]}") from None
+        d, _ = load_document(p, fmt="toml" if p.suffix.lower() == ".toml" else "json",
+                             what=PRODUCERS[want],
+                             not_found=f"file not found; give {PRODUCERS[want]}")
+    except InputError as e:
+        if "not found" in str(e):
+            raise
+        raise InputError(f"{e}; cannot parse it, give {PRODUCERS[want]}") from None
     kind = detect_kind(d)
+    if kind == "envmodel" and want == "envmodel":
+        from ..documents import DocumentError
+        from ..schemas import model_problems
+
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        if problems:
+            raise DocumentError(str(p), problems)
     if kind != want:
         if kind == "thermal-fit" and want == "envmodel":
             raise InputError(f"{p} is the --json report of 'gyrotest thermal-fit', which does not "

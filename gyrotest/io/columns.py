@@ -284,6 +284,28 @@ def resolve_columns(names: list[str], prof: Profile, source: str) -> tuple[dict[
         roles["extra"] = [need(c, "extra channel") for c in cols["extra"]]
     else:
         roles["extra"] = [n for n in names if n not in used and not n.startswith("Unnamed")]
+    one_role_per_column(roles, source)
     return roles, notes
+
+
+def one_role_per_column(roles: dict[str, Any], source: str) -> None:
+    """A column named in two roles (``rate = "gx"`` and ``temperature = ["gx"]``, or twice in
+    one list) is an error naming both keys: it would be read twice, as two quantities."""
+    seen: dict[str, str] = {}
+    out_key = {"updown": "up/down"}.get(roles.get("kind") or "", (roles.get("kind") or "rate"))
+    for key in ("time", "output", "temperature", "field", "supply", "table_rate", "position",
+                "extra"):
+        value = roles.get(key)
+        if not value:
+            continue
+        name = out_key.replace("-", "_") if key == "output" else key
+        items = [(f"[columns].{name}", value)] if isinstance(value, str) else [
+            (f"[columns].{name}[{i}]", c) for i, c in enumerate(value)]
+        for where, col in items:
+            if col in seen:
+                raise InputError(f"{source}: column {col!r} is named in two roles, {seen[col]} "
+                                 f"and {where}; a column has one role: fix the profile's "
+                                 "[columns] or the column options")
+            seen[col] = where
 
 

@@ -151,18 +151,23 @@ def _sniff_text(head: bytes, source: str) -> tuple[str, int, list[str]]:
 
 
 def read_table(path: str | os.PathLike, columns: list[str] | None = None,
-               *, select: str | None = None, _names_only: bool = False) -> RawTable:
+               *, select: str | None = None, _names_only: bool = False,
+               _data: bytes | None = None) -> RawTable:
     """Read a table file (or ``-`` for stdin) into a pyarrow Table, only ``columns`` when
     given. Errors name the file and the fix.
 
     Besides text and Parquet/Feather: gzip'd text, MATLAB ``.mat``, HDF5 and ROS bags
     (:mod:`gyrotest.io.containers`); ``select`` names the ROS topic, HDF5 group or MATLAB
-    struct that holds the columns."""
+    struct that holds the columns. ``_data``: the bytes of a stream already read (a named
+    pipe, :func:`gyrotest.ingest.read_log`), parsed like stdin."""
     source = _source_name(path)
     data: bytes | None = None
     p: Path | None = None
     compressed = False
-    if str(path) == "-":
+    if _data is not None:
+        data = _check_stream(_data, source)
+        head = data[:65536]
+    elif str(path) == "-":
         data = _read_stdin(source)
         head = data[:65536]
     else:
@@ -298,6 +303,17 @@ def _read_gzip_text(p: Path, source: str, delim: str, skip: int, columns: list[s
     except (OSError, EOFError, zlib.error, pa.ArrowException) as e:  # truncated or corrupt
         raise InputError(f"{source}: the gzip stream is damaged or truncated "
                          f"({str(e).splitlines()[0][:100]}); check the file (gzip -t)") from None
+
+
+def _check_stream(data: bytes, source: str) -> bytes:
+    """The bytes of a named pipe: text, like stdin."""
+    if not data:
+        raise InputError(f"{source}: the named pipe sent no data; a log is CSV text with a "
+                         "header")
+    if b"\x00" in data[:65536]:
+        raise InputError(f"{source}: binary data from a named pipe; stream CSV/TSV text "
+                         "(Parquet/Feather: save the file and pass its path)")
+    return data
 
 
 def _read_stdin(source: str) -> bytes:

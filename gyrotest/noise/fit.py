@@ -1133,6 +1133,10 @@ def fit_noise_model(
             f"τ have EDF < {min_edf:g} (too few clusters: the confidence interval blows up) and are shown only")
     tu, xu, nuu = tau[used], sigma[used] ** 2, edf[used]
     tau0 = float(tau0) if tau0 else float(tu.min())
+    if bi_cutoff_hz is not None and not 0.0 < bi_cutoff_hz <= 0.5 / tau0:
+        raise AnalysisError(f"--bi-cutoff f0 = {bi_cutoff_hz:g} Hz: the cut-off must be a "
+                            f"frequency above 0 and at most the Nyquist frequency 1/(2τ0) = "
+                            f"{0.5 / tau0:.4g} Hz")
     q = quantity_of(quantity)
     eng = _Engine(tu, xu, nuu, bi_cutoff_hz, q)
     lo_t, hi_t = float(tu.min()), float(tu.max())

@@ -231,22 +231,31 @@ def parse_vehicle_rate(text: str | float) -> float:
     """Parse a vehicle rate like ``10deg/s``, ``0.5 rad/s``, ``30 rpm``, ``100deg/h`` (a bare
     number is deg/s) → rad/s. Units: any angular-rate unit of :mod:`gyrotest.units`."""
     if isinstance(text, (int, float)):
-        return math.radians(float(text))
+        return _sane_vehicle_rate(math.radians(float(text)), text)
     m = _RATE_RE.match(str(text))
     if not m:
         raise InputError(f"bad vehicle rate {text!r}; use e.g. 10deg/s, 0.5rad/s, 30rpm")
     val = float(m.group(1))
     unit = m.group(2) or "deg/s"
     dph = val * factor(unit, "rate", what="--vehicle-rate")
-    return math.radians(dph / 3600.0)
+    return _sane_vehicle_rate(math.radians(dph / 3600.0), text)
+
+
+def _sane_vehicle_rate(w: float, text) -> float:
+    """|ω| from 1e-9 rad/s (0.2 mdeg/h: below it ωT underflows the closed forms) to 1e5 rad/s
+    (16 000 rev/s, beyond any vehicle); 0 is the platform case."""
+    if w != 0 and not 1e-9 <= abs(w) <= 1e5:
+        raise InputError(f"--vehicle-rate {text!r} is outside 1e-9…1e5 rad/s; use e.g. 10deg/s")
+    return w
 
 
 
 def parse_horizon(text: str | float) -> float:
-    """The prediction horizon (``--horizon``, e.g. ``1h``) in seconds; must be > 0."""
+    """The prediction horizon (``--horizon``, e.g. ``1h``) in seconds; at least 1 µs (shorter,
+    no attitude error accumulates, and the closed forms' argument πf·T underflows)."""
     horizon_s = parse_duration(text, what="--horizon")
-    if horizon_s <= 0:
-        raise InputError("--horizon must be > 0")
+    if not horizon_s >= 1e-6:
+        raise InputError(f"--horizon must be at least 1 us (e.g. 1h), got {text!r}")
     return horizon_s
 
 @dataclass

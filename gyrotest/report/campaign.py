@@ -329,6 +329,15 @@ def _scalar(err: _Err, where: str, value: Any, typ: str) -> Any:
             return value.isoformat()
         if not isinstance(value, str):
             raise err(where, f"must be a string, got {value!r}")
+        if typ == "date":  # a date that exists: 2024-02-30 is not one
+            try:
+                _dt.date.fromisoformat(value)
+            except ValueError:
+                try:
+                    _dt.datetime.fromisoformat(value)
+                except ValueError:
+                    raise err(where, f"must be a real date like 2025-03-31, got {value!r}"
+                              ) from None
         return value
     if typ == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -356,6 +365,9 @@ def _check_file(err: _Err, root: Path, where: str, value: Any) -> Path:
                          f"{root})")
     if p.is_dir():
         raise err(where, f"{value!r} is a directory, expected a file")
+    from ..guard import declare_input
+
+    declare_input(p, f"the file {where} of the campaign")
     return p
 
 

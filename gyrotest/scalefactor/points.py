@@ -17,6 +17,7 @@ with the output kind and the nominal scale factor, so it reads straight back wit
 
 from __future__ import annotations
 
+import io
 import math
 import re
 from pathlib import Path
@@ -49,18 +50,13 @@ def write_points_csv(result, path: str | Path) -> Path:
     return p
 
 
-def _meta(path: Path) -> dict:
+def _meta(text: str) -> dict:
     meta = {}
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            for _ in range(20):
-                line = fh.readline()
-                if not line.startswith("#"):
-                    break
-                for k, v in re.findall(r"(output_kind|nominal_scale_factor)=([^\s;]+)", line):
-                    meta[k] = v
-    except OSError:
-        pass
+    for line in text.splitlines()[:20]:
+        if not line.startswith("#"):
+            break
+        for k, v in re.findall(r"(output_kind|nominal_scale_factor)=([^\s;]+)", line):
+            meta[k] = v
     return meta
 
 
@@ -68,13 +64,14 @@ def read_points_table(path: str | Path, *, earth_rate_dph: float | None = None,
                       scale_factor: float | None = None
                       ) -> tuple[list[RunPlateaus], str, float | None, list[str]]:
     """Read a ready plateau table (see module doc). Returns (runs, output_kind, S0, notes)."""
+    from ..documents import read_table_text
+
     p = Path(path)
     src = str(p)
-    if not p.exists():
-        raise InputError(f"{src}: file not found")
+    text = read_table_text(p, "the plateau table")  # FIFO, device, gzip, encoding: one line
     try:
-        df = pd.read_csv(p, comment="#", skipinitialspace=True)
-    except (ValueError, pd.errors.ParserError, UnicodeDecodeError) as e:
+        df = pd.read_csv(io.StringIO(text), comment="#", skipinitialspace=True)
+    except (ValueError, pd.errors.ParserError) as e:
         raise InputError(f"{src}: cannot read the points table: {str(e).splitlines()[0][:150]}") from None
     if df.empty:
         raise InputError(f"{src}: the points table has no rows")
@@ -87,7 +84,7 @@ def read_points_table(path: str | Path, *, earth_rate_dph: float | None = None,
             else "an output column (output_dph, output_pps or output_v)"
         raise InputError(f"{src}: the points table needs {need}; columns are: "
                          f"{', '.join(map(str, df.columns[:15]))}")
-    meta = _meta(p)
+    meta = _meta(text)
     kind, ounit = _OUTPUT[out]
     if ounit == "dph" and meta.get("output_kind"):
         kind = meta["output_kind"]
@@ -100,7 +97,7 @@ def read_points_table(path: str | Path, *, earth_rate_dph: float | None = None,
 
     def num(col: str) -> np.ndarray:
         v = pd.to_numeric(df[cols[col]], errors="coerce").to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(v))
+        bad = np.flatnonzero(~np.isfinite(v) | (np.abs(np.nan_to_num(v)) > 1e40))  # MAX_ABS
         if len(bad):
             raise InputError(f"{src}: column {cols[col]!r} has a missing or non-numeric value in "
                              f"data row {bad[0] + 1}; fix the table")

@@ -223,13 +223,14 @@ def _simulate_run(sc: Scenario, seed: int, run: int, sf_off: float, bias_off: fl
     fs = sc.record.sample_rate_hz
     tau0 = 1.0 / fs
     duration = _duration(sc)
-    n = int(round(duration * fs))
+    from ..limits import SIMULATE_BYTES_PER_SAMPLE, check_samples
+
+    n = check_samples(duration * fs, bytes_per_sample=SIMULATE_BYTES_PER_SAMPLE,
+                      what=f"{sc.source}: {duration:g} s at {fs:g} Hz", cap=MAX_SAMPLES,
+                      fix="shorten [record] duration_s or lower sample_rate_hz")  # before any
     if n < 16:
         raise InputError(f"{sc.source}: only {n} samples ({duration:g} s at {fs:g} Hz); "
                          "lengthen [record] duration_s or raise sample_rate_hz")
-    if n > MAX_SAMPLES:
-        raise InputError(f"{sc.source}: {n:,} samples is too many (limit {MAX_SAMPLES:,}); "
-                         "shorten duration_s or lower sample_rate_hz")
     t_end = np.arange(1, n + 1, dtype=np.float64) * tau0
     tm = t_end - 0.5 * tau0
     comps: dict[str, np.ndarray] = {}

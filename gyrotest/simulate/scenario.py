@@ -9,7 +9,6 @@ Unknown sections and keys are errors (a misspelt key would otherwise be silently
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -411,19 +410,11 @@ def load_scenario(scenario: dict | str | Path | Scenario) -> Scenario:
         return scenario
     if isinstance(scenario, dict):
         return parse_scenario(scenario, source="scenario")
+    from ..documents import load_document
+
     p = Path(scenario)
-    try:
-        text = p.read_bytes().decode("utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{p}: scenario file not found; check the path") from None
-    except IsADirectoryError:
-        raise InputError(f"{p}: is a directory, expected a scenario TOML file") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not a text file; a scenario is TOML text") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"{p}: invalid TOML: {e}") from None
+    data, _ = load_document(p, fmt="toml", what="a scenario",
+                            not_found="scenario file not found; check the path")
     return parse_scenario(data, source=str(p))
 
 

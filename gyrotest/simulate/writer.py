@@ -58,6 +58,47 @@ def sidecar_paths(log_path: str | Path) -> tuple[Path, Path]:
     return p.with_name(p.stem + ".truth.json"), p.with_name(p.stem + ".profile.toml")
 
 
+#: what the files gyrotest simulate writes beside a log start with
+_MARKERS = {".truth.json": b'"format": "gyrotest-sim-',
+            ".profile.toml": b"written by 'gyrotest simulate'"}
+
+
+def planned_paths(path: str | Path, fmt: str | None, runs: int) -> list[tuple[Path, str]]:
+    """Every file :func:`write_log` writes for ``runs`` runs, with what each is."""
+    p = Path(path)
+    fmt = _format_for(p, fmt)
+    if not p.suffix:
+        p = p.with_suffix(FORMATS[fmt])
+    out: list[tuple[Path, str]] = []
+    for i in range(1, runs + 1):
+        lp = p if runs == 1 else p.with_name(f"{p.stem}_run{i}{p.suffix}")
+        tp, pp = sidecar_paths(lp)
+        out += [(lp, "the simulated log"), (tp, "the truth file written beside the log"),
+                (pp, "the profile written beside the log")]
+    if runs > 1:
+        out.append((p.with_name(p.stem + ".truth.json"), "the summary truth file"))
+    return out
+
+
+def check_planned(path: str | Path, fmt: str | None, runs: int) -> None:
+    """Refuse, before anything is simulated, to write over an input (:mod:`gyrotest.guard`) or
+    over a ``.truth.json``/``.profile.toml`` beside the output that simulate did not write (a
+    user's own profile of the same name) unless ``--force``."""
+    from ..guard import declare_output, forced
+
+    for p, what in planned_paths(path, fmt, runs):
+        declare_output(p, what)
+        marker = next((m for suf, m in _MARKERS.items() if p.name.endswith(suf)), None)
+        if marker is None or what == "the simulated log" or not p.exists() or forced():
+            continue
+        from ..guard import is_ours
+
+        if not is_ours(p, marker):
+            raise InputError(f"{p} exists and was not written by 'gyrotest simulate' (a file of "
+                             f"your own?); it would be replaced by {what}: name another "
+                             "output, or pass --force to replace it")
+
+
 def write_log(result: SimResult | SimRun, path: str | Path, fmt: str | None = None
               ) -> WriteResult:
     """Write the simulated log(s) and the truth and profile files beside each.

@@ -215,6 +215,30 @@ def _added_contributions(fit, added: list[dict]) -> dict[str, np.ndarray]:
     return out
 
 
+def _fit_truth(wd, case):
+    """The true model fitted by gyrotest; truth terms that are degenerate on this log (two
+    custom field terms that the coil sequence makes one, e.g. H_x² and |H|² with the other
+    coils off) are fitted as their true sum, a single term with coefficient 1 — the model
+    the workbench refuses to fit with both (returns the fit and (merged term, the labels it
+    replaces), or None)."""
+    from gyrotest.envmodel import fit_model
+    from gyrotest.errors import AnalysisError
+
+    try:
+        return fit_model(wd, case.true_terms), None
+    except AnalysisError as e:
+        m = re.search(r"terms c\[(\w+)\] and c\[(\w+)\] are degenerate", str(e))
+        if not m:
+            raise
+        pair = [t for t in case.truth if t.term_label in m.groups()]
+        if len(pair) != 2 or not all(":" in t.term for t in pair):
+            raise
+        name = "_".join(t.term_label for t in pair)
+        expr = " + ".join(f"{t.coef_term!r}*({t.term.split(':', 1)[1]})" for t in pair)
+        terms = [t.term for t in case.truth if t not in pair] + [f"{name}:{expr}"]
+        return fit_model(wd, terms), (name, [t.term_label for t in pair])
+
+
 def _design(fit) -> np.ndarray | None:
     """Block-level design matrix of a fit (gyrotest internals; None when unavailable)."""
     try:
@@ -333,20 +357,25 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         # ---- the true model
         stage = "true fit"
         t1 = time.perf_counter()
-        true_fit = fit_model(wd, case.true_terms)
+        true_fit, merged = _fit_truth(wd, case)
+        if merged:
+            row["true_terms_merged"] = merged[0]
         row["times"]["true_fit_s"] = time.perf_counter() - t1
         row["true_holdout_dph"] = true_fit.rms_holdout
         row["true_over_floor"] = true_fit.rms_holdout / floor
         row["floor_printed_true_model"] = true_fit.floor.rms_dph if true_fit.floor else None
         checks = []
         for e in case.truth:
+            label, true = e.term_label, e.coef_term
+            if merged and label in merged[1]:  # fitted as one term whose true coefficient is 1
+                label, true = merged[0], 1.0
             try:
-                c = true_fit.coef(e.term_label)
-                z = (c.value - e.coef_term) / c.stderr if c.stderr > 0 else math.nan
-                checks.append({"term": e.term_label, "true": e.coef_term, "fit": c.value,
+                c = true_fit.coef(label)
+                z = (c.value - true) / c.stderr if c.stderr > 0 else math.nan
+                checks.append({"term": label, "true": true, "fit": c.value,
                                "stderr": c.stderr, "z": z})
             except KeyError:
-                checks.append({"term": e.term_label, "true": e.coef_term, "fit": None,
+                checks.append({"term": label, "true": true, "fit": None,
                                "stderr": None, "z": None})
         row["coef_checks"] = checks
         # the true model as a user writes it with the workbench's terms (the starting model

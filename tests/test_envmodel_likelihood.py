@@ -211,3 +211,27 @@ def test_reference_noise_is_fixed_for_the_fit():
     res = fit_model(wd, "T", light=True)
     assert res.noise.params is p and res.noise.n_free == 0
     assert math.isfinite(res.loglik)
+
+
+def test_workbench_noise_model_agrees_with_allan_on_the_residual():
+    """The two halves of the tool agree: the noise model the workbench fits with the drift
+    model (likelihood of the smoothed block means) and the one ``allan --model`` fits to the
+    Allan variance of the residual (every τ): N within 3 %, and K inside the Allan fit's
+    interval or bound (8 h at 1 Hz, a temperature effect removed by the model)."""
+    import gyrotest
+
+    rng = np.random.default_rng(57)
+    n = 8 * 3600
+    t = np.arange(n, dtype=float)
+    temp = 30.0 + 8.0 * np.sin(2 * np.pi * t / 9000.0)
+    y = 2.0 + 0.3 * (temp - 30.0) + colored_noise(n, 1.0, N=0.01, K=0.05, rng=rng)
+    log = make_log(y, 1.0, temps={"T": temp})
+    fit = fit_model(prepare(log), "T(T)")
+    wb = fit.noise.params
+    res = gyrotest.allan(log, model=fit.model, terms="N,K")
+    N, K = res.term("N"), res.term("K")
+    assert wb.N == pytest.approx(N.value, rel=0.03)
+    sk = K.sigma["K"] if isinstance(K.sigma, dict) else K.sigma
+    hi = K.upper if K.status == "upper bound" else K.value + 3 * sk
+    lo = 0.0 if K.status == "upper bound" else K.value - 3 * sk
+    assert lo <= wb.K <= hi, (wb.K, K.status, K.value, sk)

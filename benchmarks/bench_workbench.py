@@ -310,6 +310,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
     verdict) change no decision of the loop; the default 1 skips them."""
     from gyrotest.envmodel import diagnose, fit_model, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
+    from gyrotest.errors import AnalysisError
     from gyrotest.ingest import read_log
 
     row: dict = case.to_dict()
@@ -419,7 +420,16 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         for k in range(max_steps):
             stage = f"diagnose step {k}"
             t1 = time.perf_counter()
-            d = diagnose(wd, terms, path_steps=path_steps)
+            try:
+                d = diagnose(wd, terms, path_steps=path_steps)
+            except AnalysisError as e:
+                if k == 0 and "degenerate" in str(e):
+                    # the drawn starting model cannot be fitted on this log (two field terms
+                    # the coil sequence makes one); the workbench refuses it, as it should
+                    row["status"] = "skipped"
+                    row["skipped"] = f"starting model degenerate on this log: {e}"
+                    return row
+                raise
             dt = time.perf_counter() - t1
             found = d.found
             step = {"step": k, "terms": [s.label for s in terms], "verdict": d.verdict,

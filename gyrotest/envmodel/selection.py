@@ -68,7 +68,6 @@ from .lookelsewhere import (
     davies_log_p,
     family_p,
     ljung_box,
-    p_from_null,
     total_variation,
 )
 from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
@@ -104,7 +103,7 @@ class Candidate:
     log_p: float = math.nan  # ln of its own (local) p-value, at the best searched value
     p_fw: float = math.nan  # family-wise p-value (min-P parametric bootstrap)
     tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
-    p_fw_full: float = math.nan  # the bootstrap p of the re-estimated-shape Λ (a diagnostic)
+    p_fw_full: float = math.nan  # family-wise p of the re-estimated-shape Λ (Bonferroni)
     #: (Λ the sensors' noise alone would give a better reading of the same nodes, its sd):
     #: set when the candidate's gain is no larger (errors in variables)
     sensor_limited: tuple[float, float] | None = None
@@ -245,6 +244,7 @@ class Screen:
         self.rss0 = float(self.r0 @ self.r0)
         self.log_m = math.log(max(self.m, 2))
         self._grid: list[tuple] | None = None
+        self._theta_grid: list[tuple] | None = None
         #: every direction tested in the step (orthonormal bases outside the model's span,
         #: one group per candidate and searched value) and the candidate each belongs to:
         #: the family of the min-P bootstrap (:func:`family_p`)
@@ -335,6 +335,53 @@ class Screen:
             best1 = max(best1, _ll(lk, float(r @ r) - float(g @ g), s2))
         self.current = cur
         return max(0.0, 2.0 * (best1 - best0)) if math.isfinite(best1) else 0.0
+
+    def theta_profiles(self) -> list[tuple]:
+        """The model at other values of its own searched parameters (a time constant, a
+        frequency, a width: :data:`TAU_POINTS` values over each term's search range, one term
+        at a time, the model's noise shape): (orthonormal whitened design, whitened
+        residual). A candidate can change the best value of a model term (a warm-up whose
+        τ grew long to imitate an ageing ramp returns to its own once the ramp is in);
+        :meth:`lr_theta` profiles over them."""
+        if self._theta_grid is not None:
+            return self._theta_grid
+        self._theta_grid = []
+        fitter, thetas = self.base.fitter, self.base.thetas
+        X0 = fitter.X(thetas)
+        for spec in fitter.nl:
+            (pname, (lo, hi)), = fitter.bounds[spec.label].items()
+            if not (lo > 0 and hi > lo):
+                continue
+            a, b = self.offsets[spec.label]
+            for v in np.exp(np.linspace(math.log(lo), math.log(hi), TAU_POINTS)):
+                try:
+                    cols = np.asarray(self.design.block(spec, {pname: float(v)}), float)
+                except (InputError, ValueError, KeyError, np.linalg.LinAlgError):
+                    continue
+                X = X0.copy()
+                X[:, a:b] = cols.reshape(self.wd.nb, -1)
+                Q = _orth(self.lik.whiten(X))
+                self._theta_grid.append((Q, self.yw - Q @ (Q.T @ self.yw)))
+        return self._theta_grid
+
+    def lr_theta(self, Z: np.ndarray) -> float:
+        """Λ of adding block-level columns ``Z`` with the model's own searched parameters
+        profiled under both models (:meth:`theta_profiles`, at the model's noise shape)."""
+        grid = self.theta_profiles()
+        if not grid:
+            return 0.0
+        Zw = self.lik.whiten(np.asarray(Z, float).reshape(self.wd.nb, -1))
+        rss0 = min([self.rss0] + [float(r @ r) for _, r in grid])
+        best = self.rss0
+        for Q, r in [(self.Q, self.r0)] + grid:
+            Zp = Zw - Q @ (Q.T @ Zw)
+            own = np.sum(Zp * Zp, axis=0)
+            live = own > np.sum(Zw * Zw, axis=0) / VIF_MAX
+            if not live.any():
+                continue
+            g = _orth(Zp[:, live]).T @ r
+            best = min(best, float(r @ r) - float(g @ g))
+        return max(0.0, self.m * math.log(rss0 / max(best, 1e-300)))
 
     def not_recording(self):
         """Context in which tested directions do not join the family (a refinement)."""
@@ -661,7 +708,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             progress(i, len(moves), spec.label)
         out.append(score_candidate(sc, spec, rep or None, index=i))
     sc.current = -1
-    local, p_fw, sim = family_p(sc, len(out))
+    local, p_fw, _ = family_p(sc, len(out))
     tested = []
     for i, c in enumerate(out):
         if c.degenerate is None and c.error is None and math.isfinite(local[i]):
@@ -670,23 +717,31 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             tested.append(c)
         else:
             c.log_p = math.nan
-    # the likelihood ratio with the noise shape re-estimated under both models ranks the
-    # candidates that pass (a missing effect the model's noise model absorbed regains its
-    # full weight); the test itself is the fixed-shape statistic the bootstrap calibrates
-    passing = [c for c in tested if c.p_family <= alpha]
-    if passing:
-        for c in passing:
+    # two tests of one family, each at α/2 (Bonferroni): the min-P bootstrap of the
+    # likelihood ratio at the model's own noise shape, and the likelihood ratio with the
+    # noise shape, or the model's own searched parameters, re-estimated under both models
+    # (Wilks; Davies for a searched value; Bonferroni over the step's candidates). The second
+    # regains a missing effect that the model had absorbed — in its noise model (a slow
+    # effect taken for random walk) or in another term's time constant (a warm-up τ grown
+    # long to imitate a ramp) — which the first, at the absorbing values, cannot see. With
+    # neither a shape grid (a noise model fixed from a reference run) nor a searched
+    # parameter in the model, the two are one test, at α.
+    n_c = max(1, len(tested))
+    if sc.shapes() or sc.theta_profiles():
+        for c in tested:
             lr = c.lr
             try:
                 Z = _columns(sc, c)
                 if Z is not None:
-                    lr = max(lr, sc.lr_full(Z))
+                    with sc.not_recording():
+                        lr = max(sc.lr_full(Z), sc.lr_theta(Z))
             except (InputError, ValueError, KeyError, np.linalg.LinAlgError):
                 pass
-            c.lr_fixed, c.lr = c.lr, lr
-            c.p_fw_full = p_from_null(sim, davies_log_p(lr, max(c.df, 1), c.tv))
-            c.dbic = -lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
-    n_c = max(1, len(tested))
+            p_full = min(1.0, n_c * math.exp(davies_log_p(lr, max(c.df, 1), c.tv)))
+            c.p_fw_full = p_full
+            c.p_fw = min(1.0, 2.0 * min(c.p_fw, p_full))
+            c.lr_fixed, c.lr = c.lr, max(c.lr, lr)
+            c.dbic = -c.lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
     for c in out:
         c.trials = n_c
     for c in tested:

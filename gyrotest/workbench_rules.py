@@ -59,11 +59,17 @@ RULES: tuple[tuple[str, str], ...] = (
      "for a time constant or width, the Fourier frequencies for a sinusoid) and refined."),
     ("One criterion",
      f"A candidate is a missing effect when its family-wise p-value is at most alpha "
-     f"(default {ALPHA:g}, --alpha). The family-wise p-value is the min-P parametric bootstrap "
-     f"(Westfall & Young 1993): {MC_DRAWS} draws of the noise the model leaves, projected off "
-     "the model; each draw's smallest local p over every candidate and every searched value; "
-     "the fraction of draws at or below the candidate's own. This corrects for every "
-     "candidate and every searched time constant, frequency and width at once."),
+     f"(default {ALPHA:g}, --alpha). Two tests make it, each at alpha/2 (Bonferroni): (a) the "
+     f"min-P parametric bootstrap (Westfall & Young 1993) of Λ at the model's noise shape: "
+     f"{MC_DRAWS} draws of the noise the model leaves, projected off the model; each draw's "
+     "smallest local p over every candidate and every searched value; the fraction of draws "
+     "at or below the candidate's own — this corrects for every candidate and every searched "
+     "time constant, frequency and width at once; (b) Λ with the noise shape, and the "
+     "model's own searched time constants, frequencies and widths, re-estimated under both "
+     "models (Wilks; Davies' (1987) bound for the candidate's searched value; Bonferroni over "
+     "the step's candidates) — a missing effect the model had absorbed in its random walk or "
+     "in another term's time constant regains its weight there. The family-wise p-value is "
+     "twice the smaller of the two."),
     ("Indistinguishable candidates",
      f"Candidates within ΔBIC {BIC_TIE:g} of the best are not told apart by the data (Kass & "
      "Raftery 1995): the verdict names them together and the measurement that would separate "

@@ -65,9 +65,9 @@ def _load(name: str) -> dict:
 
 
 def _sim(sc: dict, seed: int, stem: str):
-    from gyrotest.ingest import read_log
-    from gyrotest.profile import profile_from_dict
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.core.profile import profile_from_dict
+    from gyrotest.io.ingest import read_log
+    from gyrotest.simulation import simulate, write_log
 
     TMP.mkdir(parents=True, exist_ok=True)
     res = simulate(sc, seed=seed)

@@ -29,9 +29,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyrotest.data import GyroConstants, GyroLog, Timing  # noqa: E402
+from gyrotest.core.data import GyroConstants, GyroLog, Timing  # noqa: E402
 from gyrotest.noise.analysis import analyse_allan  # noqa: E402
-from gyrotest.simulate import simulate  # noqa: E402
+from gyrotest.simulation import simulate  # noqa: E402
 
 CASES = {
     "clean": ({"N": 0.01, "B": 0.005, "K": 0.002}, 10.0, 7200.0),

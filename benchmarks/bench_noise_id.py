@@ -107,7 +107,7 @@ def fit_recovery(seeds: range) -> list[dict]:
     """K and N from the fit with its own α (alpha_fit) and with the printed Stable32 α."""
     from dataclasses import replace
 
-    from gyrotest.simulate import simulate
+    from gyrotest.simulation import simulate
 
     def sim_rate(noise, *, hours, fs, seed):
         sc = {"record": {"sample_rate_hz": fs, "duration_s": hours * 3600},

@@ -18,8 +18,8 @@ determined by (seed, kind, max_hours).
 Method
 ------
 Each case comes from the independent simulator ``benchmarks/workbench_sim.py`` (no
-``gyrotest.simulate``; see its docstring for the physics, the noise and the truth). The log is
-written as CSV or Parquet and read back with ``gyrotest.ingest.read_log`` using the case's
+``gyrotest.simulation``; see its docstring for the physics, the noise and the truth). The log is
+written as CSV or Parquet and read back with ``gyrotest.io.ingest.read_log`` using the case's
 column roles, so ingest and channel naming are exercised; then ``prepare`` (gyrotest's
 working resolution) and
 
@@ -286,7 +286,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
     verdict) change no decision of the loop; the default 1 skips them."""
     from gyrotest.envmodel import diagnose, fit_model, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
 
     row: dict = case.to_dict()
     row.update(status="ok", error=None, crash_stage=None, steps=[], times={})

@@ -42,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import workbench_sim as ws  # noqa: E402
 
 from gyrotest.envmodel import fit_model, prepare  # noqa: E402
-from gyrotest.ingest import read_log  # noqa: E402
+from gyrotest.io.ingest import read_log  # noqa: E402
 
 
 def gains(seed: int, null: bool, base: list[str], term: str, k: int = 8

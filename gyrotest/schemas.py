@@ -4,8 +4,8 @@
 
 Each ``*_problems`` function returns every problem, one line each naming its key path
 (``terms[3].coefficients[0].value: must be a number, got None``); the loaders raise them as
-one :class:`gyrotest.documents.DocumentError`. The schema language is
-:func:`gyrotest.documents.check_schema`'s. Tables are open where the writer may add keys in a
+one :class:`gyrotest.core.documents.DocumentError`. The schema language is
+:func:`gyrotest.core.documents.check_schema`'s. Tables are open where the writer may add keys in a
 later version (``fit``, ``data``) and closed where a misspelt key would be silently ignored.
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .documents import check_schema, jsonpath
+from .core.documents import check_schema, jsonpath
 
 _COEF = {"name": "str", "symbol": "str?", "value!": "num", "stderr": "real?", "unit": "str"}
 _NONLINEAR = {"name!": "str", "value!": "num", "stderr": "real?", "unit": "str"}
@@ -43,9 +43,9 @@ def model_problems(d: Any) -> list[str]:
     problems = check_schema(d, MODEL_SCHEMA)
     if problems:
         return problems
+    from .core.errors import InputError
     from .envmodel.expr import parse_expression
     from .envmodel.terms import EFFECTS, TermSpec
-    from .errors import InputError
 
     for i, t in enumerate(d["terms"]):
         where = ("terms", i)

@@ -26,13 +26,8 @@ FUNCTIONS = ["read", "allan", "bias", "scale_factor", "thermal_fit", "mag_fit", 
 
 
 def _function(name: str):
-    """The API function behind a public name (gyrotest.bias/report/simulate are callable
-    modules that call it)."""
-    obj = getattr(gyrotest, name)
-    target = getattr(obj, "__api_function__", None)
-    if target:
-        return getattr(importlib.import_module(target[0]), target[1])
-    return obj
+    """The API function behind a public name."""
+    return getattr(gyrotest, name)
 
 
 def surface() -> str:

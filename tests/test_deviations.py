@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError, InputError
+from gyrotest.core.errors import AnalysisError, InputError
 from gyrotest.noise import deviations as dv
 from gyrotest.noise.deviations import DEVIATION_KINDS, compute_deviation
 from gyrotest.noise.taus import decade_m, m_from_taus, octave_m, per_decade_m, tau_grid

@@ -10,11 +10,11 @@ import pytest
 from test_envmodel_helpers import make_log
 from workbench_cases import helmholtz, noise, user_loop
 
+from gyrotest.core.errors import InputError
 from gyrotest.envmodel import fit_model, prepare
 from gyrotest.envmodel.channel_terms import field_quadratic, field_vector
 from gyrotest.envmodel.screen import block_candidates
 from gyrotest.envmodel.terms import TermSpec, parse_terms, resolve_terms
-from gyrotest.errors import InputError
 
 HOUR = 3600.0
 

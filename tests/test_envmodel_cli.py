@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.simulate import simulate, write_log
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 
@@ -95,7 +95,7 @@ def test_compensate_writes_parquet_and_reports(logs, tmp_path):
     d = json.loads(r.out)
     assert d["reduction_factor"] > 5
     assert 0.8 <= d["achieved_over_predicted"] <= 1.2
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
 
     g = read_log(out)
     assert "model_drift_dph" in g.extra

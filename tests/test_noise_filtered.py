@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.filtered import FILTER_STATUS, fold_filter
 from gyrotest.noise.fit import fit_noise_model

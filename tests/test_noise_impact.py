@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.errors import InputError
+from gyrotest.core.errors import InputError
 from gyrotest.noise.fit import fit_noise_model
 from gyrotest.noise.impact import (
     Component,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from test_noise_fit import sim_rate, table_from_model
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.diagnose import diagnose
 from gyrotest.noise.fit import fit_noise_model, slope_readoffs

@@ -14,10 +14,10 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
-from gyrotest.earth import Site
-from gyrotest.errors import AnalysisError, InputError
-from gyrotest.output import dumps
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.earth import Site
+from gyrotest.core.errors import AnalysisError, InputError
+from gyrotest.core.output import dumps
 from gyrotest.scalefactor import (
     Plateau,
     RunPlateaus,

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError
-from gyrotest.simulate import simulate
-from gyrotest.warmup import warmup_time
+from gyrotest.core.errors import AnalysisError
+from gyrotest.simulation import simulate
+from gyrotest.staticbias.warmup import warmup_time
 
 ROOT = Path(__file__).resolve().parents[1]
 

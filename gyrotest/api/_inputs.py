@@ -3,7 +3,7 @@
 Internal (``_``-prefixed module): :func:`gyrotest.read` is the public entry point. A log can be
 given as a file path, a :class:`pandas.DataFrame`, a numpy array with its sample interval and
 unit, a simulation (:func:`gyrotest.simulate`) or an already read
-:class:`~gyrotest.data.GyroLog`; the ingest options have the command line's names
+:class:`~gyrotest.core.data.GyroLog`; the ingest options have the command line's names
 (``rate_col="gx"``, ``temp_col=["T_case_C"]``, ``latitude=48.1``, ``nan="gap"`` ...).
 
 No numpy/pandas at import: ``import gyrotest`` and ``gyrotest --help`` stay cheap.
@@ -16,7 +16,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from ..errors import OptionError
+from ..core.errors import OptionError
 
 #: ingest option -> the key the command line collects it under (``--nan`` is ``nan_policy``)
 READ_OPTIONS: dict[str, str] = {
@@ -104,10 +104,10 @@ def split_read_options(kwargs: dict, where: str) -> dict:
 
 def as_profile(profile):
     """``profile``: None, a TOML path, a dict of the TOML's shape or a
-    :class:`~gyrotest.profile.Profile`."""
+    :class:`~gyrotest.core.profile.Profile`."""
     if profile is None:
         return None
-    from ..profile import Profile, load_profile, profile_from_dict
+    from ..core.profile import Profile, load_profile, profile_from_dict
 
     if isinstance(profile, Profile):
         return profile
@@ -121,11 +121,11 @@ def as_profile(profile):
 
 def is_log(obj) -> bool:
     """An already read log (GyroLog, or the streamed angle series of a long Parquet log)."""
-    from ..data import GyroLog
+    from ..core.data import GyroLog
 
     if isinstance(obj, GyroLog):
         return True
-    stream = sys.modules.get("gyrotest.stream")
+    stream = sys.modules.get("gyrotest.io.stream")
     return stream is not None and isinstance(obj, stream.StreamedLog)
 
 
@@ -137,7 +137,7 @@ def _is_frame(obj) -> bool:
 def _sim_run(obj):
     """The first run of a simulation (Simulation, SimResult or SimRun), else None."""
     core = getattr(obj, "core", obj)
-    sim = sys.modules.get("gyrotest.simulate.core")
+    sim = sys.modules.get("gyrotest.simulation.core")
     if sim is None:
         return None
     if isinstance(core, sim.SimResult):
@@ -166,7 +166,7 @@ def read_log_from(data, *, profile=None, opts: dict | None = None, sample_interv
     if run is not None:
         import pandas as pd
 
-        from ..profile import profile_from_dict
+        from ..core.profile import profile_from_dict
 
         if prof is None:
             prof = profile_from_dict(run.profile, source="simulation profile")
@@ -194,7 +194,7 @@ def read_log_from(data, *, profile=None, opts: dict | None = None, sample_interv
 
 
 def _positive_seconds(value, what: str) -> float:
-    from ..units import parse_duration
+    from ..core.units import parse_duration
 
     s = parse_duration(value, what=what)
     if not s > 0:
@@ -206,12 +206,12 @@ def _from_path(path: str, prof, opts: dict, nan_policy: str, stream: bool,
                dead: str = "note"):
     over = ingest_overrides(opts)
     if stream:
-        from ..stream import stream_log
+        from ..io.stream import stream_log
 
         log = stream_log(path, profile=prof, overrides=over, nan_policy=nan_policy)
         if log is not None:
             return log
-    from ..ingest import read_log
+    from ..io.ingest import read_log
 
     return read_log(path, profile=prof, overrides=over, nan_policy=nan_policy, dead=dead)
 
@@ -220,9 +220,9 @@ def _from_frame(frame, prof, opts: dict, nan_policy: str, source: str):
     import pandas as pd
     import pyarrow as pa
 
-    from ..ingest import _naming_file, build_log, resolve_columns
+    from ..core.profile import merge
+    from ..io.ingest import _naming_file, build_log, resolve_columns
     from ..io.tables import RawTable
-    from ..profile import merge
 
     if frame.index.name is not None or isinstance(frame.index, pd.DatetimeIndex):
         frame = frame.reset_index()  # a named (time) index is a column like any other
@@ -289,7 +289,7 @@ def as_logs(data, where: str, *, profile=None, opts=None, **kw) -> list:
 
 def seconds(value, what: str) -> float:
     """A duration as seconds: a number of seconds or a text such as ``"30min"``, ``"2h"``."""
-    from ..units import parse_duration
+    from ..core.units import parse_duration
 
     return parse_duration(value, what=what)
 

@@ -1,7 +1,7 @@
 """The result objects of the Python API.
 
 Each result holds the analysis object its command renders (``.core``: an
-:class:`~gyrotest.noise.analysis.AllanAnalysis`, a :class:`~gyrotest.bias_axes.BiasAxes`,
+:class:`~gyrotest.noise.analysis.AllanAnalysis`, a :class:`~gyrotest.staticbias.multiaxis.BiasAxes`,
 an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attributes
 (``res.axes``, ``res.coefficients``), and adds the same four things to every kind:
 
@@ -56,7 +56,7 @@ class Result:
 
     def to_json(self, indent: int | None = 2) -> str:
         """:meth:`to_dict` as JSON text, exactly as the command's ``--json`` prints it."""
-        from ..output import dumps
+        from ..core.output import dumps
 
         return dumps(self.to_dict(), indent=indent)
 
@@ -84,7 +84,7 @@ class Result:
         return ax
 
     def _figure(self):
-        from ..plotting import new_figure
+        from ..core.plotting import new_figure
 
         fig, ax = new_figure()
         self._draw(ax)
@@ -296,8 +296,8 @@ class AllanResult(Result):
 # ============================================================================== bias
 class BiasResult(Result):
     """Bias D_F of one or more static runs (:func:`gyrotest.bias`); ``core`` is a
-    :class:`~gyrotest.bias_axes.BiasAxes` (``per_axis``: one
-    :class:`~gyrotest.bias.BiasAnalysis` per axis with ``runs``, ``repeatability`` and
+    :class:`~gyrotest.staticbias.multiaxis.BiasAxes` (``per_axis``: one
+    :class:`~gyrotest.staticbias.analysis.BiasAnalysis` per axis with ``runs``, ``repeatability`` and
     ``multi``)."""
 
     __slots__ = ()
@@ -347,7 +347,7 @@ class BiasResult(Result):
         return out
 
     def _figure(self):
-        from ..bias_plot import figure_bias
+        from ..staticbias.plots import figure_bias
 
         return figure_bias(next(iter(self.core.per_axis.values())))
 
@@ -737,7 +737,7 @@ class CompensationResult(Result):
 # ============================================================================== campaign
 class Report(Result):
     """The spec sheet of a campaign (:func:`gyrotest.report`); ``core`` is the
-    :class:`~gyrotest.report.sheet.Sheet` (``checks``, ``sections``, ``overall()``)."""
+    :class:`~gyrotest.specsheet.sheet.Sheet` (``checks``, ``sections``, ``overall()``)."""
 
     __slots__ = ()
     title = "Specification sheet"
@@ -763,13 +763,13 @@ class Report(Result):
 
     def to_markdown(self) -> str:
         """The sheet as Markdown (as ``gyrotest report`` prints it)."""
-        from ..report.render_md import render_markdown
+        from ..specsheet.render_md import render_markdown
 
         return render_markdown(self.core, None)
 
     def to_html(self) -> str:
         """The sheet as one self-contained HTML document."""
-        from ..report.render_html import render_html
+        from ..specsheet.render_html import render_html
 
         return render_html(self.core)
 
@@ -786,8 +786,8 @@ class Report(Result):
         int
             The number of pages.
         """
-        from ..output import write_rendered
-        from ..report.render_pdf import render_pdf
+        from ..core.output import write_rendered
+        from ..specsheet.render_pdf import render_pdf
 
         data, pages = render_pdf(self.core)
         write_rendered(pdf=path, pdf_bytes=data)
@@ -811,7 +811,7 @@ class Report(Result):
 
 class Simulation(Result):
     """A simulated bench log with known truth (:func:`gyrotest.simulate`); ``core`` is a
-    :class:`~gyrotest.simulate.core.SimResult` (``runs``, ``truth``, ``columns``)."""
+    :class:`~gyrotest.simulation.core.SimResult` (``runs``, ``truth``, ``columns``)."""
 
     __slots__ = ()
     title = "Simulated bench log"
@@ -831,8 +831,8 @@ class Simulation(Result):
         WriteResult
             The paths written (``.to_dict()`` for JSON).
         """
-        from ..errors import InputError
-        from ..simulate import write_log
+        from ..core.errors import InputError
+        from ..simulation import write_log
 
         try:
             return write_log(self.core, path, fmt=format)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 
-from ..errors import InputError, OptionError
+from ..core.errors import InputError, OptionError
 from ._inputs import as_profile, is_log, read_log_from, split_read_options
 from .analyses import _env_model, _read_for
 from .results import CompensationResult, MagResult, ModelDiagnosis, ModelFit, ThermalResult
@@ -42,7 +42,7 @@ def read_reference(reference, profile=None, opts: dict | None = None):
         o = {k: v for k, v in (opts or {}).items()
              if k not in ("temp_col", "field_cols", "supply_col", "table_col", "position_col")}
         if isinstance(reference, (str, os.PathLike)):
-            from ..ingest import read_log
+            from ..io.ingest import read_log
 
             ov = ingest_overrides(o)
             return read_log(os.fspath(reference), profile=prof, overrides=ov,

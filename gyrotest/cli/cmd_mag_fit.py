@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 from rich.markup import escape
 
-from ..units import parse_duration
+from ..core.units import parse_duration
 from .cmd_model import (
     check_output,
     domain_fit_options,
@@ -59,7 +59,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
 
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     _, specs = mag_terms(with_terms)

@@ -12,8 +12,8 @@ from pathlib import Path
 import click
 from rich.markup import escape
 
-from ..errors import InputError
-from ..units import format_duration
+from ..core.errors import InputError
+from ..core.units import format_duration
 from .common import (
     FiniteRange,
     console,
@@ -113,7 +113,7 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
     """Validate an output path before any work (suffix and directory)."""
     if path is None:
         return None
-    from ..output import check_output_path
+    from ..core.output import check_output_path
 
     return check_output_path(path, suffixes, what)
 
@@ -349,7 +349,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
     specs = model.specs
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     if session:
@@ -473,7 +473,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
                   v_ref=v_ref, resolution=resolution, smooth=smooth, folds=folds)
     specs = model.specs
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     cand = split_terms(candidates) if candidates else None
@@ -517,7 +517,7 @@ def history_cmd(path, show_all, plot_path, as_json):
     from ..envmodel.history import load_history, steps_for_log
 
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     steps = load_history(path)

@@ -7,7 +7,7 @@ import math
 import click
 from rich.markup import escape
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .cmd_model import (
     check_output,
     domain_fit_options,
@@ -114,7 +114,7 @@ def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, s
     if output and log is None:
         raise InputError("-o needs a chamber log (a set-point table gives no full model)")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     parse_gradient(gradient)  # a bad --gradient fails before the log is read

@@ -8,8 +8,8 @@ Conventions for command modules (``gyrotest/cli/cmd_<name>.py``, exposing ``comm
   :func:`emit_json` and nothing else on stdout;
 * human output goes through :func:`console` (stdout, rich) and notes/warnings through
   :func:`note` / :func:`warn` (stderr, suppressed by ``-q``);
-* files are written atomically with :mod:`gyrotest.output` helpers;
-* raise :class:`gyrotest.errors.InputError` for anything the user can fix (exit code 2).
+* files are written atomically with :mod:`gyrotest.core.output` helpers;
+* raise :class:`gyrotest.core.errors.InputError` for anything the user can fix (exit code 2).
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ import click
 
 from ..api._inputs import READ_OPTIONS
 from ..api._inputs import ingest_overrides as _api_ingest_overrides
-from ..errors import InputError
-from ..units import format_number
+from ..core.errors import InputError
+from ..core.units import format_number
 
 
 class FiniteRange(click.FloatRange):
@@ -139,7 +139,7 @@ def _escape(msg: str) -> str:
 
 def emit_json(obj: Any) -> None:
     """Write one JSON document to stdout."""
-    from ..output import dumps  # numpy: only when JSON is written
+    from ..core.output import dumps  # numpy: only when JSON is written
 
     sys.stdout.write(dumps(obj) + "\n")
     sys.stdout.flush()
@@ -227,7 +227,7 @@ def _check_rate_unit(ctx, param, value):
     """--rate-unit names a rate unit gyrotest knows, whatever the log holds."""
     if value is None:
         return None
-    from ..units import factor
+    from ..core.units import factor
 
     try:
         factor(value, "rate")
@@ -307,13 +307,13 @@ ingest_overrides = _api_ingest_overrides
 def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False,
              dead: str = "error"):
     """Read one log with the shared ingest options; prints the column choices as notes.
-    ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
+    ``stream``: a long Parquet log may come back as a :class:`gyrotest.io.stream.StreamedLog`
     (its angle series only; see that module). ``dead="note"``: a dead or stuck gyro output is
     a note, not an error (``info``, ``ingest``: they describe and convert, they do not fit)."""
     from ..api._inputs import read_log_from, split_read_options
 
     if not stream or not _parquet(path):  # a streamed log sets its own heap settings
-        from ..heap import reuse_freed_memory
+        from .._runtime import reuse_freed_memory
 
         reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
     o = api_read_options(opts)
@@ -393,5 +393,5 @@ def with_ingest(func):
     return wrapper
 
 
-#: compact number formatting for tables ('—' for None/NaN), :func:`gyrotest.units.format_number`
+#: compact number formatting for tables ('—' for None/NaN), :func:`gyrotest.core.units.format_number`
 fmt_num = format_number

@@ -1,7 +1,7 @@
 """Which command-line parameters name files the command reads and which it writes.
 
 :func:`guard_commands` wraps every command (``LazyGroup`` does it once per command object):
-before the command's own code runs, a :func:`gyrotest.guard.io_guard` is opened, every input
+before the command's own code runs, a :func:`gyrotest.core.guard.io_guard` is opened, every input
 parameter is declared, then every output parameter (and the files written beside an output,
 :data:`BESIDE`), so that ``gyrotest allan in.csv --csv in.csv`` stops with one line before any
 file is read or anything is computed. The tables here are the only per-command knowledge; a
@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: parameter name -> what the file is (inputs)
 INPUTS: dict[str, str] = {
@@ -74,7 +74,7 @@ BESIDE: dict[str, Callable[[dict], Iterable[tuple[str, str]]]] = {
 
 
 def _declare(cmd_path: str, params: dict) -> None:
-    from ..guard import declare_input, declare_output
+    from ..core.guard import declare_input, declare_output
 
     outputs = []
     for name, value in params.items():
@@ -108,7 +108,7 @@ def _declare(cmd_path: str, params: dict) -> None:
 def _guarded(cmd_path: str, callback: Callable) -> Callable:
     @functools.wraps(callback)
     def run(*args, **kwargs):
-        from ..guard import io_guard
+        from ..core.guard import io_guard
 
         with io_guard(force=bool(kwargs.get("force"))):
             _declare(cmd_path, kwargs)

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import stats as st
 from .fit import FitResult, WorkData, fit_model, predict_blocks
 from .prepare import prepare_log
@@ -231,7 +231,7 @@ def read_setpoints(path: str | Path) -> dict[str, np.ndarray]:
     """Read a set-point table (CSV/TSV with a header): temperature °C, drift deviation deg/h,
     optional σ deg/h and dT/dt °C/h. Columns are recognised by name (temperature / thermostat
     / setpoint; dw / drift / delta_omega; sigma / std / rms; dTdt)."""
-    from ..documents import read_table_text
+    from ..core.documents import read_table_text
 
     p = Path(path)
     text = read_table_text(p, "the set-point table")  # FIFO, device, gzip, encoding: one line
@@ -563,7 +563,7 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
                     folds: int = 5, reference=None) -> ThermalAnalysis:
     """The analysis of ``gyrotest thermal-fit``: the set-point table ``setpoints``
     (:func:`read_setpoints`, :func:`thermal_fit_setpoints`) and/or the chamber run ``log``
-    (a :class:`~gyrotest.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
+    (a :class:`~gyrotest.core.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
     (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
     ``smooth`` options as typed), then :func:`thermal_fit`. ``reference``: a static reference
     log of the same gyro whose noise model is fixed for the fit

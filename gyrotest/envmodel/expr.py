@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: element-wise numpy functions allowed in expressions: name -> (function, number of args)
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, ...]]] = {

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError
+from ..core.errors import AnalysisError
 from ..workbench_rules import MIN_RELIABILITY, VIF_MAX
 from . import stats as st
 from .likelihood import (

@@ -39,7 +39,7 @@ def check_reference(ref_log, log, wd, noise) -> None:
     white noise (``noise``: its :class:`~gyrotest.envmodel.likelihood.NoiseParams`) differs
     from the log's own (the robust scale of the rate's first differences) by more than 10×
     (another unit or another gyro)."""
-    from ..errors import InputError
+    from ..core.errors import InputError
     from .workdata import _white_sigma
 
     if ref_log.tau0 > wd.frame.dt * (1 + 1e-6):

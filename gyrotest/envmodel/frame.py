@@ -1,5 +1,5 @@
 """The channels frame of the drift model: a uniformly sampled set of channels (full rate or
-block means) split into contiguous segments at gaps, built from a :class:`~gyrotest.data.GyroLog`;
+block means) split into contiguous segments at gaps, built from a :class:`~gyrotest.core.data.GyroLog`;
 and the earth-rate projection along an input axis that changes direction during a log.
 
 Conventions: time s, temperature degC, field uT, supply V, rates deg/h.
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 SEC_PER_HOUR = 3600.0
 
@@ -81,7 +81,7 @@ class EnvFrame:
 
 def frame_from_log(log, *, axis: str | None = None, dt: float | None = None,
                    subtract_table: bool = True) -> EnvFrame:
-    """Build an :class:`EnvFrame` from a :class:`~gyrotest.data.GyroLog`.
+    """Build an :class:`EnvFrame` from a :class:`~gyrotest.core.data.GyroLog`.
 
     With ``dt`` (s) the channels are averaged over consecutive bins of m = round(dt/τ0)
     samples within each segment (a trailing part shorter than m/2 is dropped); otherwise the
@@ -162,8 +162,8 @@ def earth_projection(log) -> np.ndarray | None:
     labels (``up``, ``north``, ``AZ/EL``, ...) or from numeric IA elevation/azimuth channels
     (``ia_elevation_deg``, ``ia_azimuth_deg``), at the site latitude. None without a
     latitude or such a channel. Formula: Ω_IA = Ω_E (cos φ cos e cos A + sin φ sin e)
-    (:func:`gyrotest.earth.earth_rate_component`)."""
-    from ..earth import earth_rate_component, parse_ia
+    (:func:`gyrotest.core.earth.earth_rate_component`)."""
+    from ..core.earth import earth_rate_component, parse_ia
 
     site = getattr(log, "site", None)
     if site is None:

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..output import write_json
+from ..core.errors import InputError
+from ..core.output import write_json
 
 HISTORY_FORMAT = "gyrotest-model-history"
 
@@ -76,7 +76,7 @@ def resolve_history(path: str | Path) -> Path:
 
 def load_history(path: str | Path) -> list[HistoryStep]:
     """Read the steps (oldest first); InputError when there is no readable history."""
-    from ..documents import DocumentError, load_document, path_kind
+    from ..core.documents import DocumentError, load_document, path_kind
     from ..schemas import history_problems
 
     hp = resolve_history(path)

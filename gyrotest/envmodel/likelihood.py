@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, optimize
 
-from ..errors import AnalysisError
+from ..core.errors import AnalysisError
 from ..workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
 
 #: fewest first differences a likelihood needs

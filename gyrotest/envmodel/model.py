@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..errors import InputError
-from ..output import jsonable, write_text
+from ..core.errors import InputError
+from ..core.output import jsonable, write_text
 from .terms import EFFECTS, Refs, TermSpec, build_term, frame_from_log, resolve_terms
 
 FORMAT = "gyrotest-envmodel"
@@ -136,7 +136,7 @@ class EnvModel:
 
     @staticmethod
     def load(path: str | Path) -> EnvModel:
-        from ..documents import DocumentError, load_document
+        from ..core.documents import DocumentError, load_document
         from ..schemas import model_problems
 
         p = Path(path)

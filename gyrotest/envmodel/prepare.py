@@ -16,8 +16,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TypeVar
 
-from ..errors import AnalysisError, InputError
-from ..units import format_duration, parse_duration
+from ..core.errors import AnalysisError, InputError
+from ..core.units import format_duration, parse_duration
 from .fit import WorkData, file_provenance, prepare
 from .terms import TermSpec, parse_terms
 
@@ -95,7 +95,7 @@ def prepare_log(log, path: str | None, *, axis: str | None = None, skip: str | f
     power-on), then :func:`~gyrotest.envmodel.fit.prepare` at the working resolution
     (``resolution``/``smooth``: ``auto`` or a duration). ``path`` is the log file for the
     model's provenance (``-`` for stdin). When the log is too short, the message names
-    ``specs``. ``reference``: a static reference :class:`~gyrotest.data.GyroLog` of the same
+    ``specs``. ``reference``: a static reference :class:`~gyrotest.core.data.GyroLog` of the same
     gyro whose noise model is fixed for every model of the log
     (:func:`gyrotest.envmodel.likelihood.reference_noise`) instead of fitted on the log. ``power_on``: the log starts at the gyro's
     power-on (before ``skip``), so a warm-up transient is a candidate effect of the

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from ..workbench_rules import (  # noqa: E402  (the decision constants, one source)
     ALPHA,
     BIC_TIE,

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .effects import (  # noqa: F401  (re-exported: the effect functions live in effects.py)
     H0_UT,
     SEC_PER_HOUR,

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import stats as st
 from .terms import (
     EnvFrame,
@@ -318,7 +318,7 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
             t_ref: float | None = None, v_ref: float | None = None,
             smoothing_s: float | None = None, t_on_s: float = 0.0,
             provenance: dict | None = None, fine_dt: float | None = None) -> WorkData:
-    """Prepare a :class:`~gyrotest.data.GyroLog` for fitting at the working resolution.
+    """Prepare a :class:`~gyrotest.core.data.GyroLog` for fitting at the working resolution.
 
     ``resolution`` T_b (s; default chosen by :func:`choose_resolution`), ``t_ref`` reference
     temperature degC (default: mean, per sensor), ``v_ref`` reference supply V (default mean),

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import Document, banner
 
 POLY = {"bias": 0, "T": 1, "T2": 2, "T3": 3}

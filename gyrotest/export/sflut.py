@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from ..scalefactor.fit import TERM_ALIASES, TERMS
 from .common import Document, banner, need, number
 from .envlut import ascii_text

@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .core import Fleet, analyse_campaign, summarise
 
 
@@ -103,7 +103,7 @@ def run_fleet(paths: list[str], *, jobs: int | None = None, scheduler: str | Non
     ``jobs``: worker processes (default :func:`default_jobs`; 1 = in this process);
     ``scheduler``: ``"local"`` or a Dask scheduler address (runs on Dask instead of the pool);
     ``client``: an existing ``distributed.Client`` to use (tests, notebooks). A campaign that
-    fails raises :class:`~gyrotest.errors.InputError` naming it.
+    fails raises :class:`~gyrotest.core.errors.InputError` naming it.
     """
     paths = [str(p) for p in paths]
     if not paths:

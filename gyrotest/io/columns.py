@@ -6,8 +6,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ..errors import InputError
-from ..profile import Profile
+from ..core.errors import InputError
+from ..core.profile import Profile
 from .tables import _missing_column_msg
 
 # ----------------------------------------------------------------------------- auto-detection

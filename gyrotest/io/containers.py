@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .tables import RawTable, _check_columns
 
 HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"

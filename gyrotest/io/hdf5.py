@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .containers import (
     MAX_MATRIX_CHANNELS,
     Found,

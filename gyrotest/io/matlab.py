@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .containers import MAT73_TEXT, Found, as_channels, equal_lengths, matrix_columns
 from .hdf5 import as_column
 

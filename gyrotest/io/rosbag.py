@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .containers import Found, need
 
 IMU_TYPES = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")

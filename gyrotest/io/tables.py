@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError
-from ..fastcsv import _skip_comment_rows  # the one invalid-row handler of both CSV readers
+from ..core.errors import InputError
+from .fastcsv import _skip_comment_rows  # the one invalid-row handler of both CSV readers
 
 META_KEY = b"gyrotest"  # schema-metadata key of gyrotest's own converted files
 
@@ -159,7 +159,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     Besides text and Parquet/Feather: gzip'd text, MATLAB ``.mat``, HDF5 and ROS bags
     (:mod:`gyrotest.io.containers`); ``select`` names the ROS topic, HDF5 group or MATLAB
     struct that holds the columns. ``_data``: the bytes of a stream already read (a named
-    pipe, :func:`gyrotest.ingest.read_log`), parsed like stdin."""
+    pipe, :func:`gyrotest.io.ingest.read_log`), parsed like stdin."""
     source = _source_name(path)
     data: bytes | None = None
     p: Path | None = None
@@ -218,7 +218,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     else:
         owned = None
         if p and decimal == ".":
-            from ..fastcsv import arrow_table, read_numeric  # plain numbers: fast path
+            from .fastcsv import arrow_table, read_numeric  # plain numbers: fast path
 
             with _quiet_invalid_row_handler():
                 owned = read_numeric(p, delim, skip, names, columns)
@@ -229,7 +229,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         elif p:
             owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal)
         if owned is not None:
-            from ..fastcsv import arrow_table
+            from .fastcsv import arrow_table
 
             table = arrow_table(owned, columns or names)
             if table.num_rows == 0:
@@ -438,7 +438,7 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
     except OSError:
         return None
     try:
-        from ..fastcsv import data_start_and_capacity
+        from .fastcsv import data_start_and_capacity
 
         pos, cap = data_start_and_capacity(fh.read(1 << 22), skip, size)
         out = {c: np.empty(cap) for c in cols}
@@ -617,7 +617,7 @@ def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
     arr = raw.table.column(col)
     t = arr.type
     if pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t):
-        from ..fastcsv import float64_values  # Arrow's to_numpy would import pandas
+        from .fastcsv import float64_values  # Arrow's to_numpy would import pandas
 
         out = float64_values(arr)
         # a zero-copy view of an Arrow buffer can be writeable (buffers decoded from

@@ -10,9 +10,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from ..data import Gap, Timing
-from ..errors import InputError
-from ..units import factor
+from ..core.data import Gap, Timing
+from ..core.errors import InputError
+from ..core.units import factor
 from .tables import RawTable, _column_to_float
 
 GAP_FACTOR = 1.5  # an interval longer than this many nominal intervals is a gap
@@ -148,7 +148,7 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             ints = num.to_numpy(dtype=np.int64)
         v = np.array(num.to_numpy(dtype=np.float64))  # a writeable copy: shifted in place
     elif pa.types.is_integer(t) and arr.null_count == 0:
-        from ..fastcsv import int64_values  # Arrow's to_numpy would import pandas
+        from .fastcsv import int64_values  # Arrow's to_numpy would import pandas
 
         ints = int64_values(arr)
         v = None

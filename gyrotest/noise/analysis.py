@@ -1,7 +1,7 @@
 """The whole Allan noise analysis of a bench log, as one pure function.
 
 :func:`analyse_allan` is what ``gyrotest allan`` and the spec-sheet report both call: it takes a
-:class:`~gyrotest.data.GyroLog` and returns an :class:`AllanAnalysis` (dataclass, ``to_dict()``
+:class:`~gyrotest.core.data.GyroLog` and returns an :class:`AllanAnalysis` (dataclass, ``to_dict()``
 for JSON) without printing anything. Per rate axis it computes
 
 1. the deviation table (default overlapping Allan deviation, IEEE 952 Annex C; NIST SP1065
@@ -35,9 +35,9 @@ from typing import Any
 
 import numpy as np
 
-from ..data import GyroLog
-from ..errors import AnalysisError, InputError
-from ..units import format_duration, parse_duration
+from ..core.data import GyroLog
+from ..core.errors import AnalysisError, InputError
+from ..core.units import format_duration, parse_duration
 from . import kinds as _kinds
 from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
 from .diagnose import Diagnosis, diagnose
@@ -84,7 +84,7 @@ MAX_JITTER = 0.1
 #: this long it screens (:func:`gyrotest.noise.outliers.detect_outliers`: mostly numpy work
 #: that releases the GIL, ≈ 0.2 s of CPU per 10⁷ samples). A streamed log's spike check (the
 #: running median everywhere, which holds the GIL) runs in a forked child instead
-#: (:mod:`gyrotest.beside`; benchmarks/README.md, bench_speed, sixth and eighth passes)
+#: (:mod:`gyrotest._runtime`; benchmarks/README.md, bench_speed, sixth and eighth passes)
 SPIKE_BESIDE_MIN = 1 << 20
 #: what the interval columns mean (``--ci``)
 CI_TEXT = {
@@ -272,9 +272,9 @@ def axis_units(quantity: str) -> dict[str, str]:
 
 
 def _accelerometers(log: GyroLog, notes: list[str]):
-    """The log's accelerometer axes in m/s² (:func:`gyrotest.accel.accel_channels`), their
+    """The log's accelerometer axes in m/s² (:func:`gyrotest.io.accel.accel_channels`), their
     notes added to ``notes``."""
-    from ..accel import accel_channels
+    from ..io.accel import accel_channels
 
     acc = accel_channels(log)
     notes.extend(acc.notes)
@@ -476,7 +476,7 @@ def _stitch_recorded(dev: DeviationResult, data_rec: np.ndarray, segs_rec, stop_
     """``dev`` (computed across bridged gaps) with the rows at the τ that the recorded
     samples' own gap-free segments support replaced by the deviation of those segments alone
     (pooled, no difference spanning a gap): the filled samples then only serve the longer τ,
-    where their effect (:mod:`gyrotest.gapfill`) is far inside the confidence interval, and
+    where their effect (:mod:`gyrotest.io.gapfill`) is far inside the confidence interval, and
     leave the short τ, whose intervals are narrow, exactly as recorded."""
     from .taus import max_averaging_factor
 
@@ -780,7 +780,7 @@ def analyse_allan(
     Parameters
     ----------
     skip_s : warm-up trim at the start of the log, seconds, or a duration text such as
-        ``"30min"`` (read by :func:`gyrotest.units.parse_duration`; quoted as written when it
+        ``"30min"`` (read by :func:`gyrotest.core.units.parse_duration`; quoted as written when it
         removes the whole record).
     dev : deviation for the table: oadev (default), adev, mdev, tdev, hdev, ohdev, totdev,
         mtotdev, akdev, hkdev. The noise model is fitted to it when it is Allan-type (oadev,
@@ -810,11 +810,11 @@ def analyse_allan(
         warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
         its running median) or "robust" (each spike clipped to the threshold). Never silent.
     accelerometers : also analyse the log's accelerometer axes (extra channels named ax/ay/az,
-        acc_x ... with an acceleration unit: :func:`gyrotest.accel.accel_channels`), σ in
+        acc_x ... with an acceleration unit: :func:`gyrotest.io.accel.accel_channels`), σ in
         m/s², the terms in IEEE Std 1293 units (VRW m/s/√h, B µg, acceleration random walk
         m/s/h/√h); ``axes`` may name them.
     fill : bridge gaps of at most this many missed samples before the analysis (default 1:
-        single missed samples; 0 never bridges; :func:`gyrotest.gapfill.fill_gaps`, whose
+        single missed samples; 0 never bridges; :func:`gyrotest.io.gapfill.fill_gaps`, whose
         effect on σ is stated in the notes). Gaps left split the record into segments.
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
@@ -823,7 +823,7 @@ def analyse_allan(
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
     """
-    streamed = getattr(log, "series", None) is not None  # gyrotest.stream.StreamedLog: θ only
+    streamed = getattr(log, "series", None) is not None  # gyrotest.io.stream.StreamedLog: θ only
     if streamed and (_skip_seconds(skip_s) > 0 or detrend not in (None, "none")
                      or env_model is not None or outliers != "flag"
                      or dev not in STREAM_DEVS):
@@ -832,7 +832,7 @@ def analyse_allan(
     log = _skip_warmup(log, skip_s) if not streamed else log
     fill_rep = None
     if not streamed and log.timing.gaps:
-        from ..gapfill import fill_gaps
+        from ..io.gapfill import fill_gaps
 
         log, fill_rep = fill_gaps(log, int(fill))
     if dev not in DEVIATION_KINDS:
@@ -904,7 +904,7 @@ def analyse_allan(
                   horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
                   record_s=log.duration_s, source=log.source, fit_model=fit_model, ci=ci)
     for name in names:
-        from ..beside import run_beside, run_on_thread
+        from .._runtime import run_beside, run_on_thread
 
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:

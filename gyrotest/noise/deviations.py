@@ -71,7 +71,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import edf as _edf
 from . import kinds as _kinds
 from . import mtot as _mtot

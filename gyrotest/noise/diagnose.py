@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError
+from ..core.errors import AnalysisError
 from .fit import LINEAR_KEYS, NoiseFit, fit_noise_model
 
 __all__ = ["Candidate", "Diagnosis", "MisfitRegion", "diagnose", "misfit_regions"]

@@ -34,7 +34,7 @@ from statistics import NormalDist
 import numpy as np
 from scipy import special
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 
 __all__ = [
     "DEFAULT_CONFIDENCE",

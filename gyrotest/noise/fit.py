@@ -74,8 +74,8 @@ from typing import Any
 import numpy as np
 from scipy import special
 
-from ..errors import AnalysisError, InputError
-from ..units import format_number
+from ..core.errors import AnalysisError, InputError
+from ..core.units import format_number
 from . import kinds as _kinds
 from .numerics import minimize_bounded, nelder_mead, nnls, root_bracketed  # no scipy.optimize
 from .quantity import ACCEL, RATE, Quantity, quantity_of
@@ -914,7 +914,7 @@ class NoiseFit:
 
         Use it to extrapolate, e.g. the variance of a mean over a record of length T is
         σ²_A(T) for white, Markov (T ≫ T_c) and random-walk rate noise (IEEE 952 Annex C): the
-        bias uncertainty of :mod:`gyrotest.bias` is ``sqrt(predict_avar(T)[0])``. With
+        bias uncertainty of :mod:`gyrotest.staticbias.analysis` is ``sqrt(predict_avar(T)[0])``. With
         ``conservative`` the terms that are upper bounds only add their bound (no variance)."""
         t = np.atleast_1d(np.asarray(tau, float))
         val = self.model_avar(t)
@@ -1671,7 +1671,7 @@ def _accel_conversions(fit: NoiseFit, val) -> dict[str, Any]:
       ((m/s²)·√Hz); µg/√h = K/3600·60/9.80665e-6… as m/s²/√h: K/3600.
     * B (µg) → m/s² (MATLAB ``accelparams.BiasInstability``, IEEE B, the flat level/0.664).
     """
-    from ..units import G0
+    from ..core.units import G0
 
     ug = G0 * 1e-6
     N, Ns = val("N")

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import deviations as _dv
 from . import edf as _edf
 from .taus import tau_grid

@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..units import factor, parse_duration
+from ..core.errors import InputError
+from ..core.units import factor, parse_duration
 from .terms import PLATFORM_BENIGN_LABEL
 
 __all__ = [
@@ -229,7 +229,7 @@ _RATE_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s]
 
 def parse_vehicle_rate(text: str | float) -> float:
     """Parse a vehicle rate like ``10deg/s``, ``0.5 rad/s``, ``30 rpm``, ``100deg/h`` (a bare
-    number is deg/s) → rad/s. Units: any angular-rate unit of :mod:`gyrotest.units`."""
+    number is deg/s) → rad/s. Units: any angular-rate unit of :mod:`gyrotest.core.units`."""
     if isinstance(text, (int, float)):
         return _sane_vehicle_rate(math.radians(float(text)), text)
     m = _RATE_RE.match(str(text))
@@ -375,7 +375,7 @@ def extrapolation_reason(fit, horizon_s: float, record_s: float) -> str | None:
     reason, never as a measurement."""
     if not horizon_s > record_s * (1.0 + 1e-9):
         return None
-    from ..units import format_duration
+    from ..core.units import format_duration
 
     t_max = float(np.max(fit.tau[fit.used])) if np.any(fit.used) else float(np.max(fit.tau))
     slow = [t.label for t in fit.terms if t.key in ("B", "K", "R", "markov", "sine")

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..units import G0
+from ..core.units import G0
 
 __all__ = ["ACCEL", "QUANTITIES", "RATE", "Quantity", "quantity_of"]
 

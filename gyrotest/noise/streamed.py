@@ -1,6 +1,6 @@
 """Rate-domain checks of a streamed log, computed from its angle series θ in bounded memory.
 
-A log streamed by :mod:`gyrotest.stream` keeps only θ (per gap-free segment
+A log streamed by :mod:`gyrotest.io.stream` keeps only θ (per gap-free segment
 [0, cumsum(x − x̄)], see :class:`~gyrotest.noise.deviations.AngleSeries`). The rate samples are
 rebuilt from it where they are needed, Ω_k = (θ_{k+1} − θ_k)/s + x̄ (s = 1 for rate input, τ0
 for increments; the rounding error is ε·|θ|, far below any gyro's noise):

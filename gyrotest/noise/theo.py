@@ -46,7 +46,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import deviations as _dv
 from . import edf as _edf
 from .taus import STOP_RATIOS, m_from_taus, tau_grid

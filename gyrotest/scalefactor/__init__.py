@@ -30,7 +30,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .analysis import (
     ASYMMETRY_SKIPPED,
     PULSE_KINDS,
@@ -189,7 +189,7 @@ def reduce_table(path: str | Path, *, latitude_deg: float | None = None, ia: str
                    full_scale_dps=analyse_kw.get("full_scale_dps"))
     er = None
     if latitude_deg is not None:
-        from ..earth import check_latitude, earth_rate_component, parse_ia
+        from ..core.earth import check_latitude, earth_rate_component, parse_ia
 
         az, el, _ = parse_ia(ia or "up")
         er = earth_rate_component(check_latitude(latitude_deg), az, el)

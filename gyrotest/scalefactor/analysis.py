@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from .fit import (
     DPS,
     TERMS,
@@ -513,7 +513,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
       across runs), lock-in dead band (points whose output collapsed are excluded).
 
     ``nominal_scale_factor`` is S0 (arcsec/pulse or (deg/h)/V; ignored for rate output).
-    Raises :class:`~gyrotest.errors.InputError` for a single rate or mismatched runs.
+    Raises :class:`~gyrotest.core.errors.InputError` for a single rate or mismatched runs.
     """
     if not runs:
         raise InputError("no runs to reduce")

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
-from ..errors import AnalysisError
+from ..core.errors import AnalysisError
 
 DPS = 3600.0
 

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from ..plotting import COLORS, new_figure, save_figure
+from ..core.plotting import COLORS, new_figure, save_figure
 from .fit import TERM_LABELS, TERM_SHORT, term_order
 
 DPS = 3600.0

@@ -29,7 +29,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from gyrotest.noise.deviations import angle_series, compute_deviation  # noqa: E402
+from gyrotest.core.angle import angle_series  # noqa: E402
+from gyrotest.noise.deviations import compute_deviation  # noqa: E402
 from gyrotest.noise.edf import identify_noise_pair  # noqa: E402
 from gyrotest.noise.fit import fit_deviation  # noqa: E402
 
@@ -53,7 +54,7 @@ def power_law_rate(alpha: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def id_campaign(seeds: range) -> dict:
-    from gyrotest.noise.deviations import _raw_variance
+    from gyrotest.noise.devcore import _raw_variance
 
     out = {}
     for avg in AVERAGES:

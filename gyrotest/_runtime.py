@@ -46,6 +46,12 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+#: optional ``hook(done, total, kind)`` of long computations (the τ loop of the deviations,
+#: the spike check and the reading of a streamed log), called in the calling thread after each
+#: step (the CLI's progress display sets it; the core never prints); for MTOTDEV also within
+#: a τ, with a fractional ``done`` (i + fraction of τ number i + 1's work)
+PROGRESS: Callable[[float, int, str], None] | None = None
+
 _M_TRIM_THRESHOLD, _M_MMAP_MAX, _M_ARENA_MAX = -1, -4, -8
 
 

@@ -24,9 +24,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import bench_noise_id  # noqa: E402
 
+from gyrotest.core.angle import angle_series
 from gyrotest.core.errors import AnalysisError, InputError  # noqa: E402
 from gyrotest.noise import edf as E
-from gyrotest.noise.deviations import angle_series
 
 
 def _quiet(fn, *args, **kwargs):

@@ -402,10 +402,11 @@ def test_allan_jobs_identical_to_serial(tmp_path):
 
 
 def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
+    from gyrotest import _runtime
     from gyrotest.noise import deviations
 
     calls = []
-    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(_runtime, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
     x = np.random.default_rng(5).standard_normal(300_000)  # above PARALLEL_MIN_SAMPLES
     r = deviations.compute_deviation(x, 0.01, input_kind="rate", taus="octave", noise_id=False)
     n = len(r.tau)
@@ -415,10 +416,11 @@ def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
 
 def test_mtotdev_progress_within_each_tau(monkeypatch):
     """MTOTDEV reports progress inside a τ too (fractional ``done``), still in order."""
+    from gyrotest import _runtime
     from gyrotest.noise import deviations, mtot
 
     calls = []
-    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(_runtime, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
     monkeypatch.setattr(mtot, "STEP_INTERVAL_S", 0.0)
     monkeypatch.setattr(mtot, "BATCH_ELEMS", 512)  # many chunks and batches
     x = np.random.default_rng(6).standard_normal(20_000)

@@ -14,9 +14,9 @@ import pyarrow.parquet as pq
 import pytest
 
 import gyrotest.io.stream as st
+from gyrotest.core.angle import angle_series
 from gyrotest.io.ingest import read_log, write_log
 from gyrotest.noise.analysis import analyse_allan
-from gyrotest.noise.deviations import angle_series
 from gyrotest.noise.outliers import detect_outliers
 from gyrotest.noise.spectral import welch_psd
 from gyrotest.noise.streamed import detect_outliers_series, welch_psd_series

@@ -20,6 +20,8 @@ from typing import Any
 
 import click
 
+from .. import _runtime
+
 
 def jobs_option(func):
     """``--jobs N``: logs analysed in parallel (default: the number of CPU cores)."""
@@ -40,7 +42,6 @@ def default_jobs() -> int:
 def deviation_progress(min_s: float = 2.0):
     """Progress of the deviation τ loops on a terminal (not with -q, nothing when piped).
     The bar appears only once a loop has run for ``min_s`` seconds: short steps stay quiet."""
-    from ..noise import deviations
     from .common import progress, settings
 
     if settings().quiet or not sys.stderr.isatty():
@@ -65,19 +66,18 @@ def deviation_progress(min_s: float = 2.0):
             if done == total:
                 state["advance"](-total)  # reset for the next loop (transient bar)
 
-        old, deviations.PROGRESS = deviations.PROGRESS, hook
+        old, _runtime.PROGRESS = _runtime.PROGRESS, hook
         try:
             yield
         finally:
-            deviations.PROGRESS = old
+            _runtime.PROGRESS = old
 
 
 def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]:
     fn, path, opts, kw, stream = args
-    from ..noise import deviations
     from .common import load_log
 
-    deviations.PROGRESS = None  # a worker process draws no bar
+    _runtime.PROGRESS = None  # a worker process draws no bar
 
     log = load_log(path, opts, announce=False, stream=stream)
     return named(fn, log, **kw), [f"{log.source}: {m}" for m in log.notes]

@@ -4,14 +4,14 @@ A 24 h log at 10 kHz has 8.6·10⁸ samples: 6.9 GB as float64. :func:`read_log`
 time column, the rate column(s) and the Arrow table at once (≈ 3–6× the record), and the
 analysis would then build θ next to the rate. :func:`stream_log` reads the Parquet file batch
 by batch (:data:`BATCH_ROWS` rows) and integrates each rate axis into its angle series θ
-(:class:`gyrotest.noise.deviations.AngleSeries`) on the fly, with the cumulative sum carried
+(:class:`gyrotest.core.angle.AngleSeries`) on the fly, with the cumulative sum carried
 across batches; the time column is only used as an on-the-fly timing check (sample interval,
 gaps, jitter) and is never stored. The peak memory is θ (the size of one float64 rate column)
 plus a few batches.
 
 θ per gap-free segment is [0, cumsum(x − c)] with c the mean of the segment's first batch; when
 the segment ends, θ_k −= k·(x̄ − c) makes it [0, cumsum(x − x̄)] (the form of
-:func:`~gyrotest.noise.deviations.angle_series`; the two differ by rounding only). Every
+:func:`~gyrotest.core.angle.angle_series`; the two differ by rounding only). Every
 deviation, the noise identification and the trend check read θ; the spike check, the Welch PSD,
 the autocorrelation and the axis cross-correlation read rate samples rebuilt from θ
 (Ω_k = θ_{k+1} − θ_k + x̄; :mod:`gyrotest.noise.streamed`).
@@ -34,9 +34,10 @@ from typing import Any
 
 import numpy as np
 
+from .. import _runtime
+from ..core.angle import CHUNK, AngleSeries
 from ..core.data import Gap, GyroConstants, Timing
 from ..core.errors import AnalysisError, InputError
-from ..noise.deviations import CHUNK, AngleSeries
 from .health import MAX_ABS, overflow_mask
 from .tables import RawTable
 
@@ -223,11 +224,9 @@ def stream_log(path: str, *, profile=None, overrides: dict | None = None,
 
 
 def _progress(done: int, total: int) -> None:
-    """The CLI's progress hook (:data:`gyrotest.noise.deviations.PROGRESS`), per batch."""
-    from ..noise import deviations
-
-    if deviations.PROGRESS is not None:
-        deviations.PROGRESS(min(done, total), total, "reading rows")
+    """The CLI's progress hook (:data:`gyrotest._runtime.PROGRESS`), per batch."""
+    if _runtime.PROGRESS is not None:
+        _runtime.PROGRESS(min(done, total), total, "reading rows")
 
 
 def _fixed_mmap_threshold() -> None:

@@ -35,11 +35,13 @@ from typing import Any
 
 import numpy as np
 
+from ..core.angle import angle_series
 from ..core.data import GyroLog
 from ..core.errors import AnalysisError, InputError
 from ..core.units import format_duration, parse_duration
 from . import kinds as _kinds
-from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
+from .devcore import DeviationResult
+from .deviations import DEVIATION_KINDS, compute_deviation
 from .diagnose import Diagnosis, diagnose
 from .fit import (
     MIN_EDF,

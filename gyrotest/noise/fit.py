@@ -1459,7 +1459,7 @@ def table_quantity(dev) -> str:
 
 def fit_deviation(dev, *, terms=None, min_edf: float = MIN_EDF, bi_cutoff_hz=None,
                   line_hints=(), tau_range=None, with_bounds: bool = True) -> NoiseFit:
-    """:func:`fit_noise_model` on a :class:`~gyrotest.noise.deviations.DeviationResult`
+    """:func:`fit_noise_model` on a :class:`~gyrotest.noise.devcore.DeviationResult`
     (its τ, σ, EDF made robust by :func:`robust_edf`, the χ² interval recomputed from that EDF,
     and τ0). The closed forms are those of the Allan variance: use an OADEV/ADEV/TOTDEV (or
     Allan–Krobka) table."""

@@ -222,7 +222,7 @@ def _from_frame(frame, prof, opts: dict, nan_policy: str, source: str):
 
     from ..core.profile import merge
     from ..io.ingest import _naming_file, build_log, resolve_columns
-    from ..io.tables import RawTable
+    from ..io.rawtable import RawTable
 
     if frame.index.name is not None or isinstance(frame.index, pd.DatetimeIndex):
         frame = frame.reset_index()  # a named (time) index is a column like any other

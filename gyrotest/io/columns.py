@@ -8,7 +8,7 @@ from typing import Any
 
 from ..core.errors import InputError
 from ..core.profile import Profile
-from .tables import _missing_column_msg
+from .rawtable import _missing_column_msg
 
 # ----------------------------------------------------------------------------- auto-detection
 _TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "sec", "elapsed",

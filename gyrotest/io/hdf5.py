@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import InputError
-from .containers import (
+from .containerbase import (
     MAX_MATRIX_CHANNELS,
     Found,
     equal_lengths,

@@ -58,12 +58,12 @@ from .meta import (
     validate_meta,
     write_log,
 )
+from .rawtable import RawTable
 from .site import site_from_profile
 from .tables import (
     NULL_VALUES,
     RANGE_BYTES,
     STREAM_MIN_BYTES,
-    RawTable,
     _column_to_float,
     _source_name,
     column_names,

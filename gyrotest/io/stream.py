@@ -39,7 +39,7 @@ from ..core.angle import CHUNK, AngleSeries
 from ..core.data import Gap, GyroConstants, Timing
 from ..core.errors import AnalysisError, InputError
 from .health import MAX_ABS, overflow_mask
-from .tables import RawTable
+from .rawtable import RawTable
 
 __all__ = ["BATCH_ROWS", "STREAM_MIN_ROWS", "StreamedLog", "stream_log"]
 

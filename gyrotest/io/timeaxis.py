@@ -13,7 +13,8 @@ import pyarrow as pa
 from ..core.data import Gap, Timing
 from ..core.errors import InputError
 from ..core.units import factor
-from .tables import RawTable, _column_to_float
+from .rawtable import RawTable
+from .tables import _column_to_float
 
 GAP_FACTOR = 1.5  # an interval longer than this many nominal intervals is a gap
 JITTER_WARN = 0.01  # relative std of the interval above which sampling is called irregular

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ..core.errors import OptionError
-from ._inputs import as_logs, read_log_from, seconds, split_read_options, text_list
+from ..io.inputs import as_logs, read_log_from, seconds, split_read_options, text_list
 from .results import AllanResult, BiasResult, ScaleFactorResult
 
 __all__ = ["allan", "bias", "read", "scale_factor"]
@@ -124,9 +124,9 @@ def _read_for(data, where: str, profile, opts, specs=None, **kw) -> list:
     term needs names the term (as the commands do)."""
     if not specs:
         return as_logs(data, where, profile=profile, opts=opts, **kw)
-    from ..envmodel.prepare import load_for_terms
+    from ..envmodel.prepare import naming_terms
 
-    return load_for_terms(lambda: as_logs(data, where, profile=profile, opts=opts, **kw),
+    return naming_terms(lambda: as_logs(data, where, profile=profile, opts=opts, **kw),
                           specs)
 
 

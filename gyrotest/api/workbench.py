@@ -13,7 +13,7 @@ import os
 from collections.abc import Callable, Sequence
 
 from ..core.errors import InputError, OptionError
-from ._inputs import as_profile, is_log, read_log_from, split_read_options
+from ..io.inputs import as_profile, is_log, read_log_from, split_read_options
 from .analyses import _env_model, _read_for
 from .results import CompensationResult, MagResult, ModelDiagnosis, ModelFit, ThermalResult
 
@@ -32,7 +32,7 @@ def read_reference(reference, profile=None, opts: dict | None = None):
         return reference
     import dataclasses
 
-    from ._inputs import ingest_overrides
+    from ..io.inputs import ingest_overrides
 
     try:
         prof = as_profile(profile)
@@ -223,7 +223,7 @@ def mag_fit(data, *, with_terms: str | None = None, settle: float | str = "10s",
     """
     opts = split_read_options(dict(read_options), "mag_fit")
     from ..envmodel.domain import analyse_mag, mag_terms
-    from ._inputs import seconds
+    from ..io.inputs import seconds
 
     _, specs = mag_terms(with_terms)
     settle_s, dwell_s = seconds(settle, "settle"), seconds(min_dwell, "min_dwell")

@@ -15,7 +15,7 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * the commands' analyses from a loaded log and their options: :func:`fit_log` (``model
   fit``), :func:`diagnose_log` (``model diagnose``), :func:`analyse_thermal`
   (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.prepare` holds the shared
-  steps (:func:`load_for_terms`, :func:`prepare_log`, :func:`collect_terms`);
+  steps (:func:`naming_terms`, :func:`prepare_log`, :func:`collect_terms`);
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
 
@@ -42,7 +42,7 @@ from .fit import (
 )
 from .history import append_history, load_history
 from .model import EnvModel
-from .prepare import collect_terms, load_for_terms, prepare_log
+from .prepare import collect_terms, naming_terms, prepare_log
 from .selection import Candidate
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 from .workbench import Diagnosis, diagnose, diagnose_log
@@ -51,5 +51,5 @@ __all__ = ["EFFECTS", "Candidate", "CompensationResult", "Diagnosis", "EnvFrame"
            "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalAnalysis",
            "ThermalResult", "WorkData", "analyse_mag", "analyse_thermal", "append_history",
            "choose_resolution", "choose_smoothing", "collect_terms", "compensate", "diagnose",
-           "diagnose_log", "fit_log", "fit_model", "load_for_terms", "load_history", "mag_fit",
+           "diagnose_log", "fit_log", "fit_model", "naming_terms", "load_history", "mag_fit",
            "parse_terms", "prepare", "prepare_log", "thermal_fit", "thermal_fit_setpoints"]

@@ -519,7 +519,7 @@ THERMAL_TERMS = ("T", "dTdt")
 
 def thermal_terms() -> list[TermSpec]:
     """The term specs of :data:`THERMAL_TERMS` (for
-    :func:`gyrotest.envmodel.prepare.load_for_terms`)."""
+    :func:`gyrotest.envmodel.prepare.naming_terms`)."""
     return parse_terms(list(THERMAL_TERMS))
 
 

@@ -4,8 +4,8 @@
 spec-sheet report, which runs the same analyses) share these steps:
 
 * :func:`collect_terms` -- the ``--terms`` / ``--term NAME:EXPR`` texts as term specs;
-* :func:`load_for_terms` -- read a log; when ingest rejects a channel a term needs, the error
-  names the term(s) as well;
+* :func:`naming_terms` -- run a log reader; when ingest rejects a channel a term needs, the
+  error names the term(s) as well;
 * :func:`prepare_log` -- the ``--skip`` warm-up trim and :func:`gyrotest.envmodel.fit.prepare`
   with the working-resolution options as typed (``auto`` or a duration); a log too short for
   the model names the terms.
@@ -21,7 +21,7 @@ from ..core.units import format_duration, parse_duration
 from .fit import WorkData, file_provenance, prepare
 from .terms import TermSpec, parse_terms
 
-__all__ = ["collect_terms", "duration_or_auto", "load_for_terms", "prepare_log"]
+__all__ = ["collect_terms", "duration_or_auto", "naming_terms", "prepare_log"]
 
 T = TypeVar("T")
 
@@ -45,7 +45,7 @@ _ROLE_WORDS = {"temperature": ("temperature",), "temperature2": ("temperature",)
                "table_rate": ("table", "rate-table"), "extra": ()}
 
 
-def load_for_terms(load: Callable[[], T], specs: Sequence[TermSpec]) -> T:
+def naming_terms(load: Callable[[], T], specs: Sequence[TermSpec]) -> T:
     """``load()`` (a log reader); when it raises an InputError about a channel that one of
     ``specs`` needs, the message starts with the term(s): ``terms T, dTdt: ...``."""
     try:

@@ -14,7 +14,7 @@ The command bodies themselves live in the core (``analyse_bias``, ``analyse_alla
 ``reduce_logs``, ``analyse_thermal``, ``analyse_mag``, ``fit_log``); an adapter only reads
 the campaign's options with the commands' own parsers and calls them. Logs are read once per
 (file, profile, ingest options) through :class:`LogCache`, with the CLI's own ingest path
-(:func:`gyrotest.cli.common.load_log` / ``load_for_terms``).
+(:func:`gyrotest.io.inputs.read_with_options`).
 """
 
 from __future__ import annotations
@@ -93,13 +93,15 @@ class LogCache:
 
     def get(self, path: Path, opts: dict[str, Any], specs: list | None = None):
         """The :class:`~gyrotest.core.data.GyroLog` of ``path`` read with ``opts`` (like the
-        commands: ``load_log``, or ``load_for_terms`` when model terms need channels)."""
+        commands: :func:`~gyrotest.io.inputs.read_with_options`, the errors about a channel a model
+        term needs naming the term, :func:`~gyrotest.envmodel.prepare.naming_terms`)."""
         key = (str(path), tuple(sorted((k, str(v)) for k, v in opts.items())))
         if key not in self._logs:
             t0 = time.perf_counter()
-            from ..cli.common import load_for_terms
+            from ..envmodel.prepare import naming_terms
+            from ..io.inputs import read_with_options
 
-            log = load_for_terms(str(path), opts, specs or [], announce=False)
+            log = naming_terms(lambda: read_with_options(str(path), opts), specs or [])
             self.seconds += time.perf_counter() - t0
             self._logs[key] = log
         return self._logs[key]

@@ -1,6 +1,7 @@
 """What a notebook hands the API, turned into what the analyses take.
 
-Internal (``_``-prefixed module): :func:`gyrotest.read` is the public entry point. A log can be
+:func:`gyrotest.read` is the public entry point; the command line reads its logs through
+:func:`read_with_options`. A log can be
 given as a file path, a :class:`pandas.DataFrame`, a numpy array with its sample interval and
 unit, a simulation (:func:`gyrotest.simulate`) or an already read
 :class:`~gyrotest.core.data.GyroLog`; the ingest options have the command line's names
@@ -13,9 +14,10 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
+from ..core.console import warn
 from ..core.errors import OptionError
 
 #: ingest option -> the key the command line collects it under (``--nan`` is ``nan_policy``)
@@ -206,12 +208,12 @@ def _from_path(path: str, prof, opts: dict, nan_policy: str, stream: bool,
                dead: str = "note"):
     over = ingest_overrides(opts)
     if stream:
-        from ..io.stream import stream_log
+        from .stream import stream_log
 
         log = stream_log(path, profile=prof, overrides=over, nan_policy=nan_policy)
         if log is not None:
             return log
-    from ..io.ingest import read_log
+    from .ingest import read_log
 
     return read_log(path, profile=prof, overrides=over, nan_policy=nan_policy, dead=dead)
 
@@ -221,8 +223,8 @@ def _from_frame(frame, prof, opts: dict, nan_policy: str, source: str):
     import pyarrow as pa
 
     from ..core.profile import merge
-    from ..io.ingest import _naming_file, build_log, resolve_columns
-    from ..io.rawtable import RawTable
+    from .ingest import _naming_file, build_log, resolve_columns
+    from .rawtable import RawTable
 
     if frame.index.name is not None or isinstance(frame.index, pd.DatetimeIndex):
         frame = frame.reset_index()  # a named (time) index is a column like any other
@@ -299,3 +301,65 @@ def text_list(value: str | Sequence[str] | None) -> str | None:
     if value is None or isinstance(value, str):
         return value
     return ",".join(str(v) for v in value)
+
+
+def read_with_options(path: str, opts: dict, *, note: Callable[[str], None] | None = None,
+                      stream: bool = False, dead: str = "error"):
+    """Read one log as a command does, with the ingest options the command line collected
+    (``opts``, under its keys): the findings about the data (a dead or saturated output, a unit
+    option not used) are warnings on stderr (:func:`gyrotest.core.console.warn`), the other
+    notes (the column choices) go to ``note`` when given. ``stream``: a long Parquet log may
+    come back as a :class:`gyrotest.io.stream.StreamedLog` (its angle series only; see that
+    module). ``dead="note"``: a dead or stuck gyro output is a note, not an error."""
+    if not stream or not _parquet(path):  # a streamed log sets its own heap settings
+        from .._runtime import reuse_freed_memory
+
+        reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
+    o = api_read_options(opts)
+    prof = o.pop("profile", None)
+    log = read_log_from(path, profile=prof, opts=split_read_options(o, "read"), stream=stream,
+                        dead=dead)
+    for msg in log.notes:  # a finding about the data (a dead or saturated output) is a warning
+        if msg.startswith("warning: "):
+            warn(f"{log.source}: {msg[len('warning: '):]}")
+        elif note is not None:
+            note(f"{log.source}: {msg}")
+    unused_unit_warning(log, opts)
+    return log
+
+
+def _parquet(path: str) -> bool:
+    """A regular file starting with Parquet's magic (a pipe or device is never opened here:
+    opening a FIFO with no writer would block)."""
+    import stat
+
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return False
+        with open(path, "rb") as fh:
+            return fh.read(4) == b"PAR1"
+    except OSError:
+        return False
+
+
+def api_read_options(opts: dict) -> dict:
+    """The collected ingest options as keyword arguments of :func:`gyrotest.read`."""
+    out = {api: opts[cli] for api, cli in READ_OPTIONS.items() if opts.get(cli) is not None}
+    if opts.get("field_cols_alias"):  # the old spelling --field-cols, still accepted
+        out["field_cols"] = list(out.get("field_cols") or ()) + [opts["field_cols_alias"]]
+    out["profile"] = opts.get("profile")
+    return out
+
+
+def unused_unit_warning(log, opts: dict) -> None:
+    """--rate-unit (or --angle-unit) on a log whose gyro output has no such column is not used:
+    say so rather than leave the user believing it applied."""
+    kind = getattr(getattr(log, "gyro", None), "output_kind", None)
+    if kind is None:
+        return
+    if opts.get("rate_unit") and kind not in ("rate",):
+        warn(f"{log.source}: --rate-unit {opts['rate_unit']} not used: the gyro output is "
+             f"{kind}, not a rate column")
+    if opts.get("angle_unit") and kind not in ("delta-angle", "angle"):
+        warn(f"{log.source}: --angle-unit {opts['angle_unit']} not used: the gyro output is "
+             f"{kind}, not an angle column")

@@ -5,6 +5,7 @@ velocity quantization of every accelerometer axis, from the same joint Allan fit
 
 from __future__ import annotations
 
+from .base import BuilderBase
 from .layout import P, Src, T, _check_table, _fig, _unit, dig
 from .sheet import Section
 
@@ -17,7 +18,7 @@ ACCEL_TERMS = (("N", "velocity random walk VRW", "m/s/√h"),
                ("Q", "velocity quantization Q", "m/s"))
 
 
-class AccelSections:
+class AccelSections(BuilderBase):
     """Mixin of :class:`~gyrotest.specsheet.build.Builder`: the accelerometer section."""
 
     def accelerometers(self, sec: Section) -> Section:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .base import BuilderBase
 from .layout import (
     U_ARW,
     U_DPH,
@@ -30,7 +31,7 @@ def _finite(v) -> bool:
     return isinstance(v, (int, float)) and v == v and abs(v) != float("inf")
 
 
-class DriftSections:
+class DriftSections(BuilderBase):
     """Mixin of :class:`~gyrotest.specsheet.build.Builder`: section 3."""
 
     # ---------------------------------------------------------------- 3 drift

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from . import adapters as ad
+from .base import BuilderBase
 from .layout import (
     U_DPH,
     P,
@@ -20,7 +21,7 @@ from .layout import (
 from .sheet import NOT_TESTED, VERDICT_RULE, Check, Num, Section, fmt_number  # noqa: F401
 
 
-class EnvironmentSections:
+class EnvironmentSections(BuilderBase):
     """Mixin of :class:`~gyrotest.specsheet.build.Builder`: section 4."""
 
     # ---------------------------------------------------------------- 4 environment

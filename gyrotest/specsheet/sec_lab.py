@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import __version__
+from .base import BuilderBase
 from .campaign import LIMITS
 from .layout import (
     P,
@@ -17,7 +18,7 @@ from .layout import (
 from .sheet import NOT_TESTED, Check, Num, Section, fmt_number, verdict_rule  # noqa: F401
 
 
-class LabSections:
+class LabSections(BuilderBase):
     """Mixin of :class:`~gyrotest.specsheet.build.Builder`: conditions, warnings, compliance."""
 
     # ---------------------------------------------------------------- 6 conditions

@@ -139,7 +139,7 @@ def _excursion_lines(out, res, limit: int) -> None:
 
 def _short(res) -> str:
     wd = getattr(res, "wd", None)
-    return getattr(wd, "resolution_short", None) or res.resolution_note
+    return (wd.resolution_short if wd is not None else "") or res.resolution_note
 
 
 def _pm(c) -> str:

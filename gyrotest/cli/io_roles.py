@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import os
+import weakref
 from collections.abc import Callable, Iterable
 
 import click
@@ -117,17 +118,21 @@ def _guarded(cmd_path: str, callback: Callable) -> Callable:
     return run
 
 
+#: the commands whose callbacks are wrapped already
+_GUARDED: weakref.WeakSet[click.Command] = weakref.WeakSet()
+
+
 def guard_commands(cmd: click.Command, path: str | None = None) -> click.Command:
     """Wrap the callbacks of ``cmd`` and of its sub-commands (once)."""
     path = path or cmd.name or ""
-    if getattr(cmd, "_gyrotest_guarded", False):
+    if cmd in _GUARDED:
         return cmd
     if isinstance(cmd, click.Group):
         for name, sub in cmd.commands.items():
             guard_commands(sub, f"{path} {name}")
     elif cmd.callback is not None:
         cmd.callback = _guarded(path, cmd.callback)
-    cmd._gyrotest_guarded = True
+    _GUARDED.add(cmd)
     return cmd
 
 

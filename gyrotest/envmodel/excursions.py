@@ -74,13 +74,7 @@ def describe_interval(frame, refs, t1: float, t2: float, power_on: bool = False)
     inside = (t >= t1) & (t <= t2)
     if not inside.any():
         inside = sel
-    cache = getattr(frame, "_rate_cache", None)
-    if cache is None:
-        cache = {}
-        try:
-            frame._rate_cache = cache
-        except AttributeError:  # pragma: no cover
-            pass
+    cache = frame.rate_cache
     for name, T in list(frame.temperature.items())[:1]:
         if name not in cache:
             cache[name] = temperature_rate(T, frame.dt, refs.smoothing_s, frame.bounds)

@@ -520,10 +520,10 @@ def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None
         A = lk.whiten_diffs(dxy, (X.shape[1] + 1,))
         return gls(A[:, :-1], A[:, -1])[1]
 
-    if not hasattr(wd, "_white_level"):
-        wd._white_level = white_level(wd)
+    if wd.white_n2 is None:
+        wd.white_n2 = white_level(wd)
     return fit_noise(wd, grid, rss, start=start.logits if start is not None else None,
-                     white=wd._white_level or None, extra=extra)
+                     white=wd.white_n2 or None, extra=extra)
 
 
 def bias_variance(p: NoiseParams, duration_s: float) -> float:
@@ -668,7 +668,7 @@ def noise_floor(p: NoiseParams, wd: WorkData) -> st.NoiseFloor:
     N = p.N * 60.0
     plateau = p.B * math.sqrt(2 * math.log(2) / math.pi)
     K = p.K / 60.0
-    t_eff = getattr(wd, "t_eff", wd.resolution_s)
+    t_eff = wd.t_eff if wd.t_eff is not None else wd.resolution_s
     rms = floor_rms(N, plateau, K, t_eff, wd.duration_s)
     basis = ((p.basis or ("the noise model fitted by maximum likelihood with this model "
                           "(white, flicker and random-walk rate noise)"))

@@ -47,6 +47,9 @@ class EnvFrame:
     #: earth-rate component along the IA per sample, deg/h, when the log has a position or
     #: IA-attitude channel and a site latitude (:func:`earth_projection`); else None
     earth_dph: np.ndarray | None = None
+    #: temperature rates per channel (:mod:`gyrotest.envmodel.excursions`), computed on first use
+    rate_cache: dict[str, np.ndarray] = field(default_factory=dict, init=False, repr=False,
+                                              compare=False)
 
     @property
     def n(self) -> int:

@@ -377,13 +377,7 @@ class NoiseFit:
 def acov_for(wd, grid: LikGrid) -> dict[str, np.ndarray]:
     """Unit-parameter component autocovariances of the differenced samples of ``grid``
     (cached on ``wd`` per sample length)."""
-    cache = getattr(wd, "_acov_cache", None)
-    if cache is None:
-        cache = {}
-        try:
-            wd._acov_cache = cache
-        except AttributeError:  # pragma: no cover - frozen objects
-            pass
+    cache = wd.acov_cache
     fr = wd.frame
     from .effects import smoothing_half
 

@@ -285,7 +285,7 @@ class Screen:
             return self._grid
         u0 = np.asarray(nf.logits, float)
         steps = (0.5, 0.0, -2.0, -5.0, -30.0)
-        white = getattr(self.wd, "_white_level", 0.0) or None
+        white = self.wd.white_n2 or None
         X = self.base.fitter.X(self.base.thetas)
         for a in steps:
             for b in steps:

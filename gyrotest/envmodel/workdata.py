@@ -85,6 +85,21 @@ class WorkData:
     #: each filtered channel's measurement noise ({name: SensorNoise},
     #: :mod:`gyrotest.envmodel.sensors`)
     sensor_noise: dict = field(default_factory=dict)
+    #: the working resolution in a few words, for one-line summaries
+    resolution_short: str = ""
+    #: effective averaging time of the smoother and the blocks (s); None: the resolution
+    t_eff: float | None = None
+    #: the white-noise parameter N² ((deg/h)²·s) of the full band
+    #: (:func:`gyrotest.envmodel.likelihood.white_level`), computed on first use
+    white_n2: float | None = field(default=None, init=False, repr=False, compare=False)
+    #: the component autocovariances per sample length
+    #: (:func:`gyrotest.envmodel.likelihood.acov_for`)
+    acov_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _sel_cache: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
+    _starts_cache: np.ndarray | None = field(default=None, init=False, repr=False,
+                                             compare=False)
+    _ids_cache: tuple[np.ndarray, bool] | None = field(default=None, init=False, repr=False,
+                                                       compare=False)
 
     @property
     def nb(self) -> int:
@@ -116,14 +131,14 @@ class WorkData:
 
     @property
     def _sel(self) -> np.ndarray:
-        if not hasattr(self, "_sel_cache"):
+        if self._sel_cache is None:
             self._sel_cache = self.block >= 0
         return self._sel_cache
 
     @property
     def _starts(self) -> np.ndarray:
         """Index (among the selected samples) of the first sample of each block."""
-        if not hasattr(self, "_starts_cache"):
+        if self._starts_cache is None:
             ids, _ = self._ids
             self._starts_cache = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         return self._starts_cache
@@ -131,7 +146,7 @@ class WorkData:
     @property
     def _ids(self) -> tuple[np.ndarray, bool]:
         """The block id of each selected fine sample, and whether every sample is selected."""
-        if not hasattr(self, "_ids_cache"):
+        if self._ids_cache is None:
             sel = self._sel
             self._ids_cache = (self.block[sel], bool(sel.all()))
         return self._ids_cache

@@ -162,7 +162,7 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             raise InputError(f"{raw.source}: invalid time value {v[i]!r} in column {col!r}, "
                              f"{raw.where(i)}; every row needs a finite time")
     first = float(ints[0]) if ints is not None else float(v[0])
-    notes: list[str] = []
+    notes = []
     start = None
     if unit is None:
         step = _median_step(ints.astype(np.float64) if ints is not None and v is None else v)

@@ -31,7 +31,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -67,6 +67,9 @@ from .spectral import (
     welch_psd,
 )
 from .warnings import KrobkaWarning, krobka_checks, trend_needs_hadamard
+
+if TYPE_CHECKING:
+    from ..io.stream import StreamedLog
 
 #: samples of a streamed log's rate rebuilt for the axis cross-correlation
 STREAM_PREFIX = 1 << 24
@@ -910,17 +913,18 @@ def analyse_allan(
 
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:
+            slog = cast("StreamedLog", log)
             spike = run_beside(_outliers_streamed, log, name)
             rep = None
             try:
                 res = _analyse_axis(name, None, log.tau0, segs, in_kind, in_note, quantum,
-                                    det_info=None, series=log.series[name],
-                                    means=log.means[name], **common)
+                                    det_info=None, series=slog.series[name],
+                                    means=slog.means[name], **common)
             finally:  # its error first, as in the serial order
                 out_info, out_warn, rep = spike.result()
             if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
                 _spike_guard(res, rep, _clean_dev_streamed(
-                    res, log.series[name], log.means[name], segs, rep, confidence,
+                    res, slog.series[name], slog.means[name], segs, rep, confidence,
                     stop_ratio))
         else:
             is_acc = name in acc_axes and name not in log.rates

@@ -1126,10 +1126,10 @@ def fit_noise_model(
             f"only {int(np.count_nonzero(used))} τ value(s) with EDF ≥ {min_edf:g} to fit "
             f"{n_par} parameter(s) ({','.join(keys)}): record a longer log, use a denser τ grid "
             "(--taus 10/decade) or fewer --terms")
-    dropped = ok & ~used & (edf < min_edf)
-    if np.any(dropped):
+    low_edf = ok & ~used & (edf < min_edf)
+    if np.any(low_edf):
         notes.append(
-            f"fit stopped at τ = {tau[used].max():.4g} s: {int(np.count_nonzero(dropped))} longer "
+            f"fit stopped at τ = {tau[used].max():.4g} s: {int(np.count_nonzero(low_edf))} longer "
             f"τ have EDF < {min_edf:g} (too few clusters: the confidence interval blows up) and are shown only")
     tu, xu, nuu = tau[used], sigma[used] ** 2, edf[used]
     tau0 = float(tau0) if tau0 else float(tu.min())

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -117,7 +118,7 @@ def split_by_quantity(items, path):
     return [(gyro, str(p)), (acc, str(p.with_name(p.stem + "_accel" + p.suffix)))]
 
 
-def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
+def plot_allan(items: Sequence[tuple[str, Any]], path, *, labels: Sequence[str] | None = None,
                title: str | None = None, show_components: bool | None = None,
                size: tuple[float, float] = ALLAN_SIZE, unit=None):
     """Write :func:`figure_allan` to ``path`` (.png/.svg/.pdf); returns the path."""
@@ -126,7 +127,7 @@ def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[st
                        path)
 
 
-def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+def figure_allan(items: Sequence[tuple[str, Any]], *, labels: Sequence[str] | None = None,
                  title: str | None = None, show_components: bool | None = None,
                  size: tuple[float, float] = ALLAN_SIZE, unit=None, k: float = 1.0):
     """Allan deviation figure (module docstring), ``size`` inches. ``items`` = [(source,
@@ -240,13 +241,13 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     return fig
 
 
-def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
+def plot_psd(items: Sequence[tuple[str, Any]], path, *, labels: Sequence[str] | None = None,
              size: tuple[float, float] = PSD_SIZE, unit=None):
     """Write :func:`figure_psd` to ``path`` (.png/.svg/.pdf); returns the path."""
     return save_figure(figure_psd(items, labels=labels, size=size, unit=unit), path)
 
 
-def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+def figure_psd(items: Sequence[tuple[str, Any]], *, labels: Sequence[str] | None = None,
                size: tuple[float, float] = PSD_SIZE, unit=None):
     """Welch PSD with the fitted model PSD and detected lines, plus the autocorrelation
     (module docstring), ``size`` inches. ``items`` = [(source, AxisAnalysis), …]. Returns the

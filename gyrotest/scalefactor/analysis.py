@@ -559,21 +559,21 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
     li = LockIn(checked=lock_in)
     if lock_in:
         locked, _ = detect_lock_in(P_all.subset(keep))
-        full = np.zeros(P_all.n, bool)
-        full[np.flatnonzero(keep)[locked]] = True
-        if full.any():
+        locked_all = np.zeros(P_all.n, bool)
+        locked_all[np.flatnonzero(keep)[locked]] = True
+        if locked_all.any():
             li.detected = True
-            rates = sorted(set(np.round(np.abs(P_all.table[full]) / DPS, 6).tolist()))
+            rates = sorted(set(np.round(np.abs(P_all.table[locked_all]) / DPS, 6).tolist()))
             li.locked_rates_dps = rates
             li.dead_band_below_dps = max(rates)
-            free = np.abs(P_all.table[keep & ~full & (P_all.table != 0)]) / DPS
+            free = np.abs(P_all.table[keep & ~locked_all & (P_all.table != 0)]) / DPS
             above = free[free > max(rates)]
             li.dead_band_above_dps = float(np.min(above)) if len(above) else math.nan
-            for i in np.flatnonzero(full):
+            for i in np.flatnonzero(locked_all):
                 plist[i].locked = True
             notes.append(f"lock-in: output collapsed at |rate| ≤ {max(rates):g} deg/s "
-                         f"({int(full.sum())} point(s)); excluded from the fits")
-            keep &= ~full
+                         f"({int(locked_all.sum())} point(s)); excluded from the fits")
+            keep &= ~locked_all
             _check_runs(P_all.subset(keep), runs, True)
     locked_all = np.array([p.locked for p in plist], dtype=bool)
     P = P_all.subset(keep)

@@ -26,7 +26,7 @@ from .writer import _toml_key, _toml_value
 
 MODEL = "GT-FOG-100"
 #: spec limits written into every lot campaign (keys of docs/campaign.md)
-LIMITS = {
+LIMITS: dict[str, dict[str, float]] = {
     "bias": {"bias_dph": 3.0},
     "allan": {"N": 0.012, "B": 0.1},
     "scale_factor": {"scale_factor_error_ppm": 300, "linearity_max_ppm_fs": 20,
@@ -120,7 +120,7 @@ def _campaign_toml(serial: str, day: str, report_id: str, static: str, table: st
              "[gyro]", f'model = "{MODEL}"', f'serial = "{serial}"',
              "nominal_scale_factor = 0.2", 'scale_factor_unit = "arcsec/pulse"', "",
              "[site]", "latitude_deg = 48.137", ""]
-    tests = {
+    tests: dict[str, dict[str, Any]] = {
         "bias": {"logs": [static], "profile": static.rsplit(".", 1)[0] + ".profile.toml",
                  "skip": "5min"},
         "allan": {"log": static, "profile": static.rsplit(".", 1)[0] + ".profile.toml",

@@ -37,7 +37,9 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import AnalysisError
-from .fit import LINEAR_KEYS, NoiseFit, fit_noise_model
+from .fit import fit_noise_model
+from .fitmodel import LINEAR_KEYS
+from .fitresult import NoiseFit
 
 __all__ = ["Candidate", "Diagnosis", "MisfitRegion", "diagnose", "misfit_regions"]
 

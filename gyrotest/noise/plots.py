@@ -72,7 +72,7 @@ def _components(ax, fit, tf, unit=None, k: float = 1.0) -> None:
     """The fitted model's terms as dashed curves (bounds dotted); ``k``: the legend's ± is
     k·1σ."""
     from ..core.display import DEFAULT, term_text
-    from .fit import _basis
+    from .fitmodel import _basis
     from .impact import _coef_from_value
 
     u = unit or DEFAULT

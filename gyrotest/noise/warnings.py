@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from .fit import NoiseFit
+from .fitresult import NoiseFit
 
 __all__ = ["KrobkaWarning", "krobka_checks", "local_slopes", "CODES"]
 

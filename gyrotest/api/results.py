@@ -1,7 +1,7 @@
 """The result objects of the Python API.
 
 Each result holds the analysis object its command renders (``.core``: an
-:class:`~gyrotest.noise.analysis.AllanAnalysis`, a :class:`~gyrotest.staticbias.multiaxis.BiasAxes`,
+:class:`~gyrotest.noise.allanresult.AllanAnalysis`, a :class:`~gyrotest.staticbias.multiaxis.BiasAxes`,
 an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attributes
 (``res.axes``, ``res.coefficients``), and adds the same four things to every kind:
 
@@ -130,7 +130,7 @@ def _frame(rows: list[dict], columns: list[str] | None = None):
 class AllanResult(Result):
     """The Allan analysis of one or more logs (:func:`gyrotest.allan`).
 
-    ``res.logs`` holds one :class:`~gyrotest.noise.analysis.AllanAnalysis` per log; the
+    ``res.logs`` holds one :class:`~gyrotest.noise.allanresult.AllanAnalysis` per log; the
     attributes of the first (``axes``, ``tau0``, ``source`` ...) are read through. Noise
     terms: :meth:`term`; the deviation table: :meth:`to_frame`; every fitted term:
     :meth:`terms`.
@@ -141,7 +141,7 @@ class AllanResult(Result):
 
     @property
     def logs(self) -> list:
-        """One :class:`~gyrotest.noise.analysis.AllanAnalysis` per log, in the order given."""
+        """One :class:`~gyrotest.noise.allanresult.AllanAnalysis` per log, in the order given."""
         return self.core
 
     def __getattr__(self, name: str) -> Any:
@@ -179,7 +179,7 @@ class AllanResult(Result):
         dict
             ``{"analysis": "allan", "logs": [...], "files": {...}}``.
         """
-        from ..noise.analysis import allan_document
+        from ..noise.allanresult import allan_document
 
         return allan_document(self.core, csv=csv, plot=plot, psd=psd)
 

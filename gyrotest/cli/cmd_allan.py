@@ -401,7 +401,7 @@ def _fit_table(f, title: str, unit=DEFAULT_UNIT):
 
 
 def _render_fit(a, unit=DEFAULT_UNIT) -> None:
-    from ..noise.analysis import FIT_WEIGHTS
+    from ..noise.allanresult import FIT_WEIGHTS
 
     c = console()
     f = a.fit

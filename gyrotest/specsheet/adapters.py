@@ -175,7 +175,8 @@ def run_bias(test: Test, campaign: Campaign, cache: LogCache, key: str = "bias")
 def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     """``gyrotest allan LOG --skip ... --terms ... --vehicle-rate ... --horizon ...``
     (cli/cmd_allan.py): :func:`gyrotest.noise.analysis.analyse_allan`."""
-    from ..noise.analysis import allan_document, analyse_allan, parse_taus
+    from ..noise.allanresult import allan_document
+    from ..noise.analysis import analyse_allan, parse_taus
     from ..noise.fit import MIN_EDF, parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
 
@@ -228,7 +229,8 @@ def run_accel(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     axes (:func:`gyrotest.io.accel.accel_channels`; IEEE Std 1293 terms). An error when the log
     has none."""
     from ..io.accel import accel_channels
-    from ..noise.analysis import allan_document, analyse_allan, parse_taus
+    from ..noise.allanresult import allan_document
+    from ..noise.analysis import analyse_allan, parse_taus
     from ..noise.fit import MIN_EDF, parse_terms
 
     opts, iargv = ingest_opts(test, campaign)

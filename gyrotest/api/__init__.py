@@ -6,7 +6,7 @@ re-exported lazily by :mod:`gyrotest`; this package and its modules are internal
   :func:`compensate`;
 * :mod:`.campaign` -- :func:`report`, :func:`simulate`;
 * :mod:`.results` -- the result objects (``to_dict``, ``to_frame``, ``plot``,
-  ``_repr_html_``).
+  ``_repr_html_``); :mod:`.modelresults` those of the drift-model functions.
 
 Paths, frames, arrays and simulations become logs in :mod:`gyrotest.io.inputs`.
 """

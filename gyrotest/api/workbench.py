@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 from ..core.errors import InputError, OptionError
 from ..io.inputs import as_profile, is_log, read_log_from, split_read_options
 from .analyses import _env_model, _read_for
-from .results import CompensationResult, MagResult, ModelDiagnosis, ModelFit, ThermalResult
+from .modelresults import CompensationResult, MagResult, ModelDiagnosis, ModelFit, ThermalResult
 
 __all__ = ["Model", "compensate", "mag_fit", "read_reference", "thermal_fit"]
 

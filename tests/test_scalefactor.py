@@ -28,11 +28,13 @@ from gyrotest.scalefactor import (
     snap_rates,
     write_points_csv,
 )
+from gyrotest.scalefactor.characteristics import (
+    asymmetry_common_intercept,
+    asymmetry_separate_lines,
+)
 from gyrotest.scalefactor.fit import (
     Points,
     adler,
-    asymmetry_common_intercept,
-    asymmetry_separate_lines,
     ieee_line,
     select_model,
 )

@@ -34,7 +34,6 @@ from ..core.errors import InputError
 from .analysis import (
     ASYMMETRY_SKIPPED,
     PULSE_KINDS,
-    ScaleFactorResult,
     analyse,
     scale_factor_from_slope,
     sf_unit,
@@ -51,6 +50,7 @@ from .plateaus import (
 )
 from .points import read_points_table, write_points_csv
 from .settling import SettlingFound, find_settling
+from .sfresult import ScaleFactorResult
 
 __all__ = [
     "ASYMMETRY_SKIPPED", "PULSE_KINDS", "Plateau", "Points", "RunPlateaus", "ScaleFactorResult",

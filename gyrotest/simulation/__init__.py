@@ -205,7 +205,8 @@ that tells :func:`gyrotest.io.ingest.read_log` how to read the file).
 from __future__ import annotations
 
 from .core import SimResult, SimRun, simulate
-from .scenario import ANTONOVA_MATVEEV, Scenario, load_scenario, parse_scenario
+from .scenario import ANTONOVA_MATVEEV, load_scenario, parse_scenario
+from .specs import Scenario
 from .writer import WriteResult, profile_toml, sidecar_paths, write_log
 
 __all__ = [

@@ -34,7 +34,8 @@ from ..core.units import rate_factor
 from ..noise.terms import TERMS
 from . import environment as env
 from . import noise as gen
-from .scenario import Scenario, load_scenario
+from .scenario import load_scenario
+from .specs import Scenario
 from .truth import H0_UT, _summary, _truth
 
 MAX_SAMPLES = 400_000_000

@@ -14,7 +14,7 @@ import numpy as np
 from scipy import signal
 
 from ..core.earth import earth_rate_component
-from .scenario import (
+from .specs import (
     FieldSpec,
     HelmholtzSpec,
     PositionSpec,

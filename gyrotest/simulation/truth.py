@@ -13,7 +13,7 @@ import numpy as np
 from ..core.earth import OMEGA_E_DPH
 from ..noise.terms import quantization_from_scale_factor
 from . import environment as env
-from .scenario import Scenario
+from .specs import Scenario
 
 if TYPE_CHECKING:
     from .core import SimRun

@@ -8,7 +8,7 @@ how often the bound holds the true N.
 Rules compared:
 
 * current: N_fit > N_upper, the 95 % upper bound of N from the upper confidence limits of σ̂
-  (family-wise over the τ; :func:`gyrotest.noise.fit.n_upper_bound`);
+  (family-wise over the τ; :func:`gyrotest.noise.noisefit.n_upper_bound`);
 * former (before issue 58): one τ beyond the Bonferroni level Φ⁻¹(1 − 0.05/(2n)) in CI units,
   or two adjacent τ beyond 3 CI, with N_upper = min σ̂√τ/60 read on the estimates.
 

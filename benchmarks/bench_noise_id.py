@@ -32,7 +32,7 @@ sys.path.insert(0, str(REPO))
 from gyrotest.core.angle import angle_series  # noqa: E402
 from gyrotest.noise.deviations import compute_deviation  # noqa: E402
 from gyrotest.noise.edf import identify_noise_pair  # noqa: E402
-from gyrotest.noise.fit import fit_deviation  # noqa: E402
+from gyrotest.noise.noisefit import fit_deviation  # noqa: E402
 
 ALPHAS = (2, 1, 0, -1, -2)
 AVERAGES = (10, 20, 28, 100)

@@ -44,7 +44,7 @@ def page_one_text(sheet) -> str:
     """What page 1 says, as text: the title, the title block (with the overall verdict) and
     section 1 (the model equation with the fitted coefficients), in the Markdown renderer's
     words -- the same numbers the PDF prints, independent of fonts and renderers."""
-    from gyrotest.specsheet.render_md import render_markdown
+    from gyrotest.specsheet.markdown import render_markdown
 
     first = dataclasses.replace(sheet, sections=sheet.sections[:1])
     return render_markdown(first).strip()
@@ -88,7 +88,7 @@ def write_image(out: Path = IMAGE) -> dict[str, str]:
     from PIL import Image
     from PIL.PngImagePlugin import PngInfo
 
-    from gyrotest.specsheet.render_pdf import render_pdf
+    from gyrotest.specsheet.pdf import render_pdf
 
     sheet = build_sheet()
     pdf, pages = render_pdf(sheet)
@@ -126,7 +126,7 @@ def differences(stored: dict[str, str], now: dict[str, str]) -> list[str]:
 
 def main() -> int:
     if "--check" in sys.argv[1:]:
-        from gyrotest.specsheet.render_pdf import render_pdf
+        from gyrotest.specsheet.pdf import render_pdf
 
         sheet = build_sheet()
         _, pages = render_pdf(sheet)

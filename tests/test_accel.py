@@ -17,7 +17,7 @@ import yaml
 from test_noise_fit import table_from_model
 
 from gyrotest.io.accel import accel_channels, is_accel_name
-from gyrotest.noise.fit import fit_noise_model
+from gyrotest.noise.noisefit import fit_noise_model
 from gyrotest.noise.resolution import output_resolution
 
 from cliutil import run_cli

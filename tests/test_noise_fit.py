@@ -11,7 +11,7 @@ import pytest
 from gyrotest.core.errors import AnalysisError, InputError
 from gyrotest.noise.deviations import compute_deviation
 from gyrotest.noise.edf import chi2_interval
-from gyrotest.noise.fit import (
+from gyrotest.noise.noisefit import (
     ci_residuals,
     conversions,
     estimate_correlation,

@@ -409,7 +409,7 @@ def test_expired_calibration_is_flagged(tmp_path):
 
 def test_pdf_creation_date(tmp_path, monkeypatch):
     from gyrotest.specsheet import build_sheet, load_campaign
-    from gyrotest.specsheet.render_pdf import render_pdf
+    from gyrotest.specsheet.pdf import render_pdf
 
     camp = _mini_campaign(tmp_path, BIAS)
     sheet = build_sheet(load_campaign(camp), {}, figures=False)

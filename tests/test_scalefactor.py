@@ -32,18 +32,18 @@ from gyrotest.scalefactor.characteristics import (
     asymmetry_common_intercept,
     asymmetry_separate_lines,
 )
-from gyrotest.scalefactor.fit import (
-    Points,
-    adler,
-    ieee_line,
-    select_model,
-)
 from gyrotest.scalefactor.plateaus import (
     allan_stderr,
     assign_sweeps,
     constant_runs,
     detect_steps,
     mean_stderr,
+)
+from gyrotest.scalefactor.tablefit import (
+    Points,
+    adler,
+    ieee_line,
+    select_model,
 )
 
 DPS = 3600.0

@@ -45,7 +45,7 @@ def sheet():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(figures, "_png_from_fig", capture)
         sh = make_figures.build_sheet()
-    from gyrotest.specsheet.render_pdf import render_pdf
+    from gyrotest.specsheet.pdf import render_pdf
 
     _, pages = render_pdf(sh)
     return sh, pages, [t for v in legends.values() for t in v]
@@ -89,7 +89,7 @@ def sf_outputs(tmp_path_factory):
 
 def test_each_f_of_i_term_has_one_name_and_one_formula_everywhere(sf_outputs, sheet):
     from gyrotest.export.envlut import ascii_text
-    from gyrotest.scalefactor.fit import OUTPUT_POWER_NOTE, TERM_LABELS, TERMS
+    from gyrotest.scalefactor.tablefit import OUTPUT_POWER_NOTE, TERM_LABELS, TERMS
 
     terminal, doc, header, csv_text = sf_outputs
     coefs = doc["nonlinearity_model"]["coefficients"]
@@ -171,7 +171,7 @@ def test_json_uncertainty_is_null_where_the_sheet_says_not_evaluated(sheet):
 
 
 def test_no_table_cell_breaks_inside_a_word(sheet):
-    from gyrotest.specsheet.render_pdf import (
+    from gyrotest.specsheet.pdf import (
         CELL_PAD,
         VERDICT_COLOURS,
         _register_fonts,

@@ -137,9 +137,9 @@ def allan_settings(*, dev="oadev", taus="10/decade", stop_ratio=None, terms="Q,N
     """:func:`allan`'s options as :func:`gyrotest.noise.analysis.analyse_allan` takes them
     (checked: an InputError names the option)."""
     from ..noise.analysis import parse_detrend, parse_taus
-    from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
     from ..noise.kinds import DEVIATION_KINDS, MIN_EDF
+    from ..noise.noisefit import parse_terms
 
     if dev not in DEVIATION_KINDS:
         raise OptionError(f"dev: unknown deviation {dev!r}", fix="use one of "

@@ -408,7 +408,7 @@ class ScaleFactorResult(Result):
         return out
 
     def _figure(self):
-        from ..scalefactor.plot import figure_scale_factor
+        from ..scalefactor.plots import figure_scale_factor
 
         return figure_scale_factor(self.core, logs=self._meta.get("logs"))
 
@@ -451,13 +451,13 @@ class Report(Result):
 
     def to_markdown(self) -> str:
         """The sheet as Markdown (as ``gyrotest report`` prints it)."""
-        from ..specsheet.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         return render_markdown(self.core, None)
 
     def to_html(self) -> str:
         """The sheet as one self-contained HTML document."""
-        from ..specsheet.render_html import render_html
+        from ..specsheet.html import render_html
 
         return render_html(self.core)
 
@@ -475,7 +475,7 @@ class Report(Result):
             The number of pages.
         """
         from ..core.output import write_rendered
-        from ..specsheet.render_pdf import render_pdf
+        from ..specsheet.pdf import render_pdf
 
         data, pages = render_pdf(self.core)
         write_rendered(pdf=path, pdf_bytes=data)

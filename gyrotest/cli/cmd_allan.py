@@ -153,8 +153,8 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     from ..api.analyses import allan
     from ..api.results import AllanResult
     from ..noise.analysis import STREAM_DEVS, parse_detrend, parse_taus
-    from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
+    from ..noise.noisefit import parse_terms
 
     unit = resolve_display_unit(display_unit, ingest_opts)
     parse_horizon(horizon)

@@ -90,17 +90,17 @@ def command(campaigns, jobs, scheduler, pdf_path, html_path, md_path, no_figures
     pdf_bytes = html_text = md_text = None
     fig_files = {}
     if pdf:
-        from ..specsheet.render_pdf import render_pdf
+        from ..specsheet.pdf import render_pdf
 
         pdf_bytes, pages = render_pdf(sheet)
         outputs.append(f"{pdf} ({pages} pages)")
     if htm:
-        from ..specsheet.render_html import render_html
+        from ..specsheet.html import render_html
 
         html_text = render_html(sheet)
         outputs.append(str(htm))
     if md or not (pdf or htm or as_json):
-        from ..specsheet.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         links = None
         if md is not None:

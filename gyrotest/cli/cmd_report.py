@@ -159,19 +159,19 @@ def command(campaign, variant, template, init_dir, pdf_path, html_path, md_path,
     outputs = []
     pdf_bytes = None
     if pdf:
-        from ..specsheet.render_pdf import render_pdf
+        from ..specsheet.pdf import render_pdf
 
         pdf_bytes, pages = render_pdf(sheet)
         outputs.append(f"{pdf} ({pages} pages)")
     html_text = None
     if htm:
-        from ..specsheet.render_html import render_html
+        from ..specsheet.html import render_html
 
         html_text = render_html(sheet)
         outputs.append(str(htm))
     md_text = None
     if md or not (pdf or htm or as_json):
-        from ..specsheet.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         links = None
         fig_files = {}

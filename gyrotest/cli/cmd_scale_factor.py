@@ -147,7 +147,7 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
                               rates=rate_list, snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
     if plot_path:
-        from ..scalefactor.plot import plot_scale_factor
+        from ..scalefactor.plots import plot_scale_factor
 
         plot_scale_factor(result.core, plot_path, logs=loaded or None)
     if points_path:
@@ -360,7 +360,7 @@ def _render(res, plot_path, points_path) -> None:
                    kept)
     c.print(ht)
     if res.model.coefficients:
-        from ..scalefactor.fit import OUTPUT_POWER_NOTE
+        from ..scalefactor.tablefit import OUTPUT_POWER_NOTE
 
         ct = Table(title=f"f(I) of ε_K, ppm; {OUTPUT_POWER_NOTE}", title_justify="left")
         for col in ("term", "f(I)", "coefficient, ppm", "kept"):

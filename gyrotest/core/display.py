@@ -27,7 +27,7 @@ PSD ((deg/h)²/Hz)         (<rate>)²/Hz          x · f²
 The deg/h family keeps the IEEE 952 reporting units unchanged (N deg/√h, K deg/h/√h,
 R deg/h/h, Q arcsec). Sources: IEEE Std 952-1997 Annex C (the units of N, K, R, Q); the
 Kalibr IMU noise model (ethz-asl/kalibr wiki "IMU-Noise-Model": noise density in rad/s/√Hz,
-random walk in rad/s²/√Hz = rad/s/√s), as in :func:`gyrotest.noise.fit.conversions`.
+random walk in rad/s²/√Hz = rad/s/√s), as in :func:`gyrotest.noise.noisefit.conversions`.
 """
 
 from __future__ import annotations
@@ -159,7 +159,7 @@ def parse_display_unit(text: str | None, *, what: str = "--unit") -> DisplayUnit
 
 
 def term_text(term, unit: DisplayUnit = DEFAULT, digits: int = 3, k: float = 1.0) -> str:
-    """A fitted noise term (:class:`gyrotest.noise.fit.FittedTerm`-like: ``main``, ``params``,
+    """A fitted noise term (:class:`gyrotest.noise.noisefit.FittedTerm`-like: ``main``, ``params``,
     ``sigma``, ``upper``, ``units``, ``status``, ``value``) as text in ``unit``, e.g.
     ``N = 0.0501 ± 0.0003 deg/s/√Hz`` or ``R ≤ 2.1e-10 deg/s²``; the deg/h family gives the
     term's own text. ``k``: the ± is k·1σ (the expanded uncertainty U of a sheet whose tables

@@ -14,10 +14,10 @@ import numpy as np
 
 from .devcore import DeviationResult
 from .diagnose import Diagnosis
-from .fit import (
+from .impact import ImpactResult
+from .noisefit import (
     NoiseFit,
 )
-from .impact import ImpactResult
 from .quantity import RATE, quantity_of
 from .spectral import (
     Autocorrelation,
@@ -70,7 +70,7 @@ class AxisAnalysis:
         """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
         sigma, sigma_hi (Stable32's interval: the identified α and its EDF), with --ci
         conservative also alpha_ci, edf_ci, edf_ci_rule, sigma_lo_ci, sigma_hi_ci
-        (:func:`gyrotest.noise.fit.robust_edf_rules`), plus model σ and the residual in CI
+        (:func:`gyrotest.noise.noisefit.robust_edf_rules`), plus model σ and the residual in CI
         units when the table is the fitted one."""
         d = self.dev
         out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),

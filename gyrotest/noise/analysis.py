@@ -7,7 +7,7 @@ for JSON) without printing anything. Per rate axis it computes
 1. the deviation table (default overlapping Allan deviation, IEEE 952 Annex C; NIST SP1065
    eq. 11) with noise identification, EDF and χ² confidence interval per τ
    (:mod:`gyrotest.noise.deviations`), gap-aware over the log's contiguous segments;
-2. the joint noise-model fit (:mod:`gyrotest.noise.fit`), the classic slope-line read-offs
+2. the joint noise-model fit (:mod:`gyrotest.noise.noisefit`), the classic slope-line read-offs
    and Krobka's bounds, and unit conversions for other tools;
 3. model vs measurement and the diagnosis of missing terms (:mod:`gyrotest.noise.diagnose`),
    helped by the Welch PSD lines and the autocorrelation (:mod:`gyrotest.noise.spectral`);
@@ -41,7 +41,8 @@ from .allanresult import CI_TEXT, AllanAnalysis, AxisAnalysis, allan_document
 from .devcore import DeviationResult
 from .deviations import DEVIATION_KINDS, compute_deviation
 from .diagnose import diagnose
-from .fit import (
+from .impact import attitude_impact
+from .noisefit import (
     MIN_EDF,
     conversions,
     fit_alpha,
@@ -51,7 +52,6 @@ from .fit import (
     slope_readoffs,
     table_quantity,
 )
-from .impact import attitude_impact
 from .quantity import ACCEL
 from .spectral import (
     SpectralLine,
@@ -349,7 +349,7 @@ def analyse_allan(
         mtotdev, akdev, hkdev. The noise model is fitted to it when it is Allan-type (oadev,
         adev, totdev, akdev), otherwise to an OADEV computed on the same τ (noted).
     taus : ``octave``, ``decade``, ``N/decade`` (default 10/decade), ``all`` or a list of τ (s).
-    terms : noise terms to fit (default Q,N,B,K,R; see :func:`gyrotest.noise.fit.parse_terms`).
+    terms : noise terms to fit (default Q,N,B,K,R; see :func:`gyrotest.noise.noisefit.parse_terms`).
     vehicle_rates : strapdown vehicle rates in rad/s for the impact prediction.
     axes : rate axes to analyse (default all).
     confidence : of the χ² intervals (0.683 as Stable32).

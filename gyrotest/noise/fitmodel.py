@@ -1,7 +1,7 @@
-"""The model the joint noise fit (:mod:`.fit`) fits, and its statistics: the term keys and
+"""The model the joint noise fit (:mod:`.noisefit`) fits, and its statistics: the term keys and
 their basis functions g(τ) and component PSDs, the log-χ² likelihood of Allan-variance
 estimates given their EDF, the model-implied correlation of those estimates, and the methods
-in words that every fit result quotes. The formulas are in :mod:`.fit`'s docstring."""
+in words that every fit result quotes. The formulas are in :mod:`.noisefit`'s docstring."""
 
 from __future__ import annotations
 

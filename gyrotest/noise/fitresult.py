@@ -1,4 +1,4 @@
-"""The result types of the joint noise fit (:mod:`.fit`): one :class:`FitTerm` per noise term
+"""The result types of the joint noise fit (:mod:`.noisefit`): one :class:`FitTerm` per noise term
 (its coefficient, the reported value in the data-sheet unit, 1σ, identification status) and the
 :class:`NoiseFit` of a whole deviation (terms, covariance, goodness of fit, notes), with their
 JSON form."""

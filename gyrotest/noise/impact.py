@@ -72,7 +72,7 @@ RAD_PER_ARCSEC = math.pi / (180.0 * 3600.0)
 class Component:
     """One noise term for the attitude prediction, in internal units (deg/h = arcsec/s, s):
     ``key`` (N, Q, markov, B, K, R, sine, blue), ``c`` its Allan-variance coefficient as in
-    :mod:`gyrotest.noise.fit` (N², Q², (q_cT_c)², B², K², R², Ω0², α), ``shape`` (T_c s, f0 Hz
+    :mod:`gyrotest.noise.noisefit` (N², Q², (q_cT_c)², B², K², R², Ω0², α), ``shape`` (T_c s, f0 Hz
     or β Hz), ``f_hi`` the band edge of B (Hz), ``label``."""
 
     key: str
@@ -315,7 +315,7 @@ class ImpactResult:
 
 
 def components_from_fit(fit, *, conservative: bool = False) -> list[Component]:
-    """:class:`Component` list from a :class:`gyrotest.noise.fit.NoiseFit` (point estimates; with
+    """:class:`Component` list from a :class:`gyrotest.noise.noisefit.NoiseFit` (point estimates; with
     ``conservative`` the terms that are upper bounds enter at their bound)."""
     out = []
     for t in fit.terms:
@@ -345,7 +345,7 @@ def unshaped_bounds(fit) -> list[str]:
 
 def _coef_from_value(key: str, v: float, shape: float | None, q=None) -> float:
     """The fit's coefficient c of a term from its reported main value (the inverse of
-    :func:`gyrotest.noise.fit._reported`; ``q`` the table's
+    :func:`gyrotest.noise.noisefit._reported`; ``q`` the table's
     :class:`~gyrotest.noise.quantity.Quantity`, default gyro)."""
     if q is not None:
         main = {"markov": "q_c", "sine": "Omega0", "blue": "alpha"}.get(key, key)

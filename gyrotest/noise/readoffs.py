@@ -3,7 +3,7 @@
 * :func:`n_upper_bound`: a one-sided upper bound on N from the deviation alone;
 * :func:`slope_readoffs`: the IEEE 952 Annex C slope read-offs (the straight-line values
   at the characteristic τ of each slope), the cross-check of the joint fit
-  (:mod:`.fit`);
+  (:mod:`.noisefit`);
 * :func:`conversions`: the fitted terms in the other units data sheets use (deg/√h,
   ppm, m/s/√h ...)."""
 

@@ -15,7 +15,7 @@ from ..core.errors import AnalysisError, InputError
 from .allanresult import AxisAnalysis
 from .devcore import DeviationResult
 from .deviations import compute_deviation
-from .fit import (
+from .noisefit import (
     conversions,
     fit_deviation,
 )

@@ -24,19 +24,6 @@ from .characteristics import (
     linearity_stats,
     per_rate_asymmetry,
 )
-from .fit import (
-    DPS,
-    TERMS,
-    ModelFit,
-    ModelStep,
-    Points,
-    applicable_terms,
-    canonical_terms,
-    fit_model,
-    ieee_line,
-    select_model,
-    term_order,
-)
 from .lowrate import detect_saturation, resolution, threshold
 from .plateaus import STDERR_METHODS, Plateau, RunPlateaus
 from .repeatability import Repeatability, repeatability_by_condition
@@ -49,6 +36,19 @@ from .sfresult import (
     StabilityResult,
     TemperatureSensitivity,
     TermCoefficient,
+)
+from .tablefit import (
+    DPS,
+    TERMS,
+    ModelFit,
+    ModelStep,
+    Points,
+    applicable_terms,
+    canonical_terms,
+    fit_model,
+    ieee_line,
+    select_model,
+    term_order,
 )
 
 PULSE_KINDS = ("counts", "updown", "counter")
@@ -200,7 +200,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
 
     * Scale factor (§12.9.4.1): per run the least-squares line y = b + k·I (unweighted unless
       ``weighted_line``; σ from the plateau SEs propagated through the fit, see
-      :func:`~gyrotest.scalefactor.fit.ieee_line`); SF = S0/k in the log's units
+      :func:`~gyrotest.scalefactor.tablefit.ieee_line`); SF = S0/k in the log's units
       (arcsec/pulse, (deg/h)/V, 1 for rate output), σ_SF = S0·σ_k/k²; bias D_F = b/k (deg/h,
       input-referred, earth rate removed). Combined: mean over runs,
       σ = max(√Σσ_r²/R, std_r/√R). ``scale_factor_error_ppm`` = (SF/S0 − 1)·1e6 = ε_0.
@@ -209,7 +209,7 @@ def analyse(runs: list[RunPlateaus], *, output_kind: str = "rate",
       |table rate| unless ``full_scale_dps``. After-model values: residuals of the model.
     * Nonlinearity f(I) of ε_K (§8.3): weighted fit (``weighted``) of per-run b_r, k_r plus
       shared terms chosen by the data (``terms="auto"``; "linear"; or a list), see
-      :func:`~gyrotest.scalefactor.fit.select_model`. ``scale_factor_model`` = S0/k_r.
+      :func:`~gyrotest.scalefactor.tablefit.select_model`. ``scale_factor_model`` = S0/k_r.
     * Asymmetry (§12.9.4.2.2), periodic check (§5.3.2.1 a), repeatability (§12.9.4.2.3: 1σ
       with ddof=1 and max spread of the run SFs, ppm, within groups of runs whose mean
       temperatures agree within ``repeat_temp_tol_degC``; :mod:`.repeatability`), stability

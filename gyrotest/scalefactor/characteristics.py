@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fit import DPS, Points, line_fit
+from .tablefit import DPS, Points, line_fit
 
 
 # ----------------------------------------------------------------------------- linearity

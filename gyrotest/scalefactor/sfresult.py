@@ -14,14 +14,14 @@ from .characteristics import (
     AsymmetryResult,
     LinearityStats,
 )
-from .fit import (
+from .lowrate import InputRange, StepResponse
+from .plateaus import Plateau, RunPlateaus
+from .repeatability import Repeatability
+from .tablefit import (
     DPS,
     ModelFit,
     ModelStep,
 )
-from .lowrate import InputRange, StepResponse
-from .plateaus import Plateau, RunPlateaus
-from .repeatability import Repeatability
 
 
 # ----------------------------------------------------------------------------- results

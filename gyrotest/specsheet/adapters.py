@@ -177,8 +177,8 @@ def run_allan(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     (cli/cmd_allan.py): :func:`gyrotest.noise.analysis.analyse_allan`."""
     from ..noise.allanresult import allan_document
     from ..noise.analysis import analyse_allan, parse_taus
-    from ..noise.fit import MIN_EDF, parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
+    from ..noise.noisefit import MIN_EDF, parse_terms
 
     opts, iargv = ingest_opts(test, campaign)
 
@@ -231,7 +231,7 @@ def run_accel(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
     from ..io.accel import accel_channels
     from ..noise.allanresult import allan_document
     from ..noise.analysis import analyse_allan, parse_taus
-    from ..noise.fit import MIN_EDF, parse_terms
+    from ..noise.noisefit import MIN_EDF, parse_terms
 
     opts, iargv = ingest_opts(test, campaign)
 

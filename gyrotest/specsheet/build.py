@@ -27,7 +27,7 @@ from collections.abc import Callable
 
 from .. import __version__
 from ..core.errors import GyrotestError, InputError
-from ..scalefactor.fit import TERM_LABELS
+from ..scalefactor.tablefit import TERM_LABELS
 from . import adapters as ad
 from .base import SF_UNIT_TEXT
 from .campaign import Campaign
@@ -67,7 +67,7 @@ from .sheet import (
 VARIANTS = ("customer", "engineering")
 #: sheet names of the f(I) terms: each named once, by its power of u = I/FS in f(I) (u¹ for
 #: the term the terminal, the JSON and the C header call u1); its output power is said once,
-#: under the table (:data:`gyrotest.scalefactor.fit.OUTPUT_POWER_NOTE`)
+#: under the table (:data:`gyrotest.scalefactor.tablefit.OUTPUT_POWER_NOTE`)
 F_OF_I_NAMES = TERM_LABELS
 
 

@@ -419,7 +419,7 @@ def _check_option(err: _Err, where: str, test: str, key: str, typ: str, value: A
         return list(value)
     v = _scalar(err, where, value, typ)
     if test in ("allan", "accel") and key == "terms":
-        from ..noise.fit import parse_terms
+        from ..noise.noisefit import parse_terms
 
         try:
             parse_terms(v)

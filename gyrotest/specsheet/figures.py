@@ -1,7 +1,7 @@
 """Figures of the spec sheet, drawn by the analysis modules' own plotting functions.
 
 * Allan deviation with the fit, components and residuals: :func:`gyrotest.noise.plots.figure_allan`;
-* scale-factor linearity residuals: :func:`gyrotest.scalefactor.plot.figure_scale_factor`;
+* scale-factor linearity residuals: :func:`gyrotest.scalefactor.plots.figure_scale_factor`;
 * thermal model vs measurement and residual: :func:`gyrotest.envmodel.plots.thermal_figures`;
 * magnetic response per axis: :func:`gyrotest.envmodel.plots.mag_figures`;
 * model history (error falling as terms are added): :func:`gyrotest.envmodel.plots.history_figures`.
@@ -79,7 +79,7 @@ def allan_figure(source: str, axis_analysis, k: float = 2.0) -> Figure:
 
 def scale_factor_figure(result) -> Figure:
     """Linearity error per rate with the nonlinearity model (residuals of the IEEE line)."""
-    from ..scalefactor.plot import figure_scale_factor
+    from ..scalefactor.plots import figure_scale_factor
 
     png, w, h = _png_from_fig(figure_scale_factor(result, size=SIZES["scale_factor"]))
     return Figure("scale_factor", "", png, None, w, h)

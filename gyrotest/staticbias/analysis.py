@@ -77,7 +77,7 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
 
     Method: overlapping Allan deviation on an octave τ grid up to a quarter of the record
     (gap-aware pooling over ``segments``), the joint χ²-likelihood noise-model fit of
-    :func:`gyrotest.noise.fit.fit_deviation` with white rate, bias-instability and rate-random-walk
+    :func:`gyrotest.noise.noisefit.fit_deviation` with white rate, bias-instability and rate-random-walk
     terms (N, B, K), evaluated at τ = T, the record length: ``u = sqrt(σ²_model(T))``. σ_A²(T)
     is the variance of a mean over T for white rate noise (N²/T), rate random walk started at
     the record start (K²T/3) and Markov noise with T ≫ T_c (IEEE 952 Annex C relations), so this
@@ -86,7 +86,7 @@ def mean_uncertainty(rate: np.ndarray, tau0: float,
     white-noise (∝ 1/τ) and random-walk (∝ τ) continuations of the measured level.
     """
     from ..noise.deviations import compute_deviation
-    from ..noise.fit import fit_deviation
+    from ..noise.noisefit import fit_deviation
 
     rate = np.asarray(rate, dtype=np.float64)
     n = rate.size

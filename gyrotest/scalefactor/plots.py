@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from ..core.plotting import COLORS, new_figure, save_figure
-from .fit import TERM_LABELS, TERM_SHORT, term_order
+from .tablefit import TERM_LABELS, TERM_SHORT, term_order
 
 DPS = 3600.0
 
@@ -55,7 +55,7 @@ def _grid(I: np.ndarray, lin: float) -> np.ndarray:
 def _formula(t: str) -> str:
     """The term's f(I) formula as the tables print it (``c2·u²``), without the lock-in's
     explanation."""
-    from .fit import TERMS
+    from .tablefit import TERMS
 
     return TERMS[t].formula.split(" (")[0] if t in TERMS else t
 
@@ -134,7 +134,7 @@ def figure_scale_factor(res, *, logs=None, size: tuple[float, float] | None = No
         if len(model.terms) > 1:
             for j, t in enumerate(shown):
                 def one(x, t=t):
-                    from .fit import TERMS
+                    from .tablefit import TERMS
 
                     u = x / model.fs_dph
                     c_, _ = model.term_coef(t)

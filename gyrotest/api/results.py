@@ -499,7 +499,7 @@ class Report(Result):
 
 class Simulation(Result):
     """A simulated bench log with known truth (:func:`gyrotest.simulate`); ``core`` is a
-    :class:`~gyrotest.simulation.core.SimResult` (``runs``, ``truth``, ``columns``)."""
+    :class:`~gyrotest.simulation.simrun.SimResult` (``runs``, ``truth``, ``columns``)."""
 
     __slots__ = ()
     title = "Simulated bench log"

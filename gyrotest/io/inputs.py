@@ -139,7 +139,7 @@ def _is_frame(obj) -> bool:
 def _sim_run(obj):
     """The first run of a simulation (Simulation, SimResult or SimRun), else None."""
     core = getattr(obj, "core", obj)
-    sim = sys.modules.get("gyrotest.simulation.core")
+    sim = sys.modules.get("gyrotest.simulation.simrun")
     if sim is None:
         return None
     if isinstance(core, sim.SimResult):

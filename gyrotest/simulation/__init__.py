@@ -204,8 +204,9 @@ that tells :func:`gyrotest.io.ingest.read_log` how to read the file).
 
 from __future__ import annotations
 
-from .core import SimResult, SimRun, simulate
+from .core import simulate
 from .scenario import ANTONOVA_MATVEEV, load_scenario, parse_scenario
+from .simrun import SimResult, SimRun
 from .specs import Scenario
 from .writer import WriteResult, profile_toml, sidecar_paths, write_log
 

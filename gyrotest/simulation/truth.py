@@ -16,7 +16,7 @@ from . import environment as env
 from .specs import Scenario
 
 if TYPE_CHECKING:
-    from .core import SimRun
+    from .simrun import SimRun
 
 #: the reference field magnitude of the magnetic terms, uT
 H0_UT = 100.0

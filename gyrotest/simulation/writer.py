@@ -18,7 +18,7 @@ import pyarrow as pa
 
 from ..core.errors import InputError
 from ..core.output import atomic_path, write_json, write_text
-from .core import SimResult, SimRun
+from .simrun import SimResult, SimRun
 
 FORMATS = {"csv": ".csv", "parquet": ".parquet", "feather": ".feather"}
 _SUFFIX_FORMAT = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet",

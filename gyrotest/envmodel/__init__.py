@@ -19,6 +19,10 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
 
+# the effects defined in their own module (channel_terms) register themselves in
+# terms.EFFECTS when it is imported: here, so that any import of the package completes the
+# registry
+from . import channel_terms  # noqa: F401
 from .compensate import CompensationResult, compensate
 from .domain import (
     MagResult,

@@ -192,3 +192,24 @@ def earth_projection(log) -> np.ndarray | None:
     az_k = next((low[n] for n in _AZIM_NAMES if n in low), None)
     az = np.asarray(log.extra[az_k], float) if az_k else site.ia_azimuth_deg
     return np.asarray(earth_rate_component(lat, az, el), float)
+
+
+# ============================================================================ channel lookup
+def find_channel(frame: EnvFrame, name: str) -> tuple[str, np.ndarray]:
+    """(group, values) of the channel ``name``: a temperature, field or extra channel, or
+    ``supply`` / ``table_rate``. InputError listing the channels when there is none."""
+    for group, chans in (("temperature", frame.temperature), ("field", frame.field_uT),
+                         ("extra", frame.extra)):
+        if name in chans:
+            return group, np.asarray(chans[name], dtype=np.float64)
+    if name == "supply" and frame.supply is not None:
+        return "supply", np.asarray(frame.supply, dtype=np.float64)
+    if name == "table_rate" and frame.table_rate is not None:
+        return "table_rate", np.asarray(frame.table_rate, dtype=np.float64)
+    have = list(frame.temperature) + list(frame.field_uT) + list(frame.extra)
+    if frame.supply is not None:
+        have.append("supply")
+    if frame.table_rate is not None:
+        have.append("table_rate")
+    raise InputError(f"{frame.source} has no channel {name!r} (channels: "
+                     f"{', '.join(have) or 'none'})")

@@ -357,7 +357,7 @@ class Model:
         >>> fit.noise.params.N > 0                   # the gyro's white noise, deg/√h
         True
         """
-        from ..envmodel.fit import fit_log
+        from ..envmodel.prepare import fit_log
 
         g, ref = self._log(data, profile, read_options, "Model.fit")
         return ModelFit(fit_log(g, self.specs, path=_path_of(data), k_sigma=k, reference=ref,

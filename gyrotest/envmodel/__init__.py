@@ -40,13 +40,12 @@ from .fit import (
     WorkData,
     choose_resolution,
     choose_smoothing,
-    fit_log,
     fit_model,
     prepare,
 )
 from .history import append_history, load_history
 from .model import EnvModel
-from .prepare import collect_terms, naming_terms, prepare_log
+from .prepare import collect_terms, fit_log, naming_terms, prepare_log
 from .selection import Candidate
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 from .workbench import Diagnosis, diagnose, diagnose_log

@@ -40,6 +40,7 @@ import numpy as np
 from ..core.errors import AnalysisError
 from ..workbench_rules import MIN_RELIABILITY, VIF_MAX
 from . import stats as st
+from .excursions import Excursion
 from .likelihood import (
     NoiseFit,
     NoiseParams,
@@ -116,21 +117,6 @@ class Coefficient:
         return {"name": self.name, "symbol": self.symbol, "term": self.term, "value": self.value,
                 "stderr": self.stderr, "stderr_ols_naive": self.stderr_ols, "unit": self.unit,
                 "z": self.z, "p": self.p, "significance": self.significance, "kind": self.kind}
-
-
-@dataclass
-class Excursion:
-    """A stretch where the residual exceeds k·σ, with what the channels were doing."""
-
-    t_start_s: float
-    t_end_s: float
-    peak_dph: float
-    mean_dph: float
-    description: str
-
-    def to_dict(self) -> dict:
-        return {"t_start_s": self.t_start_s, "t_end_s": self.t_end_s, "peak_dph": self.peak_dph,
-                "mean_dph": self.mean_dph, "description": self.description}
 
 
 @dataclass
@@ -696,22 +682,6 @@ def fit_document(res: FitResult, *, written: dict | None = None) -> dict:
     d["written"] = written or {}
     return d
 
-
-def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | None = None,
-            skip: str | float = "0", t_ref: float | None = None, v_ref: float | None = None,
-            resolution: str | None = "auto", smooth: str | None = "auto", folds: int = 5,
-            k_sigma: float = 4.0, reference=None) -> FitResult:
-    """``gyrotest model fit``: prepare ``log`` with the command's options
-    (:func:`gyrotest.envmodel.prepare.prepare_log`; ``path`` for the model's provenance), fit
-    ``specs`` (:func:`fit_model`) and add the residual Allan deviation, noise floor and
-    excursions (:func:`finish`). ``reference``: a static reference log for the noise floor."""
-    from .prepare import prepare_log
-
-    wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
-                     resolution=resolution, smooth=smooth, specs=specs, reference=reference)
-    res = fit_model(wd, specs, folds=folds, light=True)
-    finish(res, k_sigma=k_sigma)
-    return res
 
 _ADVICE = {
     frozenset({"T", "ramp"}): "temperature and time rise together (a monotone ramp): run a "

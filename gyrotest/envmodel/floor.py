@@ -40,7 +40,7 @@ def check_reference(ref_log, log, wd, noise) -> None:
     from the log's own (the robust scale of the rate's first differences) by more than 10×
     (another unit or another gyro)."""
     from ..core.errors import InputError
-    from .workdata import _white_sigma
+    from .frame import _white_sigma
 
     if ref_log.tau0 > wd.frame.dt * (1 + 1e-6):
         raise InputError(f"--reference {ref_log.source}: sampled every {ref_log.tau0:g} s, "

@@ -7,6 +7,7 @@ Conventions: time s, temperature degC, field uT, supply V, rates deg/h.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -213,3 +214,11 @@ def find_channel(frame: EnvFrame, name: str) -> tuple[str, np.ndarray]:
         have.append("table_rate")
     raise InputError(f"{frame.source} has no channel {name!r} (channels: "
                      f"{', '.join(have) or 'none'})")
+
+
+def _white_sigma(frame: EnvFrame) -> float:
+    """White-noise σ of the gyro rate per fine sample (deg/h): the robust scale of its first
+    differences / √2 (steps and drifts do not count)."""
+    r = np.asarray(frame.rate, float)
+    d = np.concatenate([np.diff(r[a:b]) for a, b in frame.bounds if b - a > 1] or [[0.0]])
+    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)

@@ -478,7 +478,7 @@ def white_level(wd) -> float:
     robust scale of the fine-grid rate's first differences, σ_d²/2·dt (white noise dominates
     the sample-to-sample changes; slow effects and steps do not move a median). Where the
     whole band is quantised to one level (no difference at all) it is 0: not measured."""
-    from .workdata import _white_sigma
+    from .frame import _white_sigma
 
     s = _white_sigma(wd.frame)
     return float(s * s * wd.frame.dt) if math.isfinite(s) else 0.0

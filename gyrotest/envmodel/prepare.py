@@ -8,7 +8,9 @@ spec-sheet report, which runs the same analyses) share these steps:
   error names the term(s) as well;
 * :func:`prepare_log` -- the ``--skip`` warm-up trim and :func:`gyrotest.envmodel.fit.prepare`
   with the working-resolution options as typed (``auto`` or a duration); a log too short for
-  the model names the terms.
+  the model names the terms;
+* :func:`fit_log` -- ``gyrotest model fit``: :func:`prepare_log`, the fit and its slower
+  diagnostics (the counterpart of :func:`gyrotest.envmodel.workbench.diagnose_log`).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import TypeVar
 
 from ..core.errors import AnalysisError, InputError
 from ..core.units import format_duration, parse_duration
-from .fit import WorkData, file_provenance, prepare
+from .fit import FitResult, WorkData, file_provenance, finish, fit_model, prepare
 from .terms import TermSpec, parse_terms
 
 __all__ = ["collect_terms", "duration_or_auto", "naming_terms", "prepare_log"]
@@ -134,3 +136,19 @@ def _prepare(log, path, *, axis, skip, t_ref, v_ref, resolution, smooth) -> Work
                    t_ref=t_ref, v_ref=v_ref,
                    smoothing_s=duration_or_auto(smooth, "--smooth"), t_on_s=-skip_s,
                    provenance=prov)
+
+
+def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | None = None,
+            skip: str | float = "0", t_ref: float | None = None, v_ref: float | None = None,
+            resolution: str | None = "auto", smooth: str | None = "auto", folds: int = 5,
+            k_sigma: float = 4.0, reference=None) -> FitResult:
+    """``gyrotest model fit``: prepare ``log`` with the command's options
+    (:func:`prepare_log`; ``path`` for the model's provenance), fit
+    ``specs`` (:func:`~gyrotest.envmodel.fit.fit_model`) and add the residual Allan deviation, noise floor and
+    excursions (:func:`~gyrotest.envmodel.fit.finish`). ``reference``: a static reference log
+    for the noise floor."""
+    wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
+                     resolution=resolution, smooth=smooth, specs=specs, reference=reference)
+    res = fit_model(wd, specs, folds=folds, light=True)
+    finish(res, k_sigma=k_sigma)
+    return res

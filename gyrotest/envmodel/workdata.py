@@ -36,6 +36,7 @@ import numpy as np
 
 from ..core.errors import AnalysisError, InputError
 from . import stats as st
+from .frame import _white_sigma
 from .terms import (
     EnvFrame,
     Refs,
@@ -274,14 +275,6 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
     W = min(need, cap)
     W = float(np.ceil(W / frame.dt - 1e-9) * frame.dt)
     return W, f"smoothing window W = {W:g} s ({why})"
-
-
-def _white_sigma(frame: EnvFrame) -> float:
-    """White-noise σ of the gyro rate per fine sample (deg/h): the robust scale of its first
-    differences / √2 (steps and drifts do not count)."""
-    r = np.asarray(frame.rate, float)
-    d = np.concatenate([np.diff(r[a:b]) for a, b in frame.bounds if b - a > 1] or [[0.0]])
-    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
 
 
 def _rate_effect_bound(frame: EnvFrame, trate: np.ndarray, inner: np.ndarray,

@@ -325,10 +325,10 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
 def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, terms: str, key: str, *,
                   t_ref: float | None = None) -> Analysis:
     """``gyrotest model fit LOG --terms TERMS [--t-ref T]`` (cli/cmd_model.py): one step of
-    the model workbench, :func:`gyrotest.envmodel.fit.fit_log`; ``obj`` is the
+    the model workbench, :func:`gyrotest.envmodel.prepare.fit_log`; ``obj`` is the
     :class:`~gyrotest.envmodel.fit.FitResult`."""
-    from ..envmodel.fit import fit_document, fit_log
-    from ..envmodel.prepare import collect_terms
+    from ..envmodel.fit import fit_document
+    from ..envmodel.prepare import collect_terms, fit_log
 
     opts, iargv = ingest_opts(test, campaign)
     path = test.logs[0]

@@ -77,7 +77,7 @@ def resolve_history(path: str | Path) -> Path:
 def load_history(path: str | Path) -> list[HistoryStep]:
     """Read the steps (oldest first); InputError when there is no readable history."""
     from ..core.documents import DocumentError, load_document, path_kind
-    from ..schemas import history_problems
+    from .schemas import history_problems
 
     hp = resolve_history(path)
     if path_kind(hp) == "missing":
@@ -86,7 +86,7 @@ def load_history(path: str | Path) -> list[HistoryStep]:
     # not declared an input: 'model fit -o' reads it to append a step (the command line
     # declares it for 'model history', gyrotest.cli.io_roles)
     d, _ = load_document(hp, fmt="json", what="a model history", declare=False)
-    problems = history_problems(d)  # every problem, naming its key (gyrotest.schemas)
+    problems = history_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
     if problems:
         raise DocumentError(str(hp), problems)
     return [HistoryStep.from_dict(s) for s in d["steps"]]

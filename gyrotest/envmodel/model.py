@@ -137,12 +137,12 @@ class EnvModel:
     @staticmethod
     def load(path: str | Path) -> EnvModel:
         from ..core.documents import DocumentError, load_document
-        from ..schemas import model_problems
+        from .schemas import model_problems
 
         p = Path(path)
         d, _ = load_document(p, what="the model file", not_found="model file not found; give a "
                              "file written by 'gyrotest model fit -o' (or thermal-fit/mag-fit)")
-        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
         if problems:
             raise DocumentError(str(p), problems)
         return EnvModel.from_dict(d, str(p))

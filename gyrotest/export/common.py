@@ -72,9 +72,9 @@ def read_document(path: str | Path, want: str) -> Document:
     kind = detect_kind(d)
     if kind == "envmodel" and want == "envmodel":
         from ..core.documents import DocumentError
-        from ..schemas import model_problems
+        from ..envmodel.schemas import model_problems
 
-        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
         if problems:
             raise DocumentError(str(p), problems)
     if kind != want:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .core.documents import check_schema, jsonpath
+from ..core.documents import check_schema, jsonpath
 
 _COEF = {"name": "str", "symbol": "str?", "value!": "num", "stderr": "real?", "unit": "str"}
 _NONLINEAR = {"name!": "str", "value!": "num", "stderr": "real?", "unit": "str"}
@@ -34,7 +34,7 @@ def model_problems(d: Any) -> list[str]:
     """Every problem of a parsed model file: types and required keys, unknown term keys, a
     custom term without a string expression or one that does not parse, a coefficient count
     that does not match the term."""
-    from .envmodel.model import FORMAT
+    from .model import FORMAT
 
     if not isinstance(d, dict) or d.get("format") != FORMAT:
         got = d.get("format") if isinstance(d, dict) else type(d).__name__
@@ -43,9 +43,9 @@ def model_problems(d: Any) -> list[str]:
     problems = check_schema(d, MODEL_SCHEMA)
     if problems:
         return problems
-    from .core.errors import InputError
-    from .envmodel.expr import parse_expression
-    from .envmodel.terms import EFFECTS, TermSpec
+    from ..core.errors import InputError
+    from .expr import parse_expression
+    from .terms import EFFECTS, TermSpec
 
     for i, t in enumerate(d["terms"]):
         where = ("terms", i)
@@ -87,7 +87,7 @@ HISTORY_SCHEMA = {"format!": "str", "version": "int", "steps!": [_STEP]}
 
 def history_problems(d: Any) -> list[str]:
     """Every problem of a parsed model history."""
-    from .envmodel.history import HISTORY_FORMAT
+    from .history import HISTORY_FORMAT
 
     if not isinstance(d, dict) or d.get("format") != HISTORY_FORMAT:
         return ["not a gyrotest model history (fit with -o MODEL.json or --session DIR first)"]

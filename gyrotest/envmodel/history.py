@@ -17,8 +17,7 @@ from typing import Any
 
 from ..core.errors import InputError
 from ..core.output import write_json
-
-HISTORY_FORMAT = "gyrotest-model-history"
+from .schemas import HISTORY_FORMAT
 
 
 @dataclass

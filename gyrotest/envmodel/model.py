@@ -21,9 +21,9 @@ import numpy as np
 from .. import __version__
 from ..core.errors import InputError
 from ..core.output import jsonable, write_text
+from .schemas import FORMAT
 from .terms import EFFECTS, Refs, TermSpec, build_term, frame_from_log, resolve_terms
 
-FORMAT = "gyrotest-envmodel"
 FORMAT_VERSION = 1
 
 

@@ -15,6 +15,11 @@ from typing import Any
 
 from ..core.documents import check_schema, jsonpath
 
+#: the ``format`` of a drift-model file and of a model history (written by
+#: :mod:`.model` and :mod:`.history`, checked here)
+FORMAT = "gyrotest-envmodel"
+HISTORY_FORMAT = "gyrotest-model-history"
+
 _COEF = {"name": "str", "symbol": "str?", "value!": "num", "stderr": "real?", "unit": "str"}
 _NONLINEAR = {"name!": "str", "value!": "num", "stderr": "real?", "unit": "str"}
 _TERM = {"key!": "str", "label": "str", "channels": "strs", "name": "str?", "expr": "str?",
@@ -34,8 +39,6 @@ def model_problems(d: Any) -> list[str]:
     """Every problem of a parsed model file: types and required keys, unknown term keys, a
     custom term without a string expression or one that does not parse, a coefficient count
     that does not match the term."""
-    from .model import FORMAT
-
     if not isinstance(d, dict) or d.get("format") != FORMAT:
         got = d.get("format") if isinstance(d, dict) else type(d).__name__
         return [f"not a gyrotest model file (format {got!r}, expected {FORMAT!r}); give a "
@@ -87,8 +90,6 @@ HISTORY_SCHEMA = {"format!": "str", "version": "int", "steps!": [_STEP]}
 
 def history_problems(d: Any) -> list[str]:
     """Every problem of a parsed model history."""
-    from .history import HISTORY_FORMAT
-
     if not isinstance(d, dict) or d.get("format") != HISTORY_FORMAT:
         return ["not a gyrotest model history (fit with -o MODEL.json or --session DIR first)"]
     return check_schema(d, HISTORY_SCHEMA)

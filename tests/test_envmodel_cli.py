@@ -268,9 +268,9 @@ def test_diagnose_magnetic_sample_completes_the_field_vector_with_hx():
 def test_diagnose_rules_prints_every_rule_without_a_log():
     """`model diagnose --rules` prints the decision rules (the man page's WORKBENCH VERDICT
     RULES) and exits 0 before any log is read; the text is generated from the decision
-    constants the diagnosis uses (gyrotest.workbench_rules)."""
-    from gyrotest import workbench_rules as w
+    constants the diagnosis uses (gyrotest.envmodel.workbench_rules)."""
     from gyrotest.envmodel import likelihood, selection
+    from gyrotest.envmodel import workbench_rules as w
 
     res = run_cli(["model", "diagnose", "--rules"])
     assert res.code == 0, res.err

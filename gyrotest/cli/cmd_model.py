@@ -402,12 +402,12 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 
 
 def _print_rules(ctx, _param, value):
-    """--rules: the verdict's decision rules (:mod:`gyrotest.workbench_rules`), then exit."""
+    """--rules: the verdict's decision rules (:mod:`gyrotest.envmodel.workbench_rules`), then exit."""
     if not value or ctx.resilient_parsing:
         return
     import shutil
 
-    from ..workbench_rules import rules_text
+    from ..envmodel.workbench_rules import rules_text
 
     width = min(100, max(60, shutil.get_terminal_size((88, 24)).columns - 2))
     click.echo(rules_text(width))

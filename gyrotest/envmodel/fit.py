@@ -38,7 +38,6 @@ from typing import Any
 import numpy as np
 
 from ..core.errors import AnalysisError
-from ..workbench_rules import MIN_RELIABILITY, VIF_MAX
 from . import stats as st
 from .excursions import Excursion
 from .likelihood import (
@@ -58,6 +57,7 @@ from .terms import (
     resolve_terms,
 )
 from .varpro import TAU_GRID, Design, _Fitter, _rss  # noqa: F401  (re-exported)
+from .workbench_rules import MIN_RELIABILITY, VIF_MAX
 from .workdata import (  # noqa: F401  (re-exported)
     MAX_BLOCKS,
     MAX_RES_S,

@@ -41,7 +41,7 @@ import numpy as np
 from scipy import linalg, optimize
 
 from ..core.errors import AnalysisError
-from ..workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
+from .workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
 
 #: fewest first differences a likelihood needs
 MIN_DIFFS = 8

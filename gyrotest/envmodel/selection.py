@@ -54,14 +54,6 @@ import numpy as np
 from scipy import optimize
 
 from ..core.errors import AnalysisError, InputError
-from ..workbench_rules import (  # noqa: E402  (the decision constants, one source)
-    ALPHA,
-    BIC_TIE,
-    MC_DRAWS,
-    PAIR_POOL,
-    TAU_POINTS,
-    WHITE_LAGS,
-)
 from .fit import VIF_MAX, FitResult, WorkData, fit_model
 from .lookelsewhere import (
     Whiteness,
@@ -73,6 +65,14 @@ from .lookelsewhere import (
 )
 from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
+from .workbench_rules import (  # noqa: E402  (the decision constants, one source)
+    ALPHA,
+    BIC_TIE,
+    MC_DRAWS,
+    PAIR_POOL,
+    TAU_POINTS,
+    WHITE_LAGS,
+)
 
 #: within a class, simpler forms first at equal evidence (x before x², a lag before a rate)
 FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,

@@ -122,7 +122,7 @@ class Diagnosis:
 
 def rule_line(alpha: float) -> str:
     """The decision rule in one line (``model diagnose`` prints it under the verdict)."""
-    from ..workbench_rules import SUMMARY
+    from .workbench_rules import SUMMARY
 
     return SUMMARY.format(alpha=alpha)
 

@@ -23,6 +23,7 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 # terms.EFFECTS when it is imported: here, so that any import of the package completes the
 # registry
 from . import channel_terms  # noqa: F401
+from .candidate import Candidate
 from .compensate import CompensationResult, compensate
 from .domain import (
     MagResult,
@@ -46,7 +47,6 @@ from .fit import (
 from .history import append_history, load_history
 from .model import EnvModel
 from .prepare import collect_terms, fit_log, naming_terms, prepare_log
-from .selection import Candidate
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 from .workbench import Diagnosis, diagnose, diagnose_log
 

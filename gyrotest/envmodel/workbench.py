@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from .candidate import Candidate, Removal, _fmt_p
 from .fit import FitResult, WorkData, fit_model
 from .likelihood import NoiseParams
 from .lookelsewhere import Whiteness
@@ -22,9 +23,6 @@ from .prepare import prepare_log
 from .selection import (
     ALPHA,
     BIC_TIE,
-    Candidate,
-    Removal,
-    _fmt_p,
     judge_step,
     removal,
     residual_whiteness,

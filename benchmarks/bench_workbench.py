@@ -202,7 +202,7 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
 
 def _added_contributions(fit, added: list[dict]) -> dict[str, np.ndarray]:
     """Block-level fitted contribution of every added term that is in ``fit``."""
-    from gyrotest.envmodel.fit import predict_blocks
+    from gyrotest.envmodel.modelfit import predict_blocks
     out = {}
     for a in added:
         spec = next((s for s in fit.specs if s.label == a["label"]), None)

@@ -177,7 +177,7 @@ def test_readme_python_block_runs(monkeypatch):
 #: the analysis entry points behind the API: the commands reach them only through it
 ENGINE = ("analyse_allan", "analyse_bias_axes", "reduce_logs", "reduce_table",
           "analyse_thermal", "analyse_mag", "fit_log", "diagnose_log", "make_report",
-          "envmodel.compensate import", "simulate import simulate", "ingest import read_log")
+          "envmodel.compensation import", "simulation import simulate", "ingest import read_log")
 
 
 def test_commands_call_the_api_not_the_engine():

@@ -115,7 +115,7 @@ def testfold_coefficients_support_directions():
     in the held-out chunk keeps its full-data coefficient) reproduced, and a *combination*
     of columns that moves only in the held-out chunk (two field axes swept together once)
     kept at its full-data value instead of being extrapolated."""
-    from gyrotest.envmodel.fit import fold_coefficients
+    from gyrotest.envmodel.modelfit import fold_coefficients
 
     rng = np.random.default_rng(3)
     n = 400

@@ -269,7 +269,7 @@ def test_diagnose_rules_prints_every_rule_without_a_log():
     """`model diagnose --rules` prints the decision rules (the man page's WORKBENCH VERDICT
     RULES) and exits 0 before any log is read; the text is generated from the decision
     constants the diagnosis uses (gyrotest.envmodel.workbench_rules)."""
-    from gyrotest.envmodel import likelihood, selection
+    from gyrotest.envmodel import candidate, likelihood, lookelsewhere, selection
     from gyrotest.envmodel import workbench_rules as w
 
     res = run_cli(["model", "diagnose", "--rules"])
@@ -282,7 +282,8 @@ def test_diagnose_rules_prints_every_rule_without_a_log():
                    f"over {w.WHITE_LAGS} lags", f"≥ {w.VIF_MAX:g}"):
         assert phrase in text, phrase
     # one source: the engine uses these very constants
-    assert selection.ALPHA is w.ALPHA and selection.MC_DRAWS is w.MC_DRAWS
+    assert selection.ALPHA is w.ALPHA and lookelsewhere.MC_DRAWS is w.MC_DRAWS
+    assert candidate.MC_DRAWS is w.MC_DRAWS
     assert likelihood.NL_MAX is w.NL_MAX
     man = (Path(__file__).resolve().parents[1] / "man" / "gyrotest.1").read_text("utf-8")
     assert "WORKBENCH VERDICT RULES" in man

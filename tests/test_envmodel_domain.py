@@ -9,7 +9,7 @@ from test_envmodel_helpers import simulated
 
 from gyrotest.core.errors import InputError
 from gyrotest.envmodel import fit_model, prepare
-from gyrotest.envmodel.compensate import compensate
+from gyrotest.envmodel.compensation import compensate
 from gyrotest.envmodel.domain import (
     ANTONOVA_MATVEEV_PAPER,
     ANTONOVA_MATVEEV_SETPOINTS,

@@ -71,7 +71,7 @@ def simulated(name: str, seed: int, tmpdir, rate_hz: float | None = None):
 def noise_floor_of(res, log, wd) -> float:
     """The simulated noise floor at the working resolution of ``wd``: the RMS of the pure
     noise (ideal − noise-free output) through the same smoother and blocks."""
-    from gyrotest.envmodel.fit import prepare
+    from gyrotest.envmodel.modelfit import prepare
 
     run = res.run
     noise_log = copy.copy(log)

@@ -124,7 +124,7 @@ def _read_for(data, where: str, profile, opts, specs=None, **kw) -> list:
     term needs names the term (as the commands do)."""
     if not specs:
         return as_logs(data, where, profile=profile, opts=opts, **kw)
-    from ..envmodel.prepare import naming_terms
+    from ..envmodel.pipeline import naming_terms
 
     return naming_terms(lambda: as_logs(data, where, profile=profile, opts=opts, **kw),
                           specs)

@@ -186,7 +186,7 @@ class ModelFit(Result):
         -------
         dict
         """
-        from ..envmodel.fit import fit_document
+        from ..envmodel.modelfit import fit_document
 
         return fit_document(self.core, written=written)
 

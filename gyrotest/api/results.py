@@ -2,7 +2,7 @@
 
 Each result holds the analysis object its command renders (``.core``: an
 :class:`~gyrotest.noise.allanresult.AllanAnalysis`, a :class:`~gyrotest.staticbias.multiaxis.BiasAxes`,
-an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attributes
+an :class:`~gyrotest.envmodel.modelfit.FitResult` ...) and reads through to its attributes
 (``res.axes``, ``res.coefficients``), and adds the same four things to every kind:
 
 * ``to_dict()`` -- the command's ``--json`` document, built by the same function;

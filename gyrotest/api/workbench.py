@@ -299,7 +299,7 @@ class Model:
                  v_ref: float | None = None, resolution: float | str = "auto",
                  smooth: float | str = "auto", folds: int = 5, reference=None,
                  power_on: bool | None = None) -> None:
-        from ..envmodel.prepare import collect_terms
+        from ..envmodel.pipeline import collect_terms
 
         texts = [terms] if isinstance(terms, str) else list(terms)
         custom = [custom] if isinstance(custom, str) else list(custom)
@@ -357,7 +357,7 @@ class Model:
         >>> fit.noise.params.N > 0                   # the gyro's white noise, deg/√h
         True
         """
-        from ..envmodel.prepare import fit_log
+        from ..envmodel.pipeline import fit_log
 
         g, ref = self._log(data, profile, read_options, "Model.fit")
         return ModelFit(fit_log(g, self.specs, path=_path_of(data), k_sigma=k, reference=ref,
@@ -479,7 +479,7 @@ def compensate(data, model, *, keep_bias: bool = False, profile=None,
     True
     """
     opts = split_read_options(dict(read_options), "compensate")
-    from ..envmodel.compensate import compensate as engine
+    from ..envmodel.compensation import compensate as engine
 
     env = _env_model(model)
     g = _read_for(_one(data, "compensate"), "compensate", profile, opts, env.specs)[0]

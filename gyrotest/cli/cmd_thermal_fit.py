@@ -29,7 +29,7 @@ from .common import (
 )
 
 #: |value / 1σ| below which a coefficient is "not determined by this log" (the fit's "not
-#: significant", :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+#: significant", :attr:`gyrotest.envmodel.modelfit.Coefficient.significance`)
 DETERMINED_Z = 2.0
 
 

@@ -299,8 +299,8 @@ def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = Fal
 
 def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True):
     """:func:`load_log` for a model with term ``specs``: an ingest error about a channel a
-    term needs names the term too (:func:`gyrotest.envmodel.prepare.naming_terms`)."""
-    from ..envmodel.prepare import naming_terms
+    term needs names the term too (:func:`gyrotest.envmodel.pipeline.naming_terms`)."""
+    from ..envmodel.pipeline import naming_terms
 
     return naming_terms(lambda: load_log(path, opts, announce=announce), specs)
 

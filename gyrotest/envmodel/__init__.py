@@ -3,7 +3,7 @@ physical effect, keep a history of the steps, and apply a model to another run.
 
 Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet report call these):
 
-* :func:`prepare` — a log at the working resolution (block means; see :mod:`.fit`);
+* :func:`prepare` — a log at the working resolution (block means; see :mod:`.modelfit`);
 * :func:`fit_model` — coefficients ± 1σ (GLS under the gyro's own noise model, fitted by
   maximum likelihood: :mod:`.likelihood`), held-out RMS, log-likelihood, AIC/BIC,
   collinearity, residual Allan deviation, excursions → :class:`FitResult` (``.model`` is
@@ -14,7 +14,7 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * :func:`compensate` — apply a model to another run → :class:`CompensationResult`;
 * the commands' analyses from a loaded log and their options: :func:`fit_log` (``model
   fit``), :func:`diagnose_log` (``model diagnose``), :func:`analyse_thermal`
-  (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.prepare` holds the shared
+  (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.pipeline` holds the shared
   steps (:func:`naming_terms`, :func:`prepare_log`, :func:`collect_terms`);
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
@@ -24,7 +24,7 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 # registry
 from . import channel_terms  # noqa: F401
 from .candidate import Candidate
-from .compensate import CompensationResult, compensate
+from .compensation import CompensationResult, compensate
 from .domain import (
     MagResult,
     SetpointResult,
@@ -36,7 +36,9 @@ from .domain import (
     thermal_fit,
     thermal_fit_setpoints,
 )
-from .fit import (
+from .history import append_history, load_history
+from .model import EnvModel
+from .modelfit import (
     FitResult,
     WorkData,
     choose_resolution,
@@ -44,9 +46,7 @@ from .fit import (
     fit_model,
     prepare,
 )
-from .history import append_history, load_history
-from .model import EnvModel
-from .prepare import collect_terms, fit_log, naming_terms, prepare_log
+from .pipeline import collect_terms, fit_log, naming_terms, prepare_log
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 from .workbench import Diagnosis, diagnose, diagnose_log
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .fit import FitResult
+from .modelfit import FitResult
 from .terms import TermSpec
 from .workbench_rules import (  # the decision constants, one source
     MC_DRAWS,

@@ -31,8 +31,8 @@ import numpy as np
 
 from ..core.errors import AnalysisError, InputError
 from . import stats as st
-from .fit import FitResult, WorkData, fit_model, predict_blocks
-from .prepare import prepare_log
+from .modelfit import FitResult, WorkData, fit_model, predict_blocks
+from .pipeline import prepare_log
 from .terms import H0_UT, TermSpec, parse_terms, split_terms, temperature_rate
 
 #: the paper's published coefficients for its FOG sample (GYRO_REFERENCE §6)
@@ -519,7 +519,7 @@ THERMAL_TERMS = ("T", "dTdt")
 
 def thermal_terms() -> list[TermSpec]:
     """The term specs of :data:`THERMAL_TERMS` (for
-    :func:`gyrotest.envmodel.prepare.naming_terms`)."""
+    :func:`gyrotest.envmodel.pipeline.naming_terms`)."""
     return parse_terms(list(THERMAL_TERMS))
 
 
@@ -564,7 +564,7 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
     """The analysis of ``gyrotest thermal-fit``: the set-point table ``setpoints``
     (:func:`read_setpoints`, :func:`thermal_fit_setpoints`) and/or the chamber run ``log``
     (a :class:`~gyrotest.core.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
-    (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
+    (:func:`gyrotest.envmodel.pipeline.prepare_log` with the ``axis``/``skip``/``resolution``/
     ``smooth`` options as typed), then :func:`thermal_fit`. ``reference``: a static reference
     log of the same gyro whose noise model is fixed for the fit
     (:func:`gyrotest.envmodel.likelihood.reference_noise`)."""
@@ -603,7 +603,7 @@ def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,
                 skip: str | float = "0", resolution: str | None = "auto",
                 smooth: str | None = "auto", folds: int = 5, reference=None) -> MagResult:
     """The analysis of ``gyrotest mag-fit``: ``log`` (read from ``path``) needs three field
-    channels; prepared (:func:`gyrotest.envmodel.prepare.prepare_log`), then :func:`mag_fit`
+    channels; prepared (:func:`gyrotest.envmodel.pipeline.prepare_log`), then :func:`mag_fit`
     with the ``--with`` terms ``with_terms`` (comma-separated); ``reference`` as in
     :func:`analyse_thermal`."""
     extra, _ = mag_terms(with_terms)

@@ -139,7 +139,7 @@ def describe_interval(frame, refs, t1: float, t2: float, power_on: bool = False)
 
 
 def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
-    """Excursions of a :class:`~gyrotest.envmodel.fit.FitResult` (see the module docstring),
+    """Excursions of a :class:`~gyrotest.envmodel.modelfit.FitResult` (see the module docstring),
     chronological, at most ``max_items`` (the largest)."""
 
     # the white and flicker part of the fitted noise at the working resolution: a random walk

@@ -21,7 +21,7 @@ def floor_rms(N: float, B: float, K: float, t_eff_s: float, duration_s: float) -
     Formula: rms² = N²/T_eff + B²·ln(T/(2·T_eff))/(2 ln 2) + K²·T/6, with N in
     (deg/h)·√s (σ² = N²/τ), B the flicker Allan plateau in deg/h, K in (deg/h)/√s
     (σ² = K²τ/3), T_eff the averaging time of the working filter (smoother and block mean,
-    :func:`gyrotest.envmodel.fit.effective_averaging_time`) and T the record length: white
+    :func:`gyrotest.envmodel.modelfit.effective_averaging_time`) and T the record length: white
     noise averaged over T_eff; flicker with one-sided PSD B²/(2 ln 2·f) integrated from 1/T to
     1/(2·T_eff); a random walk of diffusion K² has a mean-removed variance K²·T/6 over T.
     Source: IEEE Std 952-1997 Annex C (σ² of white, flicker and random-walk rate noise);

@@ -99,7 +99,7 @@ def _f(x: Any) -> float:
 
 
 def make_step(res, steps: list[HistoryStep], model_file: str | None = None) -> HistoryStep:
-    """A history step for a :class:`~gyrotest.envmodel.fit.FitResult`, diffed against the
+    """A history step for a :class:`~gyrotest.envmodel.modelfit.FitResult`, diffed against the
     previous step of the same log (same sha256, or the same file name without one)."""
     data = res.data or {}
     sha = data.get("sha256")

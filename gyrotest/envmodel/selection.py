@@ -38,7 +38,7 @@ information criterion on that model:
    lags at the same α); the verdict prints the residual's N, B, K. A model term the data do
    not support (ΔBIC of dropping it < −BIC_TIE) is named for removal.
 7. **Never degenerate.** A candidate whose design column lies in the span of the model's
-   (variance inflation ≥ :data:`gyrotest.envmodel.fit.VIF_MAX`) is not proposed.
+   (variance inflation ≥ :data:`gyrotest.envmodel.modelfit.VIF_MAX`) is not proposed.
 
 Sources: S. S. Wilks (1938) (likelihood ratio); R. B. Davies, Biometrika 74 (1987) 33–43;
 R. E. Kass, A. E. Raftery, JASA 90 (1995) 773–795 (Bayes factors, ΔBIC); G. M. Ljung,
@@ -54,7 +54,6 @@ from scipy import optimize
 
 from ..core.errors import AnalysisError, InputError
 from .candidate import Candidate, Removal, _fmt_p
-from .fit import VIF_MAX, FitResult, WorkData, fit_model
 from .lookelsewhere import (
     Whiteness,
     davies_log_p,
@@ -63,6 +62,7 @@ from .lookelsewhere import (
     p_from_null,
     total_variation,
 )
+from .modelfit import VIF_MAX, FitResult, WorkData, fit_model
 from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
 from .workbench_rules import (  # noqa: E402  (the decision constants, one source)
@@ -708,7 +708,7 @@ def pair_step(wd: WorkData, base: FitResult, sc: Screen, tested: list[Candidate]
 
 
 def separation_advice(a: Candidate, b: Candidate) -> str:
-    from .fit import _advice
+    from .modelfit import _advice
 
     ka = a.spec.key if a.spec else ""
     kb = b.spec.key if b.spec else ""

@@ -2,7 +2,7 @@
 
 Every constant the verdict depends on lives here, with its statistical meaning;
 :mod:`gyrotest.envmodel.selection`, :mod:`gyrotest.envmodel.likelihood` and
-:mod:`gyrotest.envmodel.fit` import them, and the rules text that ``gyrotest model diagnose
+:mod:`gyrotest.envmodel.modelfit` import them, and the rules text that ``gyrotest model diagnose
 --rules`` prints and the man page lists is generated from them. A plain module outside
 :mod:`gyrotest.envmodel`, so that printing the rules loads neither numpy nor scipy.
 """

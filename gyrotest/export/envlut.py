@@ -141,7 +141,7 @@ def regressor_text(t, refs) -> tuple[str, str]:
 
 # ----------------------------------------------------------------------------- evaluation
 #: a coefficient whose |value / 1σ| is below this is not determined by the log it was fitted
-#: on ("not significant" in :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+#: on ("not significant" in :attr:`gyrotest.envmodel.modelfit.Coefficient.significance`)
 DETERMINED_Z = 2.0
 
 

@@ -94,11 +94,11 @@ class LogCache:
     def get(self, path: Path, opts: dict[str, Any], specs: list | None = None):
         """The :class:`~gyrotest.core.data.GyroLog` of ``path`` read with ``opts`` (like the
         commands: :func:`~gyrotest.io.inputs.read_with_options`, the errors about a channel a model
-        term needs naming the term, :func:`~gyrotest.envmodel.prepare.naming_terms`)."""
+        term needs naming the term, :func:`~gyrotest.envmodel.pipeline.naming_terms`)."""
         key = (str(path), tuple(sorted((k, str(v)) for k, v in opts.items())))
         if key not in self._logs:
             t0 = time.perf_counter()
-            from ..envmodel.prepare import naming_terms
+            from ..envmodel.pipeline import naming_terms
             from ..io.inputs import read_with_options
 
             log = naming_terms(lambda: read_with_options(str(path), opts), specs or [])
@@ -325,10 +325,10 @@ def run_thermal(test: Test, campaign: Campaign, cache: LogCache) -> Analysis:
 def run_model_fit(test: Test, campaign: Campaign, cache: LogCache, terms: str, key: str, *,
                   t_ref: float | None = None) -> Analysis:
     """``gyrotest model fit LOG --terms TERMS [--t-ref T]`` (cli/cmd_model.py): one step of
-    the model workbench, :func:`gyrotest.envmodel.prepare.fit_log`; ``obj`` is the
-    :class:`~gyrotest.envmodel.fit.FitResult`."""
-    from ..envmodel.fit import fit_document
-    from ..envmodel.prepare import collect_terms, fit_log
+    the model workbench, :func:`gyrotest.envmodel.pipeline.fit_log`; ``obj`` is the
+    :class:`~gyrotest.envmodel.modelfit.FitResult`."""
+    from ..envmodel.modelfit import fit_document
+    from ..envmodel.pipeline import collect_terms, fit_log
 
     opts, iargv = ingest_opts(test, campaign)
     path = test.logs[0]

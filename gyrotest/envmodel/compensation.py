@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from . import stats as st
-from .fit import prepare
 from .model import EnvModel
+from .modelfit import prepare
 
 
 @dataclass

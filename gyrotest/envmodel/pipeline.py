@@ -6,7 +6,7 @@ spec-sheet report, which runs the same analyses) share these steps:
 * :func:`collect_terms` -- the ``--terms`` / ``--term NAME:EXPR`` texts as term specs;
 * :func:`naming_terms` -- run a log reader; when ingest rejects a channel a term needs, the
   error names the term(s) as well;
-* :func:`prepare_log` -- the ``--skip`` warm-up trim and :func:`gyrotest.envmodel.fit.prepare`
+* :func:`prepare_log` -- the ``--skip`` warm-up trim and :func:`gyrotest.envmodel.modelfit.prepare`
   with the working-resolution options as typed (``auto`` or a duration); a log too short for
   the model names the terms;
 * :func:`fit_log` -- ``gyrotest model fit``: :func:`prepare_log`, the fit and its slower
@@ -20,7 +20,7 @@ from typing import TypeVar
 
 from ..core.errors import AnalysisError, InputError
 from ..core.units import format_duration, parse_duration
-from .fit import FitResult, WorkData, file_provenance, finish, fit_model, prepare
+from .modelfit import FitResult, WorkData, file_provenance, finish, fit_model, prepare
 from .terms import TermSpec, parse_terms
 
 __all__ = ["collect_terms", "duration_or_auto", "naming_terms", "prepare_log"]
@@ -94,7 +94,7 @@ def prepare_log(log, path: str | None, *, axis: str | None = None, skip: str | f
                 specs: Sequence[TermSpec] | None = None, reference=None,
                 power_on: bool | None = None) -> WorkData:
     """Trim the first ``skip`` (duration text; the warm-up term then counts from the true
-    power-on), then :func:`~gyrotest.envmodel.fit.prepare` at the working resolution
+    power-on), then :func:`~gyrotest.envmodel.modelfit.prepare` at the working resolution
     (``resolution``/``smooth``: ``auto`` or a duration). ``path`` is the log file for the
     model's provenance (``-`` for stdin). When the log is too short, the message names
     ``specs``. ``reference``: a static reference :class:`~gyrotest.core.data.GyroLog` of the same
@@ -144,8 +144,8 @@ def fit_log(log, specs: list[TermSpec], *, path: str | None = None, axis: str | 
             k_sigma: float = 4.0, reference=None) -> FitResult:
     """``gyrotest model fit``: prepare ``log`` with the command's options
     (:func:`prepare_log`; ``path`` for the model's provenance), fit
-    ``specs`` (:func:`~gyrotest.envmodel.fit.fit_model`) and add the residual Allan deviation, noise floor and
-    excursions (:func:`~gyrotest.envmodel.fit.finish`). ``reference``: a static reference log
+    ``specs`` (:func:`~gyrotest.envmodel.modelfit.fit_model`) and add the residual Allan deviation, noise floor and
+    excursions (:func:`~gyrotest.envmodel.modelfit.finish`). ``reference``: a static reference log
     for the noise floor."""
     wd = prepare_log(log, path, axis=axis, skip=skip, t_ref=t_ref, v_ref=v_ref,
                      resolution=resolution, smooth=smooth, specs=specs, reference=reference)

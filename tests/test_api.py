@@ -99,7 +99,7 @@ def test_help_allan_is_the_complete_docstring():
         assert part in text, part
 
 
-@pytest.mark.parametrize("module", ["gyrotest.api.analyses", "gyrotest.api.workbench",
+@pytest.mark.parametrize("module", ["gyrotest.api.analyses", "gyrotest.api.models",
                                     "gyrotest.api.campaign"])
 def test_docstring_examples_run(module, monkeypatch):
     monkeypatch.chdir(ROOT)  # the examples use sample_data/

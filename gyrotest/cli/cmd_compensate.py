@@ -51,7 +51,7 @@ def command(log, model_path, output, keep_bias, force, plot_path, as_json, inges
       gyrotest compensate sample_data/bias_run2.parquet \\
           --profile sample_data/bias_run2.profile.toml --model model.json -o run2_comp.parquet
     """
-    from ..api.workbench import compensate
+    from ..api.models import compensate
     from ..envmodel.model import EnvModel
 
     out_path = check_output(output, LOG_SUFFIXES, "output file")

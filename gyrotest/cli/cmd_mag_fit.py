@@ -54,7 +54,7 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
       gyrotest mag-fit sample_data/magnetic.parquet --profile sample_data/magnetic.profile.toml \\
           --with T -o mag.json
     """
-    from ..api.workbench import mag_fit
+    from ..api.models import mag_fit
     from ..envmodel.domain import mag_terms
 
     out_path = check_output(output, (".json", ".toml"), "model file")

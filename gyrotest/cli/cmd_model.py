@@ -200,7 +200,7 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
     """The ``--reference`` log, read with the same ingest options (units, gyro output, time);
     the auxiliary channels a profile names (temperatures, fields, ...) are not required of a
     static run. Errors name the option."""
-    from ..api.workbench import read_reference
+    from ..api.models import read_reference
 
     return read_reference(path or None, opts.get("profile"), opts)
 
@@ -341,7 +341,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
       gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
           --terms "T(T_chamber_C)" --term "grad:temp.T_coil_a_C - temp.T_coil_b_C" --json
     """
-    from ..api.workbench import Model
+    from ..api.models import Model
     from ..envmodel.history import append_history, session_paths
 
     model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,
@@ -466,7 +466,7 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
-    from ..api.workbench import Model
+    from ..api.models import Model
     from ..envmodel.terms import split_terms
 
     model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,

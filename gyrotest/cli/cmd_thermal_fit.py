@@ -103,7 +103,7 @@ def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, s
           --t-ref 21 -o thermal.json
       gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t-ref 21
     """
-    from ..api.workbench import thermal_fit
+    from ..api.models import thermal_fit
     from ..envmodel.domain import check_thermal_input, parse_gradient, thermal_terms
 
     check_thermal_input(log is not None, setpoints)

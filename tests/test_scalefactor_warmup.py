@@ -1,4 +1,4 @@
-"""Warm-up time (gyrotest/warmup.py): the closed form τ_w·ln(A/band) of an exponential warm-up,
+"""Warm-up time (gyrotest/staticbias/warmup.py): the closed form τ_w·ln(A/band) of an exponential warm-up,
 the simulator's warm-up truth with noise, nulls (no warm-up) and the bundled power-on runs."""
 
 from __future__ import annotations

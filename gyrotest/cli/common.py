@@ -178,25 +178,6 @@ def json_option(f):
                         help="Print the result as one JSON document on stdout (for scripts).")(f)
 
 
-def _split_cols(value: str | None) -> list[str] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",") if p.strip()]
-    return parts or None
-
-
-def _split_many(*values) -> list[str] | None:
-    """Column names from repeated and/or comma-separated option values (``--temp-col A,B``,
-    ``--temp-col A --temp-col B``); a campaign's string or list works too."""
-    parts: list[str] = []
-    for v in values:
-        if v is None:
-            continue
-        for item in [v] if isinstance(v, str) else v:
-            parts += _split_cols(item) or []
-    return parts or None
-
-
 INGEST_OPTION_NAMES = (
     "profile", "time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",

@@ -159,7 +159,7 @@ def parse_display_unit(text: str | None, *, what: str = "--unit") -> DisplayUnit
 
 
 def term_text(term, unit: DisplayUnit = DEFAULT, digits: int = 3, k: float = 1.0) -> str:
-    """A fitted noise term (:class:`gyrotest.noise.noisefit.FittedTerm`-like: ``main``, ``params``,
+    """A fitted noise term (:class:`gyrotest.noise.fitresult.FitTerm`-like: ``main``, ``params``,
     ``sigma``, ``upper``, ``units``, ``status``, ``value``) as text in ``unit``, e.g.
     ``N = 0.0501 ± 0.0003 deg/s/√Hz`` or ``R ≤ 2.1e-10 deg/s²``; the deg/h family gives the
     term's own text. ``k``: the ± is k·1σ (the expanded uncertainty U of a sheet whose tables

@@ -26,7 +26,7 @@ deviation itself — benchmarked against AllanTools in bench_oadev.py — and ev
 
 Accuracy (``--accuracy``)
 -------------------------
-Simulated records (``gyrotest.simulate``, exact noise generators) of 8–24 h at 10–100 Hz, several
+Simulated records (``gyrotest.simulation``, exact noise generators) of 8–24 h at 10–100 Hz, several
 seeds each; the default Q,N,B,K,R fit (plus the diagnosis) is compared with the truth:
 N within 5 %, B within 25 %, K within 35 % where the record shows them; Q from pulse data
 within 10 % of S0/√12; a hidden Markov hump's T_c and a hidden sinusoid's period within 10 %;
@@ -68,7 +68,7 @@ BREAKDOWN = r"""
 import json, sys, time
 path = sys.argv[1]
 t0 = time.perf_counter()
-from gyrotest.ingest import read_log
+from gyrotest.io.ingest import read_log
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.deviations import compute_deviation
 t1 = time.perf_counter()
@@ -183,7 +183,7 @@ TRUE_EXTRA = {"T_c": 2.0, "period": 20.0}
 
 
 def _log(rate, tau0, kind="rate", s0=None):
-    from gyrotest.data import GyroConstants, GyroLog, Timing
+    from gyrotest.core.data import GyroConstants, GyroLog, Timing
 
     n = rate.size
     return GyroLog(source="sim", rates={"gyro": rate}, tau0=tau0,
@@ -193,7 +193,7 @@ def _log(rate, tau0, kind="rate", s0=None):
 
 def accuracy(seeds: int) -> dict:
     from gyrotest.noise.analysis import analyse_allan
-    from gyrotest.simulate import simulate
+    from gyrotest.simulation import simulate
 
     rows = []
     bounds: list[dict] = []

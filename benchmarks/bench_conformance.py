@@ -26,7 +26,7 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from gyrotest.data import GyroConstants, GyroLog, Timing  # noqa: E402
+from gyrotest.core.data import GyroConstants, GyroLog, Timing  # noqa: E402
 from gyrotest.noise.analysis import analyse_allan  # noqa: E402
 from gyrotest.noise.realdata import load_rate_csv, read_stable32, stable32_table_kind  # noqa: E402
 

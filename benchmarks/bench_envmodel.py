@@ -65,9 +65,9 @@ def _load(name: str) -> dict:
 
 
 def _sim(sc: dict, seed: int, stem: str):
-    from gyrotest.ingest import read_log
-    from gyrotest.profile import profile_from_dict
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.core.profile import profile_from_dict
+    from gyrotest.io.ingest import read_log
+    from gyrotest.simulation import simulate, write_log
 
     TMP.mkdir(parents=True, exist_ok=True)
     res = simulate(sc, seed=seed)
@@ -79,7 +79,7 @@ def _sim(sc: dict, seed: int, stem: str):
 
 
 def _floor(res, log, wd) -> float:
-    from gyrotest.envmodel.fit import prepare
+    from gyrotest.envmodel.modelfit import prepare
 
     g = copy.copy(log)
     g.rates = {log.axes[0]: res.run.ideal_rate_dph - res.run.noise_free_rate_dph}
@@ -89,8 +89,7 @@ def _floor(res, log, wd) -> float:
 
 # ----------------------------------------------------------------------------- speed
 def speed() -> dict:
-    from gyrotest.envmodel import fit_model, prepare
-    from gyrotest.envmodel.diagnose import diagnose
+    from gyrotest.envmodel import diagnose, fit_model, prepare
 
     sc = _load("hidden_gradient.toml")
     sc["record"]["duration_s"] = "24h"
@@ -137,8 +136,7 @@ def speed() -> dict:
 
 # ----------------------------------------------------------------------------- hidden / null
 def hidden_one(args) -> dict:
-    from gyrotest.envmodel import fit_model, prepare
-    from gyrotest.envmodel.diagnose import diagnose
+    from gyrotest.envmodel import diagnose, fit_model, prepare
 
     which, seed = args
     scen, add, repl, coef, true = HIDDEN[which]
@@ -166,8 +164,7 @@ def hidden_one(args) -> dict:
 
 
 def null_one(seed: int) -> dict:
-    from gyrotest.envmodel import prepare
-    from gyrotest.envmodel.diagnose import diagnose
+    from gyrotest.envmodel import diagnose, prepare
 
     res, log = _sim(_load("hidden_none.toml"), seed, "null")
     wd = prepare(log, t_ref=21.0)
@@ -181,7 +178,7 @@ def null_one(seed: int) -> dict:
 # ----------------------------------------------------------------------------- domain
 def domain_one(seed: int) -> dict:
     from gyrotest.envmodel import fit_model, prepare
-    from gyrotest.envmodel.compensate import compensate
+    from gyrotest.envmodel.compensation import compensate
     from gyrotest.envmodel.domain import mag_fit, thermal_fit
 
     out = {"seed": seed}

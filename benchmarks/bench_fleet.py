@@ -12,7 +12,7 @@ Method (the outlier rule is a classifier, so it is tuned on one seed and reporte
   the false-alarm rate (any flag in a null lot), the recall (the shifted member flagged) and the
   rate of wrong flags (another member flagged) in a lot with an outlier. Writes
   ``benchmarks/fleet_outliers.png`` with ``--plot``.
-* ``--speed DIR``: a simulated lot (``gyrotest.simulate.lot.write_lot``, 6 serials + 2 earlier
+* ``--speed DIR``: a simulated lot (``gyrotest.simulation.lot.write_lot``, 6 serials + 2 earlier
   tests) analysed serially, on the process pool (2 workers) and on a Dask LocalCluster, with the
   wall time of each and a check that the three summaries are equal.
 
@@ -77,7 +77,7 @@ def check(lots: int = 4000, seed: int = 2024, dist: str = "normal") -> list[dict
 def speed(directory: str) -> None:
     """Serial vs process pool vs Dask LocalCluster on a simulated lot: wall times, equality."""
     from gyrotest.fleet import run_fleet
-    from gyrotest.simulate.lot import SMALL, write_lot
+    from gyrotest.simulation.lot import SMALL, write_lot
 
     lot = write_lot(directory, 6, size=SMALL)
     res = {}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Single missed samples bridged by ``allan --fill`` (gyrotest.gapfill): the bridged OADEV
+"""Single missed samples bridged by ``allan --fill`` (gyrotest.io.gapfill): the bridged OADEV
 against the same record without gaps and against the closed form, across seeds.
 
     python benchmarks/bench_gaps.py --seeds 0:100
@@ -25,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyrotest.data import Gap, GyroConstants, GyroLog, Timing  # noqa: E402
+from gyrotest.core.data import Gap, GyroConstants, GyroLog, Timing  # noqa: E402
 from gyrotest.noise.analysis import analyse_allan  # noqa: E402
 
 

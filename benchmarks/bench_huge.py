@@ -12,7 +12,7 @@ is written row group by row group (2²⁰ rows each, never the whole record in m
 ``gyrotest allan FILE --rate-unit deg/h --json`` (OADEV 10/decade + noise fit + diagnosis)
 runs in a fresh process; reported: wall and CPU time (getrusage of the child) and the child's
 peak resident memory (``ru_maxrss``) over the float64 record size (8 bytes × samples).
-Every log here is streamed into the integrated angle (``gyrotest/stream.py``; the runs set
+Every log here is streamed into the integrated angle (``gyrotest/io/stream.py``; the runs set
 ``GYROTEST_STREAM_MIN_ROWS=1``, since by default only logs of ≥ 2²⁴ rows are);
 ``--whole`` also runs each log with streaming off, i.e. read whole. Check ``free -g`` first: 10⁹ samples need 8 GB streamed, ≈ 6× that read whole.
 """

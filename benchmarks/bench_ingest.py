@@ -35,7 +35,7 @@ import numpy as np
 mode, path, out = sys.argv[1], sys.argv[2], sys.argv[3]
 import pandas as pd
 import pyarrow
-from gyrotest.ingest import read_log, write_log
+from gyrotest.io.ingest import read_log, write_log
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 t0 = time.perf_counter()
 if mode == "pandas":

@@ -23,9 +23,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from gyrotest.data import GyroConstants, GyroLog, Timing  # noqa: E402
+from gyrotest.core.data import GyroConstants, GyroLog, Timing  # noqa: E402
 from gyrotest.noise.analysis import analyse_allan  # noqa: E402
-from gyrotest.simulate import simulate  # noqa: E402
+from gyrotest.simulation import simulate  # noqa: E402
 
 TRUTH = {"N": 2e-4, "B": 0.003, "markov": [{"q_c": 240.0, "T_c": 0.2}]}
 

@@ -8,7 +8,7 @@ how often the bound holds the true N.
 Rules compared:
 
 * current: N_fit > N_upper, the 95 % upper bound of N from the upper confidence limits of σ̂
-  (family-wise over the τ; :func:`gyrotest.noise.fit.n_upper_bound`);
+  (family-wise over the τ; :func:`gyrotest.noise.noisefit.n_upper_bound`);
 * former (before issue 58): one τ beyond the Bonferroni level Φ⁻¹(1 − 0.05/(2n)) in CI units,
   or two adjacent τ beyond 3 CI, with N_upper = min σ̂√τ/60 read on the estimates.
 
@@ -29,9 +29,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyrotest.data import GyroConstants, GyroLog, Timing  # noqa: E402
+from gyrotest.core.data import GyroConstants, GyroLog, Timing  # noqa: E402
 from gyrotest.noise.analysis import analyse_allan  # noqa: E402
-from gyrotest.simulate import simulate  # noqa: E402
+from gyrotest.simulation import simulate  # noqa: E402
 
 CASES = {
     "clean": ({"N": 0.01, "B": 0.005, "K": 0.002}, 10.0, 7200.0),

@@ -33,13 +33,14 @@ ROOT = os.path.dirname(HERE)
 CHILD = r"""
 import json, resource, sys, time, tracemalloc
 import numpy as np
+from gyrotest.noise import devcore
 from gyrotest.noise import deviations as dv
 kind, n, m = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 rng = np.random.default_rng(5)
 theta = np.cumsum(rng.standard_normal(n)) + 0.3 * rng.standard_normal(n)
 # warm-up on a short record (first-call costs of numpy's einsum/cumsum paths are not per τ)
-(dv._mtot_sum if kind == "mtotdev" else dv._tot_sumsq)(theta[:20000], 50)
-fn = dv._mtot_sum if kind == "mtotdev" else dv._tot_sumsq
+(devcore._mtot_sum if kind == "mtotdev" else devcore._tot_sumsq)(theta[:20000], 50)
+fn = devcore._mtot_sum if kind == "mtotdev" else devcore._tot_sumsq
 rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 t0 = time.process_time()
 val = fn(theta, m)[0]

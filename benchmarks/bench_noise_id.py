@@ -29,9 +29,10 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from gyrotest.noise.deviations import angle_series, compute_deviation  # noqa: E402
+from gyrotest.core.angle import angle_series  # noqa: E402
+from gyrotest.noise.deviations import compute_deviation  # noqa: E402
 from gyrotest.noise.edf import identify_noise_pair  # noqa: E402
-from gyrotest.noise.fit import fit_deviation  # noqa: E402
+from gyrotest.noise.noisefit import fit_deviation  # noqa: E402
 
 ALPHAS = (2, 1, 0, -1, -2)
 AVERAGES = (10, 20, 28, 100)
@@ -53,7 +54,7 @@ def power_law_rate(alpha: int, n: int, rng: np.random.Generator) -> np.ndarray:
 
 
 def id_campaign(seeds: range) -> dict:
-    from gyrotest.noise.deviations import _raw_variance
+    from gyrotest.noise.devcore import _raw_variance
 
     out = {}
     for avg in AVERAGES:
@@ -107,7 +108,7 @@ def fit_recovery(seeds: range) -> list[dict]:
     """K and N from the fit with its own α (alpha_fit) and with the printed Stable32 α."""
     from dataclasses import replace
 
-    from gyrotest.simulate import simulate
+    from gyrotest.simulation import simulate
 
     def sim_rate(noise, *, hours, fs, seed):
         sc = {"record": {"sample_rate_hz": fs, "duration_s": hours * 3600},

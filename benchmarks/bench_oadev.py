@@ -56,7 +56,10 @@ def child(args) -> dict:
     from gyrotest.noise import deviations as dv
 
     if args.chunk:
-        dv.CHUNK = args.chunk
+        from gyrotest.core import angle
+        from gyrotest.noise import devcore
+
+        angle.CHUNK = devcore.CHUNK = args.chunk
     n = int(args.n)
     y = np.random.default_rng(1).standard_normal(n)
     kind = args.kind

@@ -37,7 +37,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from gyrotest.noise.outliers import apply_outliers, detect_outliers  # noqa: E402
-from gyrotest.simulate import simulate  # noqa: E402
+from gyrotest.simulation import simulate  # noqa: E402
 
 ADIS = REPO.parent / "shared" / "reference" / "data" / "realdata" / "data" / \
     "adis16405_imu1.csv.gz"

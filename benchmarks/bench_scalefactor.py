@@ -47,10 +47,10 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", default=None, help="directory to keep the generated logs in")
     a = ap.parse_args(argv)
 
-    from gyrotest.ingest import read_log
-    from gyrotest.profile import load_profile
+    from gyrotest.core.profile import load_profile
+    from gyrotest.io.ingest import read_log
     from gyrotest.scalefactor import analyse, extract_plateaus
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.simulation import simulate, write_log
 
     mags = [1, 2, 5, 10, 20, 50, 100, 200, 500]
     up = [0] + [s * m for m in mags for s in (1, -1)]

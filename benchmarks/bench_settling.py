@@ -40,8 +40,8 @@ sys.path.insert(0, str(HERE.parent))
 
 from ratetable_gen import RATES_DPS, command_sequence, write_campaign  # noqa: E402
 
-from gyrotest.ingest import read_log  # noqa: E402
-from gyrotest.profile import load_profile  # noqa: E402
+from gyrotest.core.profile import load_profile  # noqa: E402
+from gyrotest.io.ingest import read_log  # noqa: E402
 from gyrotest.scalefactor import reduce_logs  # noqa: E402
 
 

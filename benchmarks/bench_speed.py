@@ -163,7 +163,7 @@ def big(rows: int, pairs: int, tmp: str, before: str | None = None) -> None:
 PARSE = r"""
 import json, resource, sys, time
 import pyarrow.csv, pyarrow.parquet  # imported before the clock starts: the stage only
-from gyrotest.ingest import read_log
+from gyrotest.io.ingest import read_log
 r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
 log = read_log(sys.argv[1], overrides={"gyro": {"rate_unit": "deg/h"}})
 r1 = resource.getrusage(resource.RUSAGE_SELF)

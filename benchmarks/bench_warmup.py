@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Randomized check of the warm-up detector of ``gyrotest bias`` (:mod:`gyrotest.warmup`).
+"""Randomized check of the warm-up detector of ``gyrotest bias`` (:mod:`gyrotest.staticbias.warmup`).
 
     python benchmarks/bench_warmup.py --seeds 1000:1040     # report range (tuned on 0:20)
 
@@ -19,8 +19,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from gyrotest.simulate import simulate  # noqa: E402
-from gyrotest.warmup import detect_warmup  # noqa: E402
+from gyrotest.simulation import simulate  # noqa: E402
+from gyrotest.staticbias.warmup import detect_warmup  # noqa: E402
 
 
 def run(seed: int, kind: str, amp: float = 0.0):

@@ -18,8 +18,8 @@ determined by (seed, kind, max_hours).
 Method
 ------
 Each case comes from the independent simulator ``benchmarks/workbench_sim.py`` (no
-``gyrotest.simulate``; see its docstring for the physics, the noise and the truth). The log is
-written as CSV or Parquet and read back with ``gyrotest.ingest.read_log`` using the case's
+``gyrotest.simulation``; see its docstring for the physics, the noise and the truth). The log is
+written as CSV or Parquet and read back with ``gyrotest.io.ingest.read_log`` using the case's
 column roles, so ingest and channel naming are exercised; then ``prepare`` (gyrotest's
 working resolution) and
 
@@ -202,7 +202,7 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
 
 def _added_contributions(fit, added: list[dict]) -> dict[str, np.ndarray]:
     """Block-level fitted contribution of every added term that is in ``fit``."""
-    from gyrotest.envmodel.fit import predict_blocks
+    from gyrotest.envmodel.modelfit import predict_blocks
     out = {}
     for a in added:
         spec = next((s for s in fit.specs if s.label == a["label"]), None)
@@ -221,8 +221,8 @@ def _fit_truth(wd, case):
     coils off) are fitted as their true sum, a single term with coefficient 1 — the model
     the workbench refuses to fit with both (returns the fit and (merged term, the labels it
     replaces), or None)."""
+    from gyrotest.core.errors import AnalysisError
     from gyrotest.envmodel import fit_model
-    from gyrotest.errors import AnalysisError
 
     try:
         return fit_model(wd, case.true_terms), None
@@ -308,10 +308,10 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
     the forward path each diagnosis follows (``model diagnose --path``). The loop adds only
     the chosen effect and diagnoses again, so the path's further steps ("then X" in the
     verdict) change no decision of the loop; the default 1 skips them."""
+    from gyrotest.core.errors import AnalysisError
     from gyrotest.envmodel import diagnose, fit_model, prepare
     from gyrotest.envmodel.terms import parse_terms, resolve_terms
-    from gyrotest.errors import AnalysisError
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
 
     row: dict = case.to_dict()
     row.update(status="ok", error=None, crash_stage=None, steps=[], times={})

@@ -1,6 +1,6 @@
 """Independent rate-table log generator for the scale-factor settling/repeatability checks.
 
-Deliberately *not* built on ``gyrotest.simulate``: plain numpy, its own physics, its own truth.
+Deliberately *not* built on ``gyrotest.simulation``: plain numpy, its own physics, its own truth.
 A pulse-output gyro (counts per sample) on a rate table that follows the commanded rate with a
 first-order lag (time constant ``lag_s``; 0 = ideal steps). Per run r the scale factor (input
 per output pulse, arcsec/pulse, the unit of the SF column) is

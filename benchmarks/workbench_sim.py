@@ -1,7 +1,7 @@
 """Independent simulator for the model-workbench validation campaign (bench_workbench.py).
 
 Nothing here imports gyrotest: the physics is written from scratch with numpy so that the
-campaign does not test gyrotest against its own simulator (``gyrotest.simulate``). A case is a
+campaign does not test gyrotest against its own simulator (``gyrotest.simulation``). A case is a
 bench log at 1 s sampling (a pandas DataFrame), the bench profile that names its columns, the
 model the "user" starts from, and the truth: every injected effect, whether the starting model
 lacks it, its size relative to the noise floor and the candidate names that count as naming it.

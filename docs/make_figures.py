@@ -34,8 +34,8 @@ KEYS = ("gyrotest:page1", "gyrotest:overall", "gyrotest:pages", "gyrotest:campai
 def build_sheet():
     """The customer sheet of the sample campaign, with its figures (they decide the page
     count), as ``gyrotest report`` builds it."""
-    from gyrotest.report.build import make_report
-    from gyrotest.report.campaign import load_campaign
+    from gyrotest.specsheet.build import make_report
+    from gyrotest.specsheet.campaign import load_campaign
 
     return make_report(load_campaign(str(CAMPAIGN)), figures=True, variant="customer")
 
@@ -44,7 +44,7 @@ def page_one_text(sheet) -> str:
     """What page 1 says, as text: the title, the title block (with the overall verdict) and
     section 1 (the model equation with the fitted coefficients), in the Markdown renderer's
     words -- the same numbers the PDF prints, independent of fonts and renderers."""
-    from gyrotest.report.render_md import render_markdown
+    from gyrotest.specsheet.markdown import render_markdown
 
     first = dataclasses.replace(sheet, sections=sheet.sections[:1])
     return render_markdown(first).strip()
@@ -88,7 +88,7 @@ def write_image(out: Path = IMAGE) -> dict[str, str]:
     from PIL import Image
     from PIL.PngImagePlugin import PngInfo
 
-    from gyrotest.report.render_pdf import render_pdf
+    from gyrotest.specsheet.pdf import render_pdf
 
     sheet = build_sheet()
     pdf, pages = render_pdf(sheet)
@@ -126,7 +126,7 @@ def differences(stored: dict[str, str], now: dict[str, str]) -> list[str]:
 
 def main() -> int:
     if "--check" in sys.argv[1:]:
-        from gyrotest.report.render_pdf import render_pdf
+        from gyrotest.specsheet.pdf import render_pdf
 
         sheet = build_sheet()
         _, pages = render_pdf(sheet)

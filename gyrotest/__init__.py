@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import AnalysisError, GyrotestError, InputError, OptionError
+from .core.errors import AnalysisError, GyrotestError, InputError, OptionError
 
 __version__ = "0.1.0"
 
@@ -28,20 +28,23 @@ __version__ = "0.1.0"
 _LAZY: dict[str, str] = {
     "read": "api.analyses",
     "allan": "api.analyses",
+    "bias": "api.analyses",
     "scale_factor": "api.analyses",
-    "thermal_fit": "api.workbench",
-    "mag_fit": "api.workbench",
-    "Model": "api.workbench",
-    "compensate": "api.workbench",
-    "GyroLog": "data",
+    "thermal_fit": "api.models",
+    "mag_fit": "api.models",
+    "Model": "api.models",
+    "compensate": "api.models",
+    "report": "api.campaign",
+    "simulate": "api.campaign",
+    "GyroLog": "core.data",
     "AllanResult": "api.results",
     "BiasResult": "api.results",
     "ScaleFactorResult": "api.results",
-    "ThermalResult": "api.results",
-    "MagResult": "api.results",
-    "ModelFit": "api.results",
-    "ModelDiagnosis": "api.results",
-    "CompensationResult": "api.results",
+    "ThermalResult": "api.modelresults",
+    "MagResult": "api.modelresults",
+    "ModelFit": "api.modelresults",
+    "ModelDiagnosis": "api.modelresults",
+    "CompensationResult": "api.modelresults",
     "Report": "api.results",
     "Simulation": "api.results",
 }
@@ -57,14 +60,7 @@ __all__ = [
 ]
 
 
-#: public functions that share their name with a module: the module is callable
-#: (gyrotest.api._callable), so ``gyrotest.report(...)`` works whatever was imported first
-_CALLABLE_PACKAGES = ("bias", "report", "simulate")
-
-
 def __getattr__(name: str):
-    if name in _CALLABLE_PACKAGES:
-        return importlib.import_module(f".{name}", __name__)
     mod = _LAZY.get(name)
     if mod is None:
         raise AttributeError(f"module 'gyrotest' has no attribute {name!r}")

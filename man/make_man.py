@@ -110,7 +110,7 @@ def render() -> str:
     out.append(".SH COMMANDS")
     for name in cli.list_commands(root):
         _section(name, cli.get_command(root, name), root, out)
-    from gyrotest.workbench_rules import RULES
+    from gyrotest.envmodel.workbench_rules import RULES
 
     out.append(".SH WORKBENCH VERDICT RULES")
     out.append(esc("The decision rules of gyrotest model diagnose (also printed by its --rules "

@@ -11,7 +11,7 @@ profile files, and ``campaign_<serial>.toml``; serial 1104 has a bias far from t
 the lot (within its limit), and serials 1101 and 1102 also have an earlier acceptance test
 (``campaign_<serial>_early.toml``, 90 days before). ``lot.json`` lists the true parameters.
 --small writes 30-minute static runs (what the tests use); the default is 2 h. See
-:func:`gyrotest.simulate.lot.write_lot`.
+:func:`gyrotest.simulation.lot.write_lot`.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import time
 
 def main(argv: list[str]) -> int:
     """Write the lot; print what was written."""
-    from gyrotest.simulate.lot import SMALL, write_lot
+    from gyrotest.simulation.lot import SMALL, write_lot
 
     args = [a for a in argv if not a.startswith("--")]
     if not args:

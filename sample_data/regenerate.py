@@ -5,7 +5,7 @@ Usage (from the repository root, with gyrotest installed)::
     python sample_data/regenerate.py            # all logs
     python sample_data/regenerate.py static     # only the named ones
 
-Each log is written by the simulator (``gyrotest.simulate``) together with its
+Each log is written by the simulator (``gyrotest.simulation``) together with its
 ``<stem>.truth.json`` (the true parameters) and ``<stem>.profile.toml`` (the bench profile the
 campaign uses to read it). Parquet logs are then rewritten with zstd compression (same columns,
 same values, about a third of the size) to keep the repository small. The simulation is
@@ -40,7 +40,7 @@ def recompress(path: Path) -> None:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from gyrotest.output import atomic_path
+    from gyrotest.core.output import atomic_path
 
     table = pq.read_table(path)
     floats = [f.name for f in table.schema if pa.types.is_floating(f.type)]
@@ -51,7 +51,7 @@ def recompress(path: Path) -> None:
 
 def main(argv: list[str]) -> int:
     """Regenerate the logs named in ``argv`` (stems, default all); print what was written."""
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.simulation import simulate, write_log
 
     wanted = set(argv)
     total = 0

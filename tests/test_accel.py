@@ -16,8 +16,8 @@ import pytest
 import yaml
 from test_noise_fit import table_from_model
 
-from gyrotest.accel import accel_channels, is_accel_name
-from gyrotest.noise.fit import fit_noise_model
+from gyrotest.io.accel import accel_channels, is_accel_name
+from gyrotest.noise.noisefit import fit_noise_model
 from gyrotest.noise.resolution import output_resolution
 
 from cliutil import run_cli
@@ -72,7 +72,7 @@ def test_accelerometer_names_and_units(tmp_path):
     assert d["accelerometers"]["units_read"] == {"az_g": "g"}  # _g: standard gravity
     assert d["channels"]["field:hx_g"]["mean"] == pytest.approx(20.0)  # a field's _g: gauss
     # no unit and no gravity to read it from: named, not analysed
-    from gyrotest.data import GyroConstants, GyroLog, Timing
+    from gyrotest.core.data import GyroConstants, GyroLog, Timing
 
     log = GyroLog("x", {"g": np.zeros(n)}, 0.01, Timing(n, 0.01, n * 0.01, "t"),
                   GyroConstants("rate"), extra={"ax": np.zeros(n), "ay": np.ones(n)})
@@ -154,7 +154,7 @@ def test_allan_of_the_accelerometers_and_the_exports(imu_log, tmp_path):
 
 def test_accelerometer_table_matches_allantools(imu_log):
     at = pytest.importorskip("allantools")
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
     from gyrotest.noise.analysis import analyse_allan
 
     log, _, _, _ = imu_log
@@ -220,7 +220,7 @@ def test_real_adis_lsb_and_no_thermal_effect_found():
     """The real ADIS16405 gyro: values are multiples of 0.05 °/s = 180 °/h (the provenance's
     LSB); with a room temperature that cycles ±0.5 °C (10 min HVAC period) independently of
     the gyro, thermal-fit finds no temperature term on any axis."""
-    from gyrotest.data import GyroConstants, GyroLog, Timing
+    from gyrotest.core.data import GyroConstants, GyroLog, Timing
     from gyrotest.envmodel.domain import analyse_thermal
 
     with gzip.open(ADIS, "rt") as fh:

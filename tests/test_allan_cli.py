@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.simulate import simulate, write_log
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 

@@ -21,11 +21,11 @@ import numpy as np
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.data import Gap, GyroConstants, GyroLog, Timing
+from gyrotest.core.data import Gap, GyroConstants, GyroLog, Timing
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.diagnose import diagnose
-from gyrotest.noise.fit import MIN_EDF_IDENTIFY, fit_noise_model, n_upper_bound
-from gyrotest.simulate import simulate
+from gyrotest.noise.noisefit import MIN_EDF_IDENTIFY, fit_noise_model, n_upper_bound
+from gyrotest.simulation import simulate
 
 from cliutil import run_cli
 

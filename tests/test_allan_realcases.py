@@ -9,9 +9,9 @@ import json
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.noise.fit import fit_noise_model
 from gyrotest.noise.impact import attitude_impact, unshaped_bounds
-from gyrotest.simulate import simulate, write_log
+from gyrotest.noise.noisefit import fit_noise_model
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 

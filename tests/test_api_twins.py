@@ -84,7 +84,7 @@ def test_python_twin_gives_the_commands_numbers(cmd, code, scratch, monkeypatch)
     ns: dict = {"gyrotest": gyrotest}
     exec(compile(code, f"<twin of {cmd}>", "exec"), ns)
     res = ns["res"]
-    from gyrotest.output import dumps
+    from gyrotest.core.output import dumps
 
     py = json.loads(dumps(res.to_dict() if hasattr(res, "to_dict") else res))
     counted = [0]

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.axes import choose_axes, parse_axis_option
-from gyrotest.errors import InputError
+from gyrotest.core.axes import choose_axes, parse_axis_option
+from gyrotest.core.errors import InputError
 
 from cliutil import run_cli
 
@@ -52,7 +52,7 @@ def test_parse_axis_option():
 
 
 def test_choose_axes_common_and_errors(xyz_csv):
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
 
     g = read_log(str(xyz_csv), overrides={"gyro": {"rate_unit": "deg/h"},
                                           "columns": {"rate": ["gx", "gy", "gz"]}})

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gyrotest.errors import InputError
-from gyrotest.ingest import read_log
+from gyrotest.core.errors import InputError
 from gyrotest.io.health import MAX_ABS, is_constant
+from gyrotest.io.ingest import read_log
 
 from cliutil import run_cli
 

@@ -13,8 +13,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gyrotest.errors import InputError
-from gyrotest.ingest import read_log
+from gyrotest.core.errors import InputError
+from gyrotest.io.ingest import read_log
 
 from cliutil import run_cli
 

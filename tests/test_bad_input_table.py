@@ -13,7 +13,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from gyrotest.ingest import read_log
+from gyrotest.io.ingest import read_log
 
 from cliutil import run_cli
 

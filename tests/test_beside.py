@@ -1,4 +1,4 @@
-"""The forked child beside the analysis (:mod:`gyrotest.beside`): value, error and fall-back
+"""The forked child beside the analysis (:mod:`gyrotest._runtime`): value, error and fall-back
 behave as a direct call, and the spike check run beside the deviations gives exactly the
 analysis of the serial order (issue #13)."""
 
@@ -11,9 +11,9 @@ import sys
 import numpy as np
 import pytest
 
-from gyrotest import beside
-from gyrotest.data import GyroConstants, GyroLog, Timing
-from gyrotest.errors import InputError
+from gyrotest import _runtime as beside
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.errors import InputError
 from gyrotest.noise import analysis
 
 

@@ -8,17 +8,17 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.bias import (
+from gyrotest.core.earth import OMEGA_E_DPH, Site, earth_rate_component, parse_ia
+from gyrotest.core.profile import load_profile
+from gyrotest.io.ingest import read_log
+from gyrotest.simulation import simulate, write_log
+from gyrotest.staticbias.analysis import (
     estimate_bias,
     mean_uncertainty,
     multi_position,
     repeatability,
     split_positions,
 )
-from gyrotest.earth import OMEGA_E_DPH, Site, earth_rate_component, parse_ia
-from gyrotest.ingest import read_log
-from gyrotest.profile import load_profile
-from gyrotest.simulate import simulate, write_log
 
 from cliutil import run_cli
 

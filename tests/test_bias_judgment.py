@@ -8,9 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from gyrotest.bias import mean_uncertainty
-from gyrotest.simulate import simulate, write_log
-from gyrotest.warmup import detect_warmup
+from gyrotest.simulation import simulate, write_log
+from gyrotest.staticbias.analysis import mean_uncertainty
+from gyrotest.staticbias.warmup import detect_warmup
 
 from cliutil import run_cli
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from gyrotest.simulate import simulate, write_log
-from gyrotest.units import parse_rate_dph
+from gyrotest.core.units import parse_rate_dph
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 
@@ -155,7 +155,7 @@ def test_campaign_bad_band(runs):
 def test_warmup_sigma_calibrated():
     """The stated 1σ of the warm-up time against simulator truth over seeds not used to design
     it (300-315): RMS of error/σ between 0.5 and 1.6, ≥ 80 % within 2σ."""
-    from gyrotest.warmup import warmup_time
+    from gyrotest.staticbias.warmup import warmup_time
 
     z = []
     for seed in range(300, 316):

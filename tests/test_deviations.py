@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError, InputError
+from gyrotest.core.errors import AnalysisError, InputError
+from gyrotest.noise import devcore
 from gyrotest.noise import deviations as dv
 from gyrotest.noise.deviations import DEVIATION_KINDS, compute_deviation
 from gyrotest.noise.taus import decade_m, m_from_taus, octave_m, per_decade_m, tau_grid
@@ -364,7 +365,7 @@ def test_mtotdev_fast_vs_direct(noise):
     x = {"white_pm": e, "white_fm": np.cumsum(e), "rw_fm": np.cumsum(np.cumsum(e))}[noise]
     x = x + 0.37 * np.arange(x.size)  # a frequency offset: removed per subsequence
     for m in (1, 2, 3, 7, 8, 9, 10, 13, 16, 31, 40, 55, 64, 81, 100, 109, 110):
-        fast, n = dv._mtot_sum(x, m)
+        fast, n = devcore._mtot_sum(x, m)
         ref = direct_mtot(x, m) * 12.0 * m**3 * n  # undo the normalisation of _mtot_sum
         assert n == x.size - 3 * m + 1
         assert fast == pytest.approx(ref, rel=1e-10), m
@@ -383,7 +384,7 @@ def test_mtotdev_streamed_chunks_vs_direct(monkeypatch, budget):
         e = rng.standard_normal(n_pts)
         for x in (e, np.cumsum(e) + 0.21 * np.arange(n_pts), np.cumsum(np.cumsum(e))):
             for m in ms:
-                fast, n = dv._mtot_sum(x, m)
+                fast, n = devcore._mtot_sum(x, m)
                 assert n == n_pts - 3 * m + 1
                 ref = direct_mtot(x, m) * 12.0 * m**3 * n
                 assert fast == pytest.approx(ref, rel=1e-10), (budget, n_pts, m)
@@ -401,7 +402,7 @@ def test_mtotdev_working_set_bounded():
     bound = 45 * 8 * mtot._budget(n) + 2**20  # ≈ 45 chunk buffers + small change
     for m in ((n - 1) // 3, n // 4, n // 12):
         tracemalloc.start()
-        dv._mtot_sum(x, m)
+        devcore._mtot_sum(x, m)
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         assert peak < bound, (m, peak, bound)
@@ -449,7 +450,7 @@ def test_mtotdev_linear_in_n():
     times = {}
     for m in (64, 4096):
         t = time.process_time()  # CPU time: robust to other jobs on the machine
-        dv._mtot_sum(x, m)
+        devcore._mtot_sum(x, m)
         times[m] = time.process_time() - t
     assert times[4096] < 4.0 * times[64] + 0.05, times  # O(N·m) would be 64x
 
@@ -492,10 +493,10 @@ def _naive(kind: str, theta: np.ndarray, m: int) -> tuple[float, int]:
 @pytest.mark.parametrize("kind", ["oadev", "adev", "ohdev", "hdev", "mdev", "totdev"])
 def test_chunk_boundaries(monkeypatch, kind):
     """Tiny chunks exercise every chunk-edge and carry path of the streaming kernels."""
-    monkeypatch.setattr(dv, "CHUNK", 7)
+    monkeypatch.setattr(devcore, "CHUNK", 7)
     x = np.cumsum(np.random.default_rng(4).standard_normal(203))
     for m in (1, 2, 3, 5, 8, 13, 33, 50):
-        var, n, _ = dv._raw_variance(kind, [x], m)
+        var, n, _ = devcore._raw_variance(kind, [x], m)
         ss, nn = _naive(kind, x, m)
         assert n == nn
         assert var == pytest.approx(ss / nn, rel=1e-11), m

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import InputError
+from gyrotest.core.errors import InputError
 from gyrotest.noise import theo_kernels as tk
 from gyrotest.noise.deviations import DEVIATION_KINDS, compute_deviation
 from gyrotest.noise.gapdev import finite_runs

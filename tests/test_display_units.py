@@ -12,8 +12,8 @@ import re
 import numpy as np
 import pytest
 
-from gyrotest.display import UNITS, parse_display_unit, term_text
-from gyrotest.errors import InputError
+from gyrotest.core.display import UNITS, parse_display_unit, term_text
+from gyrotest.core.errors import InputError
 
 from cliutil import run_cli
 
@@ -134,7 +134,7 @@ def test_allan_table_in_deg_s(wn_log):
 
 
 def test_allan_plot_labels(wn_log, tmp_path):
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
     from gyrotest.noise.analysis import analyse_allan
     from gyrotest.noise.plots import figure_allan, figure_psd
 

@@ -24,9 +24,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import bench_noise_id  # noqa: E402
 
-from gyrotest.errors import AnalysisError, InputError  # noqa: E402
+from gyrotest.core.angle import angle_series
+from gyrotest.core.errors import AnalysisError, InputError  # noqa: E402
 from gyrotest.noise import edf as E
-from gyrotest.noise.deviations import angle_series
 
 
 def _quiet(fn, *args, **kwargs):
@@ -382,7 +382,7 @@ def test_deviation_carries_both_identifications():
     """compute_deviation prints Stable32's α and keeps the statistical one (alpha_fit, edf_fit)
     for the fit; the fit starts from alpha_fit (fit_alpha), the JSON has both."""
     from gyrotest.noise.deviations import compute_deviation
-    from gyrotest.noise.fit import fit_alpha
+    from gyrotest.noise.noisefit import fit_alpha
 
     y = power_law_rate(-2, 1 << 14, seed=7)
     d = compute_deviation(y, 1.0, input_kind="rate", taus="octave")

@@ -10,11 +10,11 @@ import pytest
 from test_envmodel_helpers import make_log
 from workbench_cases import helmholtz, noise, user_loop
 
+from gyrotest.core.errors import InputError
 from gyrotest.envmodel import fit_model, prepare
 from gyrotest.envmodel.channel_terms import field_quadratic, field_vector
 from gyrotest.envmodel.screen import block_candidates
 from gyrotest.envmodel.terms import TermSpec, parse_terms, resolve_terms
-from gyrotest.errors import InputError
 
 HOUR = 3600.0
 
@@ -115,7 +115,7 @@ def testfold_coefficients_support_directions():
     in the held-out chunk keeps its full-data coefficient) reproduced, and a *combination*
     of columns that moves only in the held-out chunk (two field axes swept together once)
     kept at its full-data value instead of being extrapolated."""
-    from gyrotest.envmodel.fit import fold_coefficients
+    from gyrotest.envmodel.modelfit import fold_coefficients
 
     rng = np.random.default_rng(3)
     n = 400

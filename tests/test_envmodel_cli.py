@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.simulate import simulate, write_log
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 
@@ -95,7 +95,7 @@ def test_compensate_writes_parquet_and_reports(logs, tmp_path):
     d = json.loads(r.out)
     assert d["reduction_factor"] > 5
     assert 0.8 <= d["achieved_over_predicted"] <= 1.2
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
 
     g = read_log(out)
     assert "model_drift_dph" in g.extra
@@ -268,9 +268,9 @@ def test_diagnose_magnetic_sample_completes_the_field_vector_with_hx():
 def test_diagnose_rules_prints_every_rule_without_a_log():
     """`model diagnose --rules` prints the decision rules (the man page's WORKBENCH VERDICT
     RULES) and exits 0 before any log is read; the text is generated from the decision
-    constants the diagnosis uses (gyrotest.workbench_rules)."""
-    from gyrotest import workbench_rules as w
-    from gyrotest.envmodel import likelihood, selection
+    constants the diagnosis uses (gyrotest.envmodel.workbench_rules)."""
+    from gyrotest.envmodel import candidate, likelihood, lookelsewhere, selection
+    from gyrotest.envmodel import workbench_rules as w
 
     res = run_cli(["model", "diagnose", "--rules"])
     assert res.code == 0, res.err
@@ -282,7 +282,8 @@ def test_diagnose_rules_prints_every_rule_without_a_log():
                    f"over {w.WHITE_LAGS} lags", f"≥ {w.VIF_MAX:g}"):
         assert phrase in text, phrase
     # one source: the engine uses these very constants
-    assert selection.ALPHA is w.ALPHA and selection.MC_DRAWS is w.MC_DRAWS
+    assert selection.ALPHA is w.ALPHA and lookelsewhere.MC_DRAWS is w.MC_DRAWS
+    assert candidate.MC_DRAWS is w.MC_DRAWS
     assert likelihood.NL_MAX is w.NL_MAX
     man = (Path(__file__).resolve().parents[1] / "man" / "gyrotest.1").read_text("utf-8")
     assert "WORKBENCH VERDICT RULES" in man

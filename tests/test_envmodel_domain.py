@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 from test_envmodel_helpers import simulated
 
+from gyrotest.core.errors import InputError
 from gyrotest.envmodel import fit_model, prepare
-from gyrotest.envmodel.compensate import compensate
+from gyrotest.envmodel.compensation import compensate
 from gyrotest.envmodel.domain import (
     ANTONOVA_MATVEEV_PAPER,
     ANTONOVA_MATVEEV_SETPOINTS,
@@ -17,7 +18,6 @@ from gyrotest.envmodel.domain import (
     thermal_fit,
     thermal_fit_setpoints,
 )
-from gyrotest.errors import InputError
 
 
 @pytest.fixture(scope="module")

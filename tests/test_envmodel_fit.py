@@ -10,11 +10,11 @@ import pytest
 from scipy import signal
 from test_envmodel_helpers import chamber_profile, lag, make_log
 
+from gyrotest.core.errors import AnalysisError
 from gyrotest.envmodel import fit_model, prepare
 from gyrotest.envmodel.history import append_history, history_path_for, load_history
 from gyrotest.envmodel.model import EnvModel
 from gyrotest.envmodel.terms import temperature_rate
-from gyrotest.errors import AnalysisError
 
 TAU0 = 0.5
 
@@ -247,7 +247,7 @@ def test_several_time_constants_from_scratch_are_not_trapped(tmp_path):
         import workbench_sim as ws
     finally:
         sys.path.remove(str(bench))
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
     case = ws.make_case(24070)
     log = read_log(ws.write_case(case, str(tmp_path)), overrides=case.profile)
     wd = prepare(log)

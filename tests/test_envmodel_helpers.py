@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "sample_data" / "scenarios"
 
@@ -49,9 +49,9 @@ def load_scenario_dict(name: str) -> dict:
 
 @functools.lru_cache(maxsize=64)
 def _sim(name: str, seed: int, rate_hz: float | None, tmpdir: str):
-    from gyrotest.ingest import read_log
-    from gyrotest.profile import profile_from_dict
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.core.profile import profile_from_dict
+    from gyrotest.io.ingest import read_log
+    from gyrotest.simulation import simulate, write_log
 
     sc = load_scenario_dict(name)
     if rate_hz is not None:
@@ -71,7 +71,7 @@ def simulated(name: str, seed: int, tmpdir, rate_hz: float | None = None):
 def noise_floor_of(res, log, wd) -> float:
     """The simulated noise floor at the working resolution of ``wd``: the RMS of the pure
     noise (ideal − noise-free output) through the same smoother and blocks."""
-    from gyrotest.envmodel.fit import prepare
+    from gyrotest.envmodel.modelfit import prepare
 
     run = res.run
     noise_log = copy.copy(log)

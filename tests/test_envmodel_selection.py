@@ -10,11 +10,11 @@ import pytest
 from scipy import stats
 from test_envmodel_helpers import colored_noise, lag, make_log
 
+from gyrotest.core.errors import AnalysisError
 from gyrotest.envmodel import diagnose, fit_model, prepare
 from gyrotest.envmodel.lookelsewhere import chi2_logsf, ljung_box
 from gyrotest.envmodel.selection import judge_step
 from gyrotest.envmodel.sensors import quantisation_step, white_sigma
-from gyrotest.errors import AnalysisError
 
 
 def test_chi2_tail_is_finite_and_continuous_far_out():

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from gyrotest.core.errors import InputError
 from gyrotest.envmodel import terms as tm
 from gyrotest.envmodel.expr import parse_expression
 from gyrotest.envmodel.terms import (
@@ -18,7 +19,6 @@ from gyrotest.envmodel.terms import (
     resolve_terms,
     split_terms,
 )
-from gyrotest.errors import InputError
 
 
 def frame(n=1000, dt=1.0, **ch):

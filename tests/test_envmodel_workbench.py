@@ -91,9 +91,9 @@ def test_bad_reference_run_is_refused_in_one_line(prepared):
     import numpy as np
     from test_envmodel_helpers import make_log
 
+    from gyrotest.core.errors import InputError
     from gyrotest.envmodel.floor import check_reference
     from gyrotest.envmodel.likelihood import reference_noise
-    from gyrotest.errors import InputError
 
     c, wd = prepared("hyhz")
     rng = np.random.default_rng(11)

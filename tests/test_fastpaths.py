@@ -3,7 +3,7 @@
 * which modules a command imports (a module-set check in a fresh interpreter, not a timing);
 * the numpy Welch PSD against ``scipy.signal.welch``;
 * the χ² quantiles from ``scipy.special`` against ``scipy.stats``;
-* the plain-number CSV reader (``gyrotest.fastcsv``) against pyarrow's reader and the general
+* the plain-number CSV reader (``gyrotest.io.fastcsv``) against pyarrow's reader and the general
   ingest path, including ranges, comments, missing cells and the fall-back cases.
 """
 
@@ -259,7 +259,7 @@ def test_trend_check_computes_the_hadamard_deviation_only_as_trend_evidence():
     """``allan``'s trend check: OHDEV at the long τ is computed when the Allan–Krobka
     dispersion falls below the Allan deviation's interval (the KROBKA-M7 evidence, shown in
     the warning's rows), and not on a record without a trend."""
-    from gyrotest.data import GyroConstants, GyroLog, Timing
+    from gyrotest.core.data import GyroConstants, GyroLog, Timing
     from gyrotest.noise.analysis import analyse_allan
 
     rng = np.random.default_rng(3)
@@ -304,7 +304,7 @@ def _write(path: Path, text: str) -> Path:
 def test_fastcsv_matches_pyarrow_across_ranges(tmp_path, monkeypatch):
     import pyarrow.csv as pcsv
 
-    from gyrotest import fastcsv
+    from gyrotest.io import fastcsv
 
     rng = np.random.default_rng(7)
     n = 50_000
@@ -330,7 +330,7 @@ def test_fastcsv_matches_pyarrow_across_ranges(tmp_path, monkeypatch):
 
 
 def test_fastcsv_missing_cells_are_nan_and_text_falls_back(tmp_path):
-    from gyrotest import fastcsv
+    from gyrotest.io import fastcsv
 
     f = _write(tmp_path / "na.csv", "t;x\n0;1.5\n1;NA\n2;\n3;nan\n4;-2e3\n")
     got = fastcsv.read_numeric(f, ";", 0, ["t", "x"], None)
@@ -345,8 +345,8 @@ def test_fastcsv_missing_cells_are_nan_and_text_falls_back(tmp_path):
 
 def test_ingest_results_unchanged_by_fast_path(tmp_path, monkeypatch):
     """read_log through the fast path equals read_log through the general reader."""
-    from gyrotest import fastcsv
-    from gyrotest.ingest import read_log
+    from gyrotest.io import fastcsv
+    from gyrotest.io.ingest import read_log
 
     rng = np.random.default_rng(11)
     n = 3000
@@ -402,10 +402,11 @@ def test_allan_jobs_identical_to_serial(tmp_path):
 
 
 def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
+    from gyrotest import _runtime
     from gyrotest.noise import deviations
 
     calls = []
-    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(_runtime, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
     x = np.random.default_rng(5).standard_normal(300_000)  # above PARALLEL_MIN_SAMPLES
     r = deviations.compute_deviation(x, 0.01, input_kind="rate", taus="octave", noise_id=False)
     n = len(r.tau)
@@ -415,10 +416,11 @@ def test_deviation_progress_hook_sees_every_tau_in_order(monkeypatch):
 
 def test_mtotdev_progress_within_each_tau(monkeypatch):
     """MTOTDEV reports progress inside a τ too (fractional ``done``), still in order."""
+    from gyrotest import _runtime
     from gyrotest.noise import deviations, mtot
 
     calls = []
-    monkeypatch.setattr(deviations, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
+    monkeypatch.setattr(_runtime, "PROGRESS", lambda d, t, k: calls.append((d, t, k)))
     monkeypatch.setattr(mtot, "STEP_INTERVAL_S", 0.0)
     monkeypatch.setattr(mtot, "BATCH_ELEMS", 512)  # many chunks and batches
     x = np.random.default_rng(6).standard_normal(20_000)

@@ -101,7 +101,7 @@ def test_a_constant_log_prints_a_plain_number(tmp_path):
 
 
 def test_east_and_west_sense_no_earth_rate():
-    from gyrotest.earth import OMEGA_E_DPH, earth_rate_component, ia_unit_vector
+    from gyrotest.core.earth import OMEGA_E_DPH, earth_rate_component, ia_unit_vector
 
     for az in (90.0, 270.0, -90.0):
         assert earth_rate_component(48.137, az, 0.0) == 0.0
@@ -278,9 +278,9 @@ def test_export_refuses_undetermined_terms_and_extrapolation(thermal_models, tmp
 
 # ----------------------------------------------------------------------------- conveniences (11)
 def test_info_plot_is_a_quick_look_of_the_raw_log(tmp_path):
-    from gyrotest.ingest import read_log
-    from gyrotest.profile import load_profile
-    from gyrotest.quicklook import envelope, figure_quicklook
+    from gyrotest.core.profile import load_profile
+    from gyrotest.io.ingest import read_log
+    from gyrotest.io.quicklook import envelope, figure_quicklook
 
     png = tmp_path / "look.png"
     r = run_cli(["info", SAMPLE / "magnetic.parquet", "--profile", SAMPLE / "magnetic.profile.toml",
@@ -300,9 +300,9 @@ def test_info_plot_is_a_quick_look_of_the_raw_log(tmp_path):
 
 
 def test_info_plot_shades_gaps_and_marks_spikes_at_their_time(tmp_path):
-    from gyrotest.ingest import read_log
+    from gyrotest.io.ingest import read_log
+    from gyrotest.io.quicklook import figure_quicklook
     from gyrotest.noise.outliers import detect_outliers
-    from gyrotest.quicklook import figure_quicklook
 
     rng = np.random.default_rng(3)
     t = np.arange(20_000) * 0.1
@@ -332,7 +332,7 @@ def lab_folder(tmp_path):
 
 
 def test_report_init_writes_a_campaign_of_the_logs_it_recognised(lab_folder):
-    from gyrotest.report.campaign import load_campaign
+    from gyrotest.specsheet.campaign import load_campaign
 
     r = run_cli(["report", "--init", lab_folder, "--json"])
     assert r.code == 0, r.err

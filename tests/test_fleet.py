@@ -13,7 +13,7 @@ from cliutil import run_cli
 
 @pytest.fixture(scope="module")
 def lot(tmp_path_factory):
-    from gyrotest.simulate.lot import SMALL, write_lot
+    from gyrotest.simulation.lot import SMALL, write_lot
 
     return write_lot(tmp_path_factory.mktemp("lot"), 5, size=SMALL, outlier=3, earlier=1)
 

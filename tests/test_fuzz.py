@@ -23,10 +23,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from gyrotest.core.errors import InputError
+from gyrotest.core.units import factor, parse_duration
 from gyrotest.envmodel.expr import parse_expression
-from gyrotest.errors import InputError
 from gyrotest.noise.analysis import parse_taus
-from gyrotest.units import factor, parse_duration
 
 from cliutil import run_cli
 

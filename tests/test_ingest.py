@@ -11,10 +11,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-from gyrotest.earth import OMEGA_E_DPH
-from gyrotest.errors import InputError
-from gyrotest.ingest import read_log, write_log
-from gyrotest.profile import Profile, load_profile, merge, profile_from_dict
+from gyrotest.core.earth import OMEGA_E_DPH
+from gyrotest.core.errors import InputError
+from gyrotest.core.profile import Profile, load_profile, merge, profile_from_dict
+from gyrotest.io.ingest import read_log, write_log
 
 from cliutil import run_cli
 
@@ -372,7 +372,7 @@ def test_profile_dataclass_roundtrip():
 def test_atomic_write_permissions(tmp_path):
     import os
 
-    from gyrotest.output import write_text
+    from gyrotest.core.output import write_text
 
     old = os.umask(0o022)
     try:

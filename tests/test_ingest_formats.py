@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from gyrotest.ingest import column_guesses, read_log
+from gyrotest.io.ingest import column_guesses, read_log
 
 from cliutil import run_cli
 

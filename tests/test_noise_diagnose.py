@@ -8,7 +8,7 @@ from test_noise_fit import sim_rate, table_from_model
 
 from gyrotest.noise.deviations import compute_deviation
 from gyrotest.noise.diagnose import diagnose, misfit_regions
-from gyrotest.noise.fit import fit_deviation, fit_noise_model
+from gyrotest.noise.noisefit import fit_deviation, fit_noise_model
 from gyrotest.noise.spectral import find_lines, welch_psd
 
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.filtered import FILTER_STATUS, fold_filter
-from gyrotest.noise.fit import fit_noise_model
+from gyrotest.noise.noisefit import fit_noise_model
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from bench_conformance import REAL  # noqa: E402

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError, InputError
+from gyrotest.core.errors import AnalysisError, InputError
 from gyrotest.noise.deviations import compute_deviation
 from gyrotest.noise.edf import chi2_interval
-from gyrotest.noise.fit import (
+from gyrotest.noise.noisefit import (
     ci_residuals,
     conversions,
     estimate_correlation,
@@ -24,7 +24,7 @@ from gyrotest.noise.fit import (
     slope_readoffs,
 )
 from gyrotest.noise.terms import mixture_avar
-from gyrotest.simulate import simulate
+from gyrotest.simulation import simulate
 
 
 # ----------------------------------------------------------------------------- helpers

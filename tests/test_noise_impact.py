@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 from test_noise_fit import table_from_model
 
-from gyrotest.errors import InputError
-from gyrotest.noise.fit import fit_noise_model
+from gyrotest.core.errors import InputError
 from gyrotest.noise.impact import (
     Component,
     attitude_impact,
@@ -21,6 +20,7 @@ from gyrotest.noise.impact import (
     predict_attitude_variance,
     transverse_variance,
 )
+from gyrotest.noise.noisefit import fit_noise_model
 
 A = 180.0 / math.pi * 3600.0  # arcsec per rad (internal angles are arcsec)
 T, DT = 600.0, 0.01

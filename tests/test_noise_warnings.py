@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from test_noise_fit import sim_rate, table_from_model
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
 from gyrotest.noise.analysis import analyse_allan
 from gyrotest.noise.diagnose import diagnose
-from gyrotest.noise.fit import fit_noise_model, slope_readoffs
+from gyrotest.noise.noisefit import fit_noise_model, slope_readoffs
 from gyrotest.noise.terms import mixture_avar
 from gyrotest.noise.warnings import CODES, krobka_checks, local_slopes
 

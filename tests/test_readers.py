@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.ingest import read_log
+from gyrotest.io.ingest import read_log
 
 from cliutil import run_cli
 

@@ -191,7 +191,7 @@ def test_markdown_to_stdout_by_default(tmp_path):
     ('[extra]\nx = 1\n', ["camp.toml", "[extra]", "unknown section"]),
 ])
 def test_bad_campaign_fails_before_any_work(tmp_path, monkeypatch, body, fragments):
-    import gyrotest.report.build as build
+    import gyrotest.specsheet.build as build
 
     def boom(*a, **k):
         raise AssertionError("an analysis ran before the campaign was validated")
@@ -226,7 +226,7 @@ def test_analysis_error_names_the_test(tmp_path):
 
 
 def test_number_formatting_and_verdicts():
-    from gyrotest.report.sheet import (
+    from gyrotest.specsheet.sheet import (
         FAIL,
         INCONCLUSIVE,
         NO_LIMIT,
@@ -253,7 +253,7 @@ def test_number_formatting_and_verdicts():
     assert v(0.8, 1.0) == PASS and v(-0.8, 1.0) == PASS and v(1.2, 1.0) == FAIL
     assert v(1.2, 1.0, bound=True) == INCONCLUSIVE and v(0.5, 1.0, bound=True) == PASS
     # ILAC-G8 guarded acceptance with U = 2σ, and simple acceptance
-    from gyrotest.report.sheet import COND_FAIL, COND_PASS
+    from gyrotest.specsheet.sheet import COND_FAIL, COND_PASS
 
     def g(value, sigma, limit, rule="guard-band"):
         return Check("k", "x", "", Num(value, "u", sigma), limit, "u", rule=rule).verdict
@@ -291,7 +291,7 @@ def test_sample_pdf_and_html_with_figures(tmp_path):
 def test_supply_test_and_equality(tmp_path):
     """A campaign with a supply-voltage run: the sensitivity is reported, checked against its
     limit, and equals what 'gyrotest model fit --terms V' prints."""
-    from gyrotest.simulate import simulate, write_log
+    from gyrotest.simulation import simulate, write_log
 
     scen = {"scenario": {"seed": 3}, "record": {"sample_rate_hz": 1.0, "duration_s": 7200},
             "gyro": {"output": "rate", "rate_unit": "deg/h", "bias_dph": 0.5,
@@ -369,7 +369,7 @@ def test_template_is_a_valid_campaign(tmp_path):
     p = SAMPLE / "_template_check.toml"
     try:
         p.write_text(r.out, encoding="utf-8")
-        from gyrotest.report.campaign import load_campaign
+        from gyrotest.specsheet.campaign import load_campaign
 
         c = load_campaign(p)
         assert c.decision == {"rule": "guard-band", "coverage_factor": 2.0}
@@ -408,8 +408,8 @@ def test_expired_calibration_is_flagged(tmp_path):
 
 
 def test_pdf_creation_date(tmp_path, monkeypatch):
-    from gyrotest.report import build_sheet, load_campaign
-    from gyrotest.report.render_pdf import render_pdf
+    from gyrotest.specsheet import build_sheet, load_campaign
+    from gyrotest.specsheet.pdf import render_pdf
 
     camp = _mini_campaign(tmp_path, BIAS)
     sheet = build_sheet(load_campaign(camp), {}, figures=False)

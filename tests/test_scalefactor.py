@@ -14,10 +14,10 @@ import math
 import numpy as np
 import pytest
 
-from gyrotest.data import GyroConstants, GyroLog, Timing
-from gyrotest.earth import Site
-from gyrotest.errors import AnalysisError, InputError
-from gyrotest.output import dumps
+from gyrotest.core.data import GyroConstants, GyroLog, Timing
+from gyrotest.core.earth import Site
+from gyrotest.core.errors import AnalysisError, InputError
+from gyrotest.core.output import dumps
 from gyrotest.scalefactor import (
     Plateau,
     RunPlateaus,
@@ -28,13 +28,9 @@ from gyrotest.scalefactor import (
     snap_rates,
     write_points_csv,
 )
-from gyrotest.scalefactor.fit import (
-    Points,
-    adler,
+from gyrotest.scalefactor.characteristics import (
     asymmetry_common_intercept,
     asymmetry_separate_lines,
-    ieee_line,
-    select_model,
 )
 from gyrotest.scalefactor.plateaus import (
     allan_stderr,
@@ -42,6 +38,12 @@ from gyrotest.scalefactor.plateaus import (
     constant_runs,
     detect_steps,
     mean_stderr,
+)
+from gyrotest.scalefactor.tablefit import (
+    Points,
+    adler,
+    ieee_line,
+    select_model,
 )
 
 DPS = 3600.0

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from gyrotest.simulate import simulate, write_log
+from gyrotest.simulation import simulate, write_log
 
 from cliutil import run_cli
 

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.scalefactor.fit import DPS, Points
 from gyrotest.scalefactor.lowrate import detect_saturation, resolution, threshold
+from gyrotest.scalefactor.tablefit import DPS, Points
 
 from cliutil import run_cli
 

@@ -11,9 +11,9 @@ import json
 import numpy as np
 import pytest
 
-from gyrotest.errors import InputError
-from gyrotest.ingest import read_log
-from gyrotest.profile import load_profile
+from gyrotest.core.errors import InputError
+from gyrotest.core.profile import load_profile
+from gyrotest.io.ingest import read_log
 from gyrotest.scalefactor.matrix import misalignment_matrix, parse_axis_label
 
 from cliutil import run_cli

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.ingest import read_log
-from gyrotest.profile import load_profile
+from gyrotest.core.profile import load_profile
+from gyrotest.io.ingest import read_log
 from gyrotest.scalefactor import find_settling, reduce_logs
 from gyrotest.scalefactor.repeatability import (
     group_by_temperature,

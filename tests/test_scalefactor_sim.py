@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.ingest import read_log
-from gyrotest.profile import load_profile
+from gyrotest.core.profile import load_profile
+from gyrotest.io.ingest import read_log
 from gyrotest.scalefactor import extract_plateaus, reduce_logs
-from gyrotest.simulate import simulate, write_log
+from gyrotest.simulation import simulate, write_log
 
 SCEN = Path(__file__).resolve().parents[1] / "sample_data" / "scenarios"
 

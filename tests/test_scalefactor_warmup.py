@@ -1,4 +1,4 @@
-"""Warm-up time (gyrotest/warmup.py): the closed form τ_w·ln(A/band) of an exponential warm-up,
+"""Warm-up time (gyrotest/staticbias/warmup.py): the closed form τ_w·ln(A/band) of an exponential warm-up,
 the simulator's warm-up truth with noise, nulls (no warm-up) and the bundled power-on runs."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import AnalysisError
-from gyrotest.simulate import simulate
-from gyrotest.warmup import warmup_time
+from gyrotest.core.errors import AnalysisError
+from gyrotest.simulation import simulate
+from gyrotest.staticbias.warmup import warmup_time
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -28,7 +28,7 @@ OLD_NAMES = ("quadratic", "cubic", "quartic", "quintic")
 def sheet():
     """The customer sheet of the sample campaign with its figures (as make_figures builds
     it), and the legend texts of every figure drawn on the way."""
-    import gyrotest.report.figures as figures
+    import gyrotest.specsheet.figures as figures
 
     legends: dict[str, list[str]] = {}
     orig = figures._png_from_fig
@@ -45,7 +45,7 @@ def sheet():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(figures, "_png_from_fig", capture)
         sh = make_figures.build_sheet()
-    from gyrotest.report.render_pdf import render_pdf
+    from gyrotest.specsheet.pdf import render_pdf
 
     _, pages = render_pdf(sh)
     return sh, pages, [t for v in legends.values() for t in v]
@@ -89,7 +89,7 @@ def sf_outputs(tmp_path_factory):
 
 def test_each_f_of_i_term_has_one_name_and_one_formula_everywhere(sf_outputs, sheet):
     from gyrotest.export.envlut import ascii_text
-    from gyrotest.scalefactor.fit import OUTPUT_POWER_NOTE, TERM_LABELS, TERMS
+    from gyrotest.scalefactor.tablefit import OUTPUT_POWER_NOTE, TERM_LABELS, TERMS
 
     terminal, doc, header, csv_text = sf_outputs
     coefs = doc["nonlinearity_model"]["coefficients"]
@@ -136,7 +136,7 @@ def _pm(text: str) -> str:
 
 
 def test_legends_give_the_uncertainty_the_tables_give(sheet):
-    from gyrotest.units import format_number
+    from gyrotest.core.units import format_number
 
     sh, _, legends = sheet
     checks = {c.key: c for c in sh.checks}
@@ -171,14 +171,14 @@ def test_json_uncertainty_is_null_where_the_sheet_says_not_evaluated(sheet):
 
 
 def test_no_table_cell_breaks_inside_a_word(sheet):
-    from gyrotest.report.render_pdf import (
+    from gyrotest.specsheet.pdf import (
         CELL_PAD,
         VERDICT_COLOURS,
         _register_fonts,
         _styles,
         column_widths,
     )
-    from gyrotest.report.sheet import Num, Table
+    from gyrotest.specsheet.sheet import Num, Table
 
     _register_fonts()
     st = _styles()
@@ -190,8 +190,8 @@ def test_no_table_cell_breaks_inside_a_word(sheet):
                          "0.0398 ± 0.0090", "≤ 0.05265", "CONDITIONAL PASS"],
                         ["0428", Num(4.75e-6, "", 1.2e-7, k=2.0), "0.012", "strapdown",
                          "arcsec/pulse", "4.750·10⁻⁶", "PASS"]])
-    from gyrotest.report.build import make_report
-    from gyrotest.report.campaign import load_campaign
+    from gyrotest.specsheet.build import make_report
+    from gyrotest.specsheet.campaign import load_campaign
 
     eng = make_report(load_campaign(str(make_figures.CAMPAIGN)), figures=False,
                       variant="engineering")  # its commands, diagnostics and history tables

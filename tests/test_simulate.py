@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrotest.errors import InputError
-from gyrotest.ingest import read_log
+from gyrotest.core.errors import InputError
+from gyrotest.core.output import jsonable
+from gyrotest.core.profile import load_profile
+from gyrotest.io.ingest import read_log
 from gyrotest.noise.terms import EARTH_RATE_DPH
-from gyrotest.output import jsonable
-from gyrotest.profile import load_profile
-from gyrotest.simulate import ANTONOVA_MATVEEV, load_scenario, simulate, write_log
-from gyrotest.simulate import environment as env
+from gyrotest.simulation import ANTONOVA_MATVEEV, load_scenario, simulate, write_log
+from gyrotest.simulation import environment as env
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = sorted(glob.glob(str(ROOT / "sample_data" / "scenarios" / "*.toml")))
@@ -526,7 +526,7 @@ def test_sample_scenarios_load(path):
 
 
 def test_docstring_example_parses_and_runs():
-    import gyrotest.simulate as S
+    import gyrotest.simulation as S
 
     block = S.__doc__.split(".. code-block:: toml")[1].split("Files written beside")[0]
     text = "\n".join(ln[4:] if ln.startswith("    ") else ln for ln in block.splitlines())
@@ -576,7 +576,7 @@ def test_missing_duration_and_bad_file(tmp_path):
 
 
 def test_readme_format_block_matches_the_module_docstring():
-    import gyrotest.simulate as S
+    import gyrotest.simulation as S
 
     readme = (ROOT / "sample_data" / "scenarios" / "README.md").read_text()
     block = readme.split("```toml\n")[1].split("```")[0]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from gyrotest.noise.terms import TERMS, mixture_avar
-from gyrotest.simulate import simulate
+from gyrotest.simulation import simulate
 
 
 def oavar(rate: np.ndarray, tau0: float, ms) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Long Parquet logs streamed into θ (gyrotest.stream, gyrotest.noise.streamed; issue #13):
+"""Long Parquet logs streamed into θ (gyrotest.io.stream, gyrotest.noise.streamed; issue #13):
 the streamed analysis must give the numbers of the whole-log analysis — deviations, noise
 types, fit, spike events, PSD, ACF — across batch boundaries, gaps and spikes, for plain
 Parquet tables and for files written by `gyrotest ingest`."""
@@ -13,10 +13,10 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
-import gyrotest.stream as st
-from gyrotest.ingest import read_log, write_log
+import gyrotest.io.stream as st
+from gyrotest.core.angle import angle_series
+from gyrotest.io.ingest import read_log, write_log
 from gyrotest.noise.analysis import analyse_allan
-from gyrotest.noise.deviations import angle_series
 from gyrotest.noise.outliers import detect_outliers
 from gyrotest.noise.spectral import welch_psd
 from gyrotest.noise.streamed import detect_outliers_series, welch_psd_series

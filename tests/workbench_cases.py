@@ -1,4 +1,4 @@
-"""The workbench cases of issue #9, written with plain numpy (not ``gyrotest.simulate``).
+"""The workbench cases of issue #9, written with plain numpy (not ``gyrotest.simulation``).
 
 :func:`case` returns a :class:`Case`: the log, the base terms a user starts from, the true
 model as term texts (custom expressions where the library has no term), and the term keys
@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from test_envmodel_helpers import make_log
 
-from gyrotest.earth import Site, earth_rate_component
+from gyrotest.core.earth import Site, earth_rate_component
 from gyrotest.envmodel.terms import first_order_lag, thermal_branch
 
 HOUR = 3600.0

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from ..errors import OptionError
-from ._inputs import as_logs, read_log_from, seconds, split_read_options, text_list
+from ..core.errors import OptionError
+from ..io.inputs import as_logs, read_log_from, seconds, split_read_options, text_list
 from .results import AllanResult, BiasResult, ScaleFactorResult
 
 __all__ = ["allan", "bias", "read", "scale_factor"]
@@ -20,7 +20,7 @@ __all__ = ["allan", "bias", "read", "scale_factor"]
 
 def read(data, profile=None, *, sample_interval=None, unit: str | None = None,
          name: str | None = None, stream: bool = False, **options):
-    """Read a bench log into a :class:`~gyrotest.data.GyroLog` (``gyrotest info``/``ingest``).
+    """Read a bench log into a :class:`~gyrotest.core.data.GyroLog` (``gyrotest info``/``ingest``).
 
     The gyro output becomes an angular rate in deg/h (one array per axis), time seconds from
     the first sample, temperatures degC, magnetic field µT, supply voltage V; gaps (intervals
@@ -50,7 +50,7 @@ def read(data, profile=None, *, sample_interval=None, unit: str | None = None,
         ``"<array>"``).
     stream : bool, default False
         A Parquet log of ≥ 2**24 rows comes back as its integrated angle only (a
-        :class:`~gyrotest.stream.StreamedLog`, enough for :func:`allan`).
+        :class:`~gyrotest.io.stream.StreamedLog`, enough for :func:`allan`).
     **options
         Ingest options with the command line's names: ``time_col``, ``rate_col`` (a name, a
         list or comma-separated names for several axes), ``rate_unit``, ``counts_col``,
@@ -124,9 +124,9 @@ def _read_for(data, where: str, profile, opts, specs=None, **kw) -> list:
     term needs names the term (as the commands do)."""
     if not specs:
         return as_logs(data, where, profile=profile, opts=opts, **kw)
-    from ..envmodel.prepare import load_for_terms
+    from ..envmodel.pipeline import naming_terms
 
-    return load_for_terms(lambda: as_logs(data, where, profile=profile, opts=opts, **kw),
+    return naming_terms(lambda: as_logs(data, where, profile=profile, opts=opts, **kw),
                           specs)
 
 
@@ -137,9 +137,9 @@ def allan_settings(*, dev="oadev", taus="10/decade", stop_ratio=None, terms="Q,N
     """:func:`allan`'s options as :func:`gyrotest.noise.analysis.analyse_allan` takes them
     (checked: an InputError names the option)."""
     from ..noise.analysis import parse_detrend, parse_taus
-    from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
     from ..noise.kinds import DEVIATION_KINDS, MIN_EDF
+    from ..noise.noisefit import parse_terms
 
     if dev not in DEVIATION_KINDS:
         raise OptionError(f"dev: unknown deviation {dev!r}", fix="use one of "
@@ -390,9 +390,9 @@ def bias(data, *, skip: float | str = 0, axis: str | None = None,
     11.2017 0.50 ± 0.011 deg/h
     """
     opts = split_read_options(dict(read_options), "bias")
-    from ..bias import parse_positions
-    from ..bias_axes import analyse_bias_axes
-    from ..units import parse_rate_dph
+    from ..core.units import parse_rate_dph
+    from ..staticbias.analysis import parse_positions
+    from ..staticbias.multiaxis import analyse_bias_axes
 
     if outliers not in ("flag", "remove", "robust"):
         raise OptionError(f"outliers: {outliers!r}", fix="use flag, remove or robust")

@@ -7,7 +7,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import OptionError
+from ..core.errors import OptionError
 from .results import Report, Simulation
 
 __all__ = ["report", "simulate"]
@@ -62,8 +62,8 @@ def report(campaign, *, variant: str = "customer", figures: bool = True,
     """
     if variant not in ("customer", "engineering"):
         raise OptionError(f"variant: {variant!r}", fix="use customer or engineering")
-    from ..report.build import make_report
-    from ..report.campaign import Campaign, load_campaign
+    from ..specsheet.build import make_report
+    from ..specsheet.campaign import Campaign, load_campaign
 
     if isinstance(campaign, Campaign):
         camp = campaign
@@ -122,6 +122,6 @@ def simulate(scenario, *, seed: int | None = None) -> Simulation:
     >>> sim.truth["bias"]["D_F_dph"], sim.to_frame().shape
     (0.5, (6000, 2))
     """
-    from ..simulate import simulate as engine
+    from ..simulation import simulate as engine
 
     return Simulation(engine(scenario, seed=seed))

@@ -1,8 +1,8 @@
 """The result objects of the Python API.
 
 Each result holds the analysis object its command renders (``.core``: an
-:class:`~gyrotest.noise.analysis.AllanAnalysis`, a :class:`~gyrotest.bias_axes.BiasAxes`,
-an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attributes
+:class:`~gyrotest.noise.allanresult.AllanAnalysis`, a :class:`~gyrotest.staticbias.multiaxis.BiasAxes`,
+an :class:`~gyrotest.envmodel.modelfit.FitResult` ...) and reads through to its attributes
 (``res.axes``, ``res.coefficients``), and adds the same four things to every kind:
 
 * ``to_dict()`` -- the command's ``--json`` document, built by the same function;
@@ -10,6 +10,8 @@ an :class:`~gyrotest.envmodel.fit.FitResult` ...) and reads through to its attri
 * ``plot(ax=None)`` -- without ``ax`` the figure the command's ``--plot`` writes (a
   :class:`matplotlib.figure.Figure`); with ``ax`` the main panel drawn on that Axes (returned);
 * ``_repr_html_()`` -- a summary and the frame, for notebooks.
+
+The results of the drift-model functions are in :mod:`.modelresults`.
 
 The engine behind a result can change (the workbench's verdict engine is being rebuilt):
 scripts that use these four methods and the documented attributes keep working.
@@ -56,7 +58,7 @@ class Result:
 
     def to_json(self, indent: int | None = 2) -> str:
         """:meth:`to_dict` as JSON text, exactly as the command's ``--json`` prints it."""
-        from ..output import dumps
+        from ..core.output import dumps
 
         return dumps(self.to_dict(), indent=indent)
 
@@ -84,7 +86,7 @@ class Result:
         return ax
 
     def _figure(self):
-        from ..plotting import new_figure
+        from ..core.plotting import new_figure
 
         fig, ax = new_figure()
         self._draw(ax)
@@ -130,7 +132,7 @@ def _frame(rows: list[dict], columns: list[str] | None = None):
 class AllanResult(Result):
     """The Allan analysis of one or more logs (:func:`gyrotest.allan`).
 
-    ``res.logs`` holds one :class:`~gyrotest.noise.analysis.AllanAnalysis` per log; the
+    ``res.logs`` holds one :class:`~gyrotest.noise.allanresult.AllanAnalysis` per log; the
     attributes of the first (``axes``, ``tau0``, ``source`` ...) are read through. Noise
     terms: :meth:`term`; the deviation table: :meth:`to_frame`; every fitted term:
     :meth:`terms`.
@@ -141,7 +143,7 @@ class AllanResult(Result):
 
     @property
     def logs(self) -> list:
-        """One :class:`~gyrotest.noise.analysis.AllanAnalysis` per log, in the order given."""
+        """One :class:`~gyrotest.noise.allanresult.AllanAnalysis` per log, in the order given."""
         return self.core
 
     def __getattr__(self, name: str) -> Any:
@@ -179,7 +181,7 @@ class AllanResult(Result):
         dict
             ``{"analysis": "allan", "logs": [...], "files": {...}}``.
         """
-        from ..noise.analysis import allan_document
+        from ..noise.allanresult import allan_document
 
         return allan_document(self.core, csv=csv, plot=plot, psd=psd)
 
@@ -296,8 +298,8 @@ class AllanResult(Result):
 # ============================================================================== bias
 class BiasResult(Result):
     """Bias D_F of one or more static runs (:func:`gyrotest.bias`); ``core`` is a
-    :class:`~gyrotest.bias_axes.BiasAxes` (``per_axis``: one
-    :class:`~gyrotest.bias.BiasAnalysis` per axis with ``runs``, ``repeatability`` and
+    :class:`~gyrotest.staticbias.multiaxis.BiasAxes` (``per_axis``: one
+    :class:`~gyrotest.staticbias.analysis.BiasAnalysis` per axis with ``runs``, ``repeatability`` and
     ``multi``)."""
 
     __slots__ = ()
@@ -347,7 +349,7 @@ class BiasResult(Result):
         return out
 
     def _figure(self):
-        from ..bias_plot import figure_bias
+        from ..staticbias.plots import figure_bias
 
         return figure_bias(next(iter(self.core.per_axis.values())))
 
@@ -406,7 +408,7 @@ class ScaleFactorResult(Result):
         return out
 
     def _figure(self):
-        from ..scalefactor.plot import figure_scale_factor
+        from ..scalefactor.plots import figure_scale_factor
 
         return figure_scale_factor(self.core, logs=self._meta.get("logs"))
 
@@ -420,324 +422,10 @@ class ScaleFactorResult(Result):
         ax.set_ylabel(y.replace("_ppm_fs", ", ppm of full scale").replace("_", " "))
 
 
-# ============================================================================== workbench
-def _coef_rows(coefs, group: str) -> list[dict]:
-    return [{"group": group, "name": c.name, "value": c.value, "sigma": c.stderr,
-             "unit": c.unit} for c in coefs]
-
-
-class ThermalResult(Result):
-    """The thermal drift model of a chamber run and/or a set-point table
-    (:func:`gyrotest.thermal_fit`); ``core`` is a
-    :class:`~gyrotest.envmodel.domain.ThermalAnalysis` (``chamber``, ``setpoints``)."""
-
-    __slots__ = ()
-    title = "Thermal drift model (Antonova–Matveev; IEEE 952 D_T, D_Ṫ, D_∇Ṫ)"
-
-    def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest thermal-fit --json`` document.
-
-        Parameters
-        ----------
-        model_file : str, optional
-            The model file written (``-o``), named in the document.
-
-        Returns
-        -------
-        dict
-        """
-        return self.core.to_dict(model_file=model_file)
-
-    def coef(self, name: str):
-        """A coefficient by name.
-
-        Parameters
-        ----------
-        name : str
-            ``"w0"``, ``"w1"``, ``"w2"``, ``"w_dV"``, ``"D_T"``, ``"D_Tdot"``,
-            ``"D_gradTdot"`` ...
-
-        Returns
-        -------
-        Coef
-            ``value``, ``stderr`` (1σ) and ``unit``.
-        """
-        for part in (self.core.chamber, self.core.setpoints):
-            if part is not None:
-                try:
-                    return part.coef(name)
-                except KeyError:
-                    pass
-        raise KeyError(name)
-
-    @property
-    def model(self):
-        """The fitted chamber-run model (an :class:`~gyrotest.envmodel.model.EnvModel` for
-        :func:`gyrotest.compensate`; ``.save(path)``), or None from set-points alone."""
-        return self.core.chamber.am.model if self.core.chamber else None
-
-    def to_frame(self):
-        """Every coefficient: ``group`` (Antonova–Matveev, IEEE E terms, set-points),
-        ``name``, ``value``, ``sigma`` (1σ, GLS under the noise model for a chamber run), ``unit``."""
-        rows = []
-        th, sp = self.core.chamber, self.core.setpoints
-        if th:
-            rows += _coef_rows(th.coefficients, "Antonova-Matveev")
-            rows += _coef_rows(th.ieee_coefficients, "IEEE E terms")
-        if sp:
-            rows += _coef_rows(sp.coefficients, "set-points")
-        return _frame(rows, ["group", "name", "value", "sigma", "unit"])
-
-    def summary(self) -> list[str]:
-        return [f"{r.group} {r.name} = {r.value:.4g} ± {r.sigma:.2g} {r.unit}"
-                for r in self.to_frame().itertuples()]
-
-    def _figure(self):
-        from ..envmodel.plots import setpoint_figures, thermal_figures
-
-        th, sp = self.core.chamber, self.core.setpoints
-        return _first_figure((thermal_figures(th) if th else [])
-                             + (setpoint_figures(sp) if sp else []))
-
-    def _draw(self, ax) -> None:
-        _coef_bars(ax, self.to_frame())
-
-
-def _first_figure(figs):
-    """The first of a command's ``(name, figure)`` list; the others are closed."""
-    import matplotlib.pyplot as plt
-
-    for _, f in figs[1:]:
-        plt.close(f)
-    return figs[0][1]
-
-
-def _coef_bars(ax, df) -> None:
-    ax.errorbar(df["value"], range(len(df)), xerr=df["sigma"], fmt="o", capsize=3)
-    ax.set_yticks(range(len(df)))
-    ax.set_yticklabels([f"{n} [{u}]" for n, u in zip(df["name"], df["unit"])], fontsize=8)
-    ax.axvline(0, color="0.6", lw=0.8)
-    ax.set_xlabel("coefficient ± 1σ (unit per row)")
-
-
-class MagResult(Result):
-    """Magnetic sensitivities from a Helmholtz-coil run (:func:`gyrotest.mag_fit`);
-    ``core`` is a :class:`~gyrotest.envmodel.domain.MagResult`."""
-
-    __slots__ = ()
-    title = "Magnetic sensitivity (IEEE 952 §5.3.3.2), deg/h per 100 µT"
-
-    def to_dict(self, *, model_file: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest mag-fit --json`` document.
-
-        Parameters
-        ----------
-        model_file : str, optional
-            The model file written (``-o``), named in the document.
-
-        Returns
-        -------
-        dict
-        """
-        from ..envmodel.domain import mag_document
-
-        return mag_document(self.core, model_file=model_file)
-
-    @property
-    def model(self):
-        """The fitted model (:class:`~gyrotest.envmodel.model.EnvModel`; ``.save(path)``)."""
-        return self.core.fit.model
-
-    def to_frame(self):
-        """One row per field axis: ``name``, ``value`` and ``sigma`` (1σ) in deg/h per
-        100 µT, ``reversal_K_dph_per_100uT`` (signed reversal estimate) and
-        ``up_minus_down_dph`` with its ``up_minus_down_sigma_dph`` (sweep hysteresis)."""
-        rows = []
-        for c in self.core.coefficients:
-            a = c.name[-1]
-            rv = self.core.reversal.get(a) or {}
-            hy = self.core.hysteresis.get(a) or {}
-            rows.append({"name": c.name, "value": c.value, "sigma": c.stderr, "unit": c.unit,
-                         "reversal_K_dph_per_100uT": _num(rv.get("signed_dph_per_100uT")),
-                         "up_minus_down_dph": _num(hy.get("up_minus_down_dph")),
-                         "up_minus_down_sigma_dph": _num(hy.get("stderr_dph"))})
-        return _frame(rows)
-
-    def summary(self) -> list[str]:
-        return [f"{c.name} = {c.value:.4g} ± {c.stderr:.2g} {c.unit}"
-                for c in self.core.coefficients]
-
-    def _figure(self):
-        from ..envmodel.plots import mag_figures
-
-        return _first_figure(mag_figures(self.core))
-
-    def _draw(self, ax) -> None:
-        _coef_bars(ax, self.to_frame())
-
-
-class ModelFit(Result):
-    """A drift model fitted to a log (:meth:`gyrotest.Model.fit`); ``core`` is the
-    workbench's fit result (``coefficients``, ``rms_fit``, ``rms_holdout``, ``floor``,
-    ``excursions``, ``model``)."""
-
-    __slots__ = ()
-    title = "Drift model fit"
-
-    def to_dict(self, *, written: dict | None = None) -> dict[str, Any]:
-        """The ``gyrotest model fit --json`` document.
-
-        Parameters
-        ----------
-        written : dict, optional
-            The model and history files written (``-o``, ``--session``).
-
-        Returns
-        -------
-        dict
-        """
-        from ..envmodel.fit import fit_document
-
-        return fit_document(self.core, written=written)
-
-    def save(self, path) -> None:
-        """Write the fitted model for :func:`gyrotest.compensate` or ``gyrotest compensate``.
-
-        Parameters
-        ----------
-        path : str or os.PathLike
-            A .json or .toml file (written atomically).
-        """
-        self.core.model.save(path)
-
-    def to_frame(self):
-        """One row per coefficient: ``name``, ``term``, ``value``, ``sigma`` (1σ, GLS under
-        the noise model), ``unit``, ``z``, ``significance``."""
-        return _frame([{"name": c.name, "term": c.term, "value": c.value, "sigma": c.stderr,
-                        "unit": c.unit, "z": c.z, "significance": c.significance}
-                       for c in self.core.coefficients])
-
-    def summary(self) -> list[str]:
-        r = self.core
-        out = [f"terms {' + '.join(r.terms) or '(bias only)'}",
-               f"residual RMS: fit {r.rms_fit:.4g} deg/h, held-out {r.rms_holdout:.4g} deg/h"]
-        out.append(f"noise model: {r.noise.params.text()}; log-likelihood {r.loglik:.1f}")
-        return out
-
-    def _figure(self):
-        from ..envmodel.plots import fit_figures
-
-        return _first_figure(fit_figures(self.core))
-
-    def _draw(self, ax) -> None:
-        _coef_bars(ax, self.to_frame())
-
-
-class ModelDiagnosis(Result):
-    """Which effect the model lacks (:meth:`gyrotest.Model.diagnose`); ``core`` is the
-    workbench's diagnosis (``verdict``, ``candidates`` best first, ``found``, ``path``,
-    ``base``)."""
-
-    __slots__ = ()
-    title = "Model diagnosis"
-
-    def to_dict(self) -> dict[str, Any]:
-        """The ``gyrotest model diagnose --json`` document."""
-        return self.core.to_dict()
-
-    @property
-    def missing(self) -> str | None:
-        """The term text of the missing effect (None when none was found)."""
-        return self.core.found[0].term if self.core.found else None
-
-    def to_frame(self):
-        """The candidate terms, most significant first: ``term``, ``effect``, ``lr``
-        (likelihood ratio), ``df``, ``p``, ``p_family`` (family-wise), ``delta_bic``,
-        ``significant``."""
-        return _frame([{"term": c.term, "effect": c.effect, "lr": c.lr, "df": c.df, "p": c.p,
-                        "p_family": c.p_family, "delta_bic": c.dbic,
-                        "significant": c.significant}
-                       for c in self.core.candidates],
-                      ["term", "effect", "lr", "df", "p", "p_family", "delta_bic",
-                       "significant"])
-
-    def summary(self) -> list[str]:
-        return [self.core.verdict]
-
-    def _figure(self):
-        from ..envmodel.plots import diagnosis_figures
-
-        return _first_figure(diagnosis_figures(self.core))
-
-    def _draw(self, ax) -> None:
-        import numpy as np
-
-        df = self.to_frame().head(12)
-        ax.barh(range(len(df)), np.maximum(df["lr"].to_numpy(float), 1e-3),
-                color=["#009E73" if s else "#999999" for s in df["significant"]])
-        ax.set_yticks(range(len(df)))
-        ax.set_yticklabels(df["term"], fontsize=8)
-        ax.invert_yaxis()
-        ax.set_xscale("log")
-        ax.set_xlabel("likelihood ratio Λ (log scale)")
-
-
-class CompensationResult(Result):
-    """A drift model applied to another run (:func:`gyrotest.compensate`); ``core`` has
-    the drift before and after (``rms_before_dph``, ``rms_after_dph``, ``factor``), the Allan
-    deviation before and after, and the compensated ``log``."""
-
-    __slots__ = ()
-    title = "Compensation"
-
-    def to_dict(self, *, output: str | None = None) -> dict[str, Any]:
-        """The ``gyrotest compensate --json`` document.
-
-        Parameters
-        ----------
-        output : str, optional
-            The compensated log written (``-o``).
-
-        Returns
-        -------
-        dict
-        """
-        d = self.core.to_dict()
-        d["output"] = output
-        d["model_file"] = self._meta.get("model_file")
-        return d
-
-    def to_frame(self):
-        """The Allan deviation before and after: ``tau_s``, ``sigma_before_dph``,
-        ``sigma_after_dph``."""
-        c = self.core
-        return _frame({"tau_s": list(map(float, c.adev_tau)),
-                       "sigma_before_dph": list(map(float, c.adev_before)),
-                       "sigma_after_dph": list(map(float, c.adev_after))})
-
-    def summary(self) -> list[str]:
-        c = self.core
-        return [f"drift RMS {c.rms_before_dph:.4g} → {c.rms_after_dph:.4g} deg/h "
-                f"(×{c.factor:.3g}; the model predicts ×{c.predicted_factor:.3g})"]
-
-    def _figure(self):
-        from ..envmodel.plots import compensation_figures
-
-        return _first_figure(compensation_figures(self.core))
-
-    def _draw(self, ax) -> None:
-        df = self.to_frame()
-        ax.loglog(df["tau_s"], df["sigma_before_dph"], "o-", ms=3, label="before")
-        ax.loglog(df["tau_s"], df["sigma_after_dph"], "o-", ms=3, label="after")
-        ax.set_xlabel("averaging time τ, s")
-        ax.set_ylabel("Allan deviation, deg/h")
-        ax.legend()
-
-
 # ============================================================================== campaign
 class Report(Result):
     """The spec sheet of a campaign (:func:`gyrotest.report`); ``core`` is the
-    :class:`~gyrotest.report.sheet.Sheet` (``checks``, ``sections``, ``overall()``)."""
+    :class:`~gyrotest.specsheet.sheet.Sheet` (``checks``, ``sections``, ``overall()``)."""
 
     __slots__ = ()
     title = "Specification sheet"
@@ -763,13 +451,13 @@ class Report(Result):
 
     def to_markdown(self) -> str:
         """The sheet as Markdown (as ``gyrotest report`` prints it)."""
-        from ..report.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         return render_markdown(self.core, None)
 
     def to_html(self) -> str:
         """The sheet as one self-contained HTML document."""
-        from ..report.render_html import render_html
+        from ..specsheet.html import render_html
 
         return render_html(self.core)
 
@@ -786,8 +474,8 @@ class Report(Result):
         int
             The number of pages.
         """
-        from ..output import write_rendered
-        from ..report.render_pdf import render_pdf
+        from ..core.output import write_rendered
+        from ..specsheet.pdf import render_pdf
 
         data, pages = render_pdf(self.core)
         write_rendered(pdf=path, pdf_bytes=data)
@@ -811,7 +499,7 @@ class Report(Result):
 
 class Simulation(Result):
     """A simulated bench log with known truth (:func:`gyrotest.simulate`); ``core`` is a
-    :class:`~gyrotest.simulate.core.SimResult` (``runs``, ``truth``, ``columns``)."""
+    :class:`~gyrotest.simulation.simrun.SimResult` (``runs``, ``truth``, ``columns``)."""
 
     __slots__ = ()
     title = "Simulated bench log"
@@ -831,8 +519,8 @@ class Simulation(Result):
         WriteResult
             The paths written (``.to_dict()`` for JSON).
         """
-        from ..errors import InputError
-        from ..simulate import write_log
+        from ..core.errors import InputError
+        from ..simulation import write_log
 
         try:
             return write_log(self.core, path, fmt=format)

@@ -32,7 +32,7 @@ os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
 import click  # noqa: E402
 
 from .. import __version__  # noqa: E402
-from ..errors import GyrotestError  # noqa: E402
+from ..core.errors import GyrotestError  # noqa: E402
 
 # command name -> module (in the order shown by --help)
 COMMANDS: dict[str, str] = {

@@ -15,11 +15,11 @@ import math
 import click
 from rich.markup import escape
 
-from ..display import DEFAULT as DEFAULT_UNIT
-from ..errors import InputError
+from ..core.display import DEFAULT as DEFAULT_UNIT
+from ..core.errors import InputError
+from ..core.output import atomic_open
+from ..core.units import format_duration, parse_duration
 from ..noise.kinds import DEVIATION_KINDS, MIN_EDF  # no numpy/scipy: see command()
-from ..output import atomic_open
-from ..units import format_duration, parse_duration
 from .common import (
     console,
     emit_json,
@@ -153,8 +153,8 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
     from ..api.analyses import allan
     from ..api.results import AllanResult
     from ..noise.analysis import STREAM_DEVS, parse_detrend, parse_taus
-    from ..noise.fit import parse_terms
     from ..noise.impact import parse_horizon, parse_vehicle_rate
+    from ..noise.noisefit import parse_terms
 
     unit = resolve_display_unit(display_unit, ingest_opts)
     parse_horizon(horizon)
@@ -166,11 +166,11 @@ def command(logs, dev_kind, taus, stop_ratio, terms, axes, confidence, ci_kind, 
         raise InputError(f"--confidence must be between 0 and 1, got {confidence}")
     for p in (plot_path, psd_path):
         if p:
-            from ..plotting import check_plot_path
+            from ..core.plotting import check_plot_path
 
             check_plot_path(p)
     if csv_path:
-        from ..output import check_output_path
+        from ..core.output import check_output_path
 
         check_output_path(csv_path, (".csv", ".txt"), "--csv table", formats=".csv or .txt")
     axis_list = [a.strip() for a in axes.split(",") if a.strip()] if axes else None
@@ -290,7 +290,7 @@ def _write_csv(path, results) -> None:
 def axis_display(a, unit=DEFAULT_UNIT):
     """The display unit of an analysed axis: ``unit`` for a gyro, the accelerometer's own
     (σ in m/s², terms in IEEE 1293 units, unchanged) for an accelerometer."""
-    from ..display import ACCEL_DISPLAY
+    from ..core.display import ACCEL_DISPLAY
 
     return ACCEL_DISPLAY if getattr(a, "quantity", "rate") == "acceleration" else unit
 
@@ -401,7 +401,7 @@ def _fit_table(f, title: str, unit=DEFAULT_UNIT):
 
 
 def _render_fit(a, unit=DEFAULT_UNIT) -> None:
-    from ..noise.analysis import FIT_WEIGHTS
+    from ..noise.allanresult import FIT_WEIGHTS
 
     c = console()
     f = a.fit

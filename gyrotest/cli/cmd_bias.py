@@ -7,9 +7,9 @@ import os
 import click
 
 from ..api.analyses import bias
-from ..bias import parse_positions
-from ..errors import InputError
-from ..units import format_duration, parse_duration, parse_rate_dph
+from ..core.errors import InputError
+from ..core.units import format_duration, parse_duration, parse_rate_dph
+from ..staticbias.analysis import parse_positions
 from .common import (
     console,
     emit_json,
@@ -89,7 +89,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
     if wblock <= 0:
         raise InputError(f"--warmup-block must be > 0, got {warmup_block!r}")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     pos_list = parse_positions(positions, len(logs))  # before reading: a count error is cheap
@@ -98,7 +98,7 @@ def command(logs, skip, axis, positions, settle, no_earth_rate, outliers, warmup
                earth_rate=not no_earth_rate, outliers=outliers, warmup_band=band,
                warmup_block=wblock)
     if plot_path:
-        from ..bias_plot import plot_bias
+        from ..staticbias.plots import plot_bias
 
         for name, ba in res.per_axis.items():
             path = axis_plot_path(plot_path, name, len(res.per_axis))
@@ -126,7 +126,7 @@ def run_name(label: str) -> str:
 def _render(runs, rep, multi, axis: str = "", unit=None):
     from rich.table import Table
 
-    from ..display import DEFAULT
+    from ..core.display import DEFAULT
 
     u = unit or DEFAULT
     f = u.f  # display rate per deg/h

@@ -29,8 +29,8 @@ def command(log, as_json, ingest_opts):
     from rich.markup import escape
     from rich.table import Table
 
-    from ..ingest import describe_columns
-    from ..profile import load_profile
+    from ..core.profile import load_profile
+    from ..io.ingest import describe_columns
     from .common import ingest_overrides
 
     prof = load_profile(ingest_opts["profile"]) if ingest_opts.get("profile") else None

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 from rich.markup import escape
 
-from ..output import LOG_SUFFIXES
+from ..core.output import LOG_SUFFIXES
 from .cmd_model import check_output, write_plot
 from .common import (
     console,
@@ -51,19 +51,19 @@ def command(log, model_path, output, keep_bias, force, plot_path, as_json, inges
       gyrotest compensate sample_data/bias_run2.parquet \\
           --profile sample_data/bias_run2.profile.toml --model model.json -o run2_comp.parquet
     """
-    from ..api.workbench import compensate
+    from ..api.models import compensate
     from ..envmodel.model import EnvModel
 
     out_path = check_output(output, LOG_SUFFIXES, "output file")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     model = EnvModel.load(model_path)
     g = load_for_terms(log, ingest_opts, model.specs, announce=not as_json)
     cp = compensate(g, model, keep_bias=keep_bias)  # gyrotest.compensate
     if out_path:
-        from ..ingest import write_log
+        from ..io.ingest import write_log
 
         write_log(cp.log, out_path)
     if plot_path:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import emit_json, ingest_options, json_option, load_log, note, warn, with_ingest
 
 
@@ -71,7 +71,7 @@ def _allan_document(inp: str, skip: str, ingest_opts: dict, as_json: bool,
     if Path(inp).suffix.lower() == ".json":
         return read_document(inp, "allan")
     from ..api.analyses import allan
-    from ..units import parse_duration
+    from ..core.units import parse_duration
 
     parse_duration(skip, what="--skip")
     g = load_log(inp, ingest_opts, announce=not as_json)

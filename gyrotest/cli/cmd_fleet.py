@@ -6,7 +6,7 @@ import time
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .cmd_report import _check_out
 from .common import emit_json, note, settings
 
@@ -58,9 +58,9 @@ def command(campaigns, jobs, scheduler, pdf_path, html_path, md_path, no_figures
       gyrotest fleet lot/campaign_*.toml --scheduler local --json > lot.json
       gyrotest fleet lot/campaign_*.toml --scheduler tcp://10.0.0.5:8786 --html lot.html
     """
+    from ..core.output import write_rendered
     from ..fleet import fleet_sheet, run_fleet
-    from ..output import write_rendered
-    from ..report.campaign import load_campaign
+    from ..specsheet.campaign import load_campaign
 
     t0 = time.perf_counter()
     pdf = _check_out(pdf_path, (".pdf",), "PDF file")
@@ -90,17 +90,17 @@ def command(campaigns, jobs, scheduler, pdf_path, html_path, md_path, no_figures
     pdf_bytes = html_text = md_text = None
     fig_files = {}
     if pdf:
-        from ..report.render_pdf import render_pdf
+        from ..specsheet.pdf import render_pdf
 
         pdf_bytes, pages = render_pdf(sheet)
         outputs.append(f"{pdf} ({pages} pages)")
     if htm:
-        from ..report.render_html import render_html
+        from ..specsheet.html import render_html
 
         html_text = render_html(sheet)
         outputs.append(str(htm))
     if md or not (pdf or htm or as_json):
-        from ..report.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         links = None
         if md is not None:

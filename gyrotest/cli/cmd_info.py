@@ -5,8 +5,8 @@ from __future__ import annotations
 import click
 from rich.markup import escape
 
-from ..axes import choose_axes
-from ..units import format_duration
+from ..core.axes import choose_axes
+from ..core.units import format_duration
 from .common import (
     console,
     emit_json,
@@ -60,11 +60,11 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
       gyrotest info sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
           --plot thermal_look.png                 # a quick look: output, temperatures, gaps
     """
-    from ..ingest import RoleError
+    from ..io.ingest import RoleError
     from ..noise.outliers import detect_outliers
 
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     unit = resolve_display_unit(display_unit, ingest_opts)
@@ -81,11 +81,11 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
     reps = [detect_outliers(g.rates[a], g.tau0, t0=float(g.t[0]) if g.n else 0.0, channel=a,
                             segments=g.segments, unit="deg/h") for a in axes if g.n >= 3]
     summary["outliers"] = {r.channel: r.to_dict() for r in reps}
-    from ..gapfill import gap_map
+    from ..io.gapfill import gap_map
 
     gmap = gap_map(g) if g.timing.gaps else None
     summary["gap_map"] = gmap
-    from ..accel import accel_channels
+    from ..io.accel import accel_channels
     from ..noise.resolution import output_resolution
 
     acc = accel_channels(g)
@@ -98,7 +98,7 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
             warn(f"{g.source}: spikes: {r.summary()} (gyrotest allan/bias --outliers remove or "
                  "robust to treat them)")
     if plot_path:
-        from ..quicklook import plot_quicklook
+        from ..io.quicklook import plot_quicklook
 
         summary["plot"] = str(plot_quicklook(g, plot_path, axes=axes, unit=unit, outliers=reps))
         if not as_json:
@@ -176,7 +176,7 @@ def command(log, axis, display_unit, plot_path, as_json, ingest_opts):
 
 def _list_columns(log: str, as_json: bool) -> None:
     """The columns of LOG with the role and unit gyrotest guesses from each name (on stdout)."""
-    from ..ingest import column_guesses, column_names
+    from ..io.ingest import column_guesses, column_names
 
     guesses = column_guesses(column_names(log))
     if not guesses:

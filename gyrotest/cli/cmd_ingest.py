@@ -6,9 +6,9 @@ import time
 
 import click
 
-from ..ingest import write_log
-from ..output import LOG_SUFFIXES, check_output_path
-from ..units import format_duration
+from ..core.output import LOG_SUFFIXES, check_output_path
+from ..core.units import format_duration
+from ..io.ingest import write_log
 from .common import emit_json, ingest_options, json_option, load_log, note, with_ingest
 
 

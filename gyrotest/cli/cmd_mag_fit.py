@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 from rich.markup import escape
 
-from ..units import parse_duration
+from ..core.units import parse_duration
 from .cmd_model import (
     check_output,
     domain_fit_options,
@@ -54,12 +54,12 @@ def command(log, with_terms, settle, min_dwell, axis, skip, resolution, smooth, 
       gyrotest mag-fit sample_data/magnetic.parquet --profile sample_data/magnetic.profile.toml \\
           --with T -o mag.json
     """
-    from ..api.workbench import mag_fit
+    from ..api.models import mag_fit
     from ..envmodel.domain import mag_terms
 
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     _, specs = mag_terms(with_terms)

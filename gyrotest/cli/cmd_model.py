@@ -12,8 +12,8 @@ from pathlib import Path
 import click
 from rich.markup import escape
 
-from ..errors import InputError
-from ..units import format_duration
+from ..core.errors import InputError
+from ..core.units import format_duration
 from .common import (
     FiniteRange,
     console,
@@ -113,7 +113,7 @@ def check_output(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
     """Validate an output path before any work (suffix and directory)."""
     if path is None:
         return None
-    from ..output import check_output_path
+    from ..core.output import check_output_path
 
     return check_output_path(path, suffixes, what)
 
@@ -139,7 +139,7 @@ def _excursion_lines(out, res, limit: int) -> None:
 
 def _short(res) -> str:
     wd = getattr(res, "wd", None)
-    return getattr(wd, "resolution_short", None) or res.resolution_note
+    return (wd.resolution_short if wd is not None else "") or res.resolution_note
 
 
 def _pm(c) -> str:
@@ -200,7 +200,7 @@ def load_reference(path: str | None, opts: dict, quiet: bool):
     """The ``--reference`` log, read with the same ingest options (units, gyro output, time);
     the auxiliary channels a profile names (temperatures, fields, ...) are not required of a
     static run. Errors name the option."""
-    from ..api.workbench import read_reference
+    from ..api.models import read_reference
 
     return read_reference(path or None, opts.get("profile"), opts)
 
@@ -341,7 +341,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
       gyrotest model fit sample_data/thermal.parquet --profile sample_data/thermal.profile.toml \\
           --terms "T(T_chamber_C)" --term "grad:temp.T_coil_a_C - temp.T_coil_b_C" --json
     """
-    from ..api.workbench import Model
+    from ..api.models import Model
     from ..envmodel.history import append_history, session_paths
 
     model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,
@@ -349,7 +349,7 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
     specs = model.specs
     out_path = check_output(output, (".json", ".toml"), "model file")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     if session:
@@ -402,12 +402,12 @@ def fit_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smooth, fo
 
 
 def _print_rules(ctx, _param, value):
-    """--rules: the verdict's decision rules (:mod:`gyrotest.workbench_rules`), then exit."""
+    """--rules: the verdict's decision rules (:mod:`gyrotest.envmodel.workbench_rules`), then exit."""
     if not value or ctx.resilient_parsing:
         return
     import shutil
 
-    from ..workbench_rules import rules_text
+    from ..envmodel.workbench_rules import rules_text
 
     width = min(100, max(60, shutil.get_terminal_size((88, 24)).columns - 2))
     click.echo(rules_text(width))
@@ -466,14 +466,14 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
       gyrotest model diagnose sample_data/thermal.parquet \\
           --profile sample_data/thermal.profile.toml --terms T --candidates dTdt,Tlag,dGdt --json
     """
-    from ..api.workbench import Model
+    from ..api.models import Model
     from ..envmodel.terms import split_terms
 
     model = Model(list(terms), custom=list(custom), axis=axis, skip=skip, t_ref=t_ref,
                   v_ref=v_ref, resolution=resolution, smooth=smooth, folds=folds)
     specs = model.specs
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     cand = split_terms(candidates) if candidates else None
@@ -517,7 +517,7 @@ def history_cmd(path, show_all, plot_path, as_json):
     from ..envmodel.history import load_history, steps_for_log
 
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     steps = load_history(path)

@@ -7,14 +7,14 @@ from pathlib import Path
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import console, emit_json, err_console, note, settings
 
 
 def _init(folder: str, as_json: bool) -> None:
-    """``--init DIR``: DIR/campaign.toml from the logs in DIR (:mod:`gyrotest.report.init`)."""
-    from ..output import atomic_open
-    from ..report.init import campaign_text
+    """``--init DIR``: DIR/campaign.toml from the logs in DIR (:mod:`gyrotest.specsheet.init`)."""
+    from ..core.output import atomic_open
+    from ..specsheet.init import campaign_text
 
     d = Path(folder)
     if not d.is_dir():
@@ -116,11 +116,11 @@ def command(campaign, variant, template, init_dir, pdf_path, html_path, md_path,
       gyrotest report sample_data/campaign.toml --variant engineering --pdf eng.pdf
       gyrotest report sample_data/campaign.toml --html spec.html --json > spec.json
     """
-    from ..output import write_rendered
-    from ..report.campaign import load_campaign
+    from ..core.output import write_rendered
+    from ..specsheet.campaign import load_campaign
 
     if template:
-        from ..report.template import TEMPLATE
+        from ..specsheet.template import TEMPLATE
 
         click.echo(TEMPLATE, nl=False)
         return
@@ -159,19 +159,19 @@ def command(campaign, variant, template, init_dir, pdf_path, html_path, md_path,
     outputs = []
     pdf_bytes = None
     if pdf:
-        from ..report.render_pdf import render_pdf
+        from ..specsheet.pdf import render_pdf
 
         pdf_bytes, pages = render_pdf(sheet)
         outputs.append(f"{pdf} ({pages} pages)")
     html_text = None
     if htm:
-        from ..report.render_html import render_html
+        from ..specsheet.html import render_html
 
         html_text = render_html(sheet)
         outputs.append(str(htm))
     md_text = None
     if md or not (pdf or htm or as_json):
-        from ..report.render_md import render_markdown
+        from ..specsheet.markdown import render_markdown
 
         links = None
         fig_files = {}

@@ -6,7 +6,7 @@ import math
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import (
     console,
     emit_json,
@@ -24,7 +24,7 @@ from .common import (
 def _duration(ctx, param, value):
     if value is None:
         return None
-    from ..units import parse_duration
+    from ..core.units import parse_duration
 
     try:
         return parse_duration(value, what=f"--{param.name.replace('_', '-')}")
@@ -112,11 +112,11 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
     from ..api.analyses import scale_factor
 
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     if points_path:
-        from ..output import check_output_path
+        from ..core.output import check_output_path
 
         check_output_path(points_path, (".csv", ".txt"), "points file", formats=".csv or .txt")
     sfm.check_settings(settle_s=settle, trim_end_s=trim_end, min_dwell_s=min_dwell, alpha=alpha,
@@ -147,7 +147,7 @@ def command(logs, table_path, settle, fixed_settle, trim_end, min_dwell, detect,
                               rates=rate_list, snap_tol=snap_tol, stderr=stderr_method, **kw)
     # files last, so that an error leaves nothing behind
     if plot_path:
-        from ..scalefactor.plot import plot_scale_factor
+        from ..scalefactor.plots import plot_scale_factor
 
         plot_scale_factor(result.core, plot_path, logs=loaded or None)
     if points_path:
@@ -360,7 +360,7 @@ def _render(res, plot_path, points_path) -> None:
                    kept)
     c.print(ht)
     if res.model.coefficients:
-        from ..scalefactor.fit import OUTPUT_POWER_NOTE
+        from ..scalefactor.tablefit import OUTPUT_POWER_NOTE
 
         ct = Table(title=f"f(I) of ε_K, ppm; {OUTPUT_POWER_NOTE}", title_justify="left")
         for col in ("term", "f(I)", "coefficient, ppm", "kept"):

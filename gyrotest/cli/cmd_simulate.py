@@ -6,7 +6,7 @@ import time
 
 import click
 
-from ..units import format_duration
+from ..core.units import format_duration
 from .common import console, emit_json, fmt_num, json_option, note
 
 
@@ -42,8 +42,8 @@ def command(scenario, output, fmt, seed, force, as_json):
       gyrotest ingest fog.csv --profile fog.profile.toml -o fog.parquet
     """
     from ..api.campaign import simulate
-    from ..simulate.scenario import load_scenario
-    from ..simulate.writer import check_planned
+    from ..simulation.scenario import load_scenario
+    from ..simulation.writer import check_planned
 
     t0 = time.perf_counter()
     sc = load_scenario(scenario)

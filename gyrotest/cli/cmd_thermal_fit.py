@@ -7,7 +7,7 @@ import math
 import click
 from rich.markup import escape
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .cmd_model import (
     check_output,
     domain_fit_options,
@@ -29,7 +29,7 @@ from .common import (
 )
 
 #: |value / 1σ| below which a coefficient is "not determined by this log" (the fit's "not
-#: significant", :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+#: significant", :attr:`gyrotest.envmodel.modelfit.Coefficient.significance`)
 DETERMINED_Z = 2.0
 
 
@@ -103,7 +103,7 @@ def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, s
           --t-ref 21 -o thermal.json
       gyrotest thermal-fit --setpoints sample_data/thermostat.csv --t-ref 21
     """
-    from ..api.workbench import thermal_fit
+    from ..api.models import thermal_fit
     from ..envmodel.domain import check_thermal_input, parse_gradient, thermal_terms
 
     check_thermal_input(log is not None, setpoints)
@@ -114,7 +114,7 @@ def command(log, setpoints, t_ref, t0_alias, sensor, gradient, weighted, axis, s
     if output and log is None:
         raise InputError("-o needs a chamber log (a set-point table gives no full model)")
     if plot_path:
-        from ..plotting import check_plot_path
+        from ..core.plotting import check_plot_path
 
         check_plot_path(plot_path)
     parse_gradient(gradient)  # a bad --gradient fails before the log is read

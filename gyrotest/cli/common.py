@@ -8,8 +8,8 @@ Conventions for command modules (``gyrotest/cli/cmd_<name>.py``, exposing ``comm
   :func:`emit_json` and nothing else on stdout;
 * human output goes through :func:`console` (stdout, rich) and notes/warnings through
   :func:`note` / :func:`warn` (stderr, suppressed by ``-q``);
-* files are written atomically with :mod:`gyrotest.output` helpers;
-* raise :class:`gyrotest.errors.InputError` for anything the user can fix (exit code 2).
+* files are written atomically with :mod:`gyrotest.core.output` helpers;
+* raise :class:`gyrotest.core.errors.InputError` for anything the user can fix (exit code 2).
 """
 
 from __future__ import annotations
@@ -24,10 +24,15 @@ from typing import Any
 
 import click
 
-from ..api._inputs import READ_OPTIONS
-from ..api._inputs import ingest_overrides as _api_ingest_overrides
-from ..errors import InputError
-from ..units import format_number
+from ..core.console import (
+    err_console,
+    escape_markup,
+    warn,  # noqa: F401 (the commands import it from here)
+)
+from ..core.errors import InputError
+from ..core.units import format_number
+from ..io.inputs import ingest_overrides as _api_ingest_overrides
+from ..io.inputs import read_with_options
 
 
 class FiniteRange(click.FloatRange):
@@ -57,7 +62,6 @@ def settings() -> Settings:
 
 
 _console = None
-_err_console = None
 
 
 def console():
@@ -95,16 +99,6 @@ def _quiet_pipe_console(base):
     return QuietPipeConsole
 
 
-def err_console():
-    """Rich console on stderr for notes, warnings and progress."""
-    global _err_console
-    from rich.console import Console
-
-    if _err_console is None or _err_console.file is not sys.stderr:
-        _err_console = Console(file=sys.stderr, highlight=False, soft_wrap=True)
-    return _err_console
-
-
 def notes_shown() -> bool:
     """Notes and progress reach stderr when it is a terminal, or with ``-v`` on any stderr
     (a log file, ``2>err``); ``-q`` silences them. A redirected stderr then holds the
@@ -123,23 +117,12 @@ def notes_shown() -> bool:
 def note(msg: str) -> None:
     """An informational line on stderr: on a terminal, or anywhere with -v (-q: never)."""
     if notes_shown():
-        err_console().print(f"[dim]{_escape(msg)}[/dim]")
-
-
-def warn(msg: str) -> None:
-    """A warning on stderr (always shown, also with --json: stdout stays clean)."""
-    err_console().print(f"[yellow]warning:[/yellow] {_escape(msg)}")
-
-
-def _escape(msg: str) -> str:
-    from rich.markup import escape
-
-    return escape(msg)
+        err_console().print(f"[dim]{escape_markup(msg)}[/dim]")
 
 
 def emit_json(obj: Any) -> None:
     """Write one JSON document to stdout."""
-    from ..output import dumps  # numpy: only when JSON is written
+    from ..core.output import dumps  # numpy: only when JSON is written
 
     sys.stdout.write(dumps(obj) + "\n")
     sys.stdout.flush()
@@ -195,25 +178,6 @@ def json_option(f):
                         help="Print the result as one JSON document on stdout (for scripts).")(f)
 
 
-def _split_cols(value: str | None) -> list[str] | None:
-    if value is None:
-        return None
-    parts = [p.strip() for p in value.split(",") if p.strip()]
-    return parts or None
-
-
-def _split_many(*values) -> list[str] | None:
-    """Column names from repeated and/or comma-separated option values (``--temp-col A,B``,
-    ``--temp-col A --temp-col B``); a campaign's string or list works too."""
-    parts: list[str] = []
-    for v in values:
-        if v is None:
-            continue
-        for item in [v] if isinstance(v, str) else v:
-            parts += _split_cols(item) or []
-    return parts or None
-
-
 INGEST_OPTION_NAMES = (
     "profile", "time_col", "rate_col", "rate_unit", "counts_col", "up_col", "down_col",
     "counter_col", "counter_bits", "voltage_col", "scale_factor", "offset", "sample_rate",
@@ -227,7 +191,7 @@ def _check_rate_unit(ctx, param, value):
     """--rate-unit names a rate unit gyrotest knows, whatever the log holds."""
     if value is None:
         return None
-    from ..units import factor
+    from ..core.units import factor
 
     try:
         factor(value, "rate")
@@ -306,70 +270,18 @@ ingest_overrides = _api_ingest_overrides
 
 def load_log(path: str, opts: dict, *, announce: bool = True, stream: bool = False,
              dead: str = "error"):
-    """Read one log with the shared ingest options; prints the column choices as notes.
-    ``stream``: a long Parquet log may come back as a :class:`gyrotest.stream.StreamedLog`
-    (its angle series only; see that module). ``dead="note"``: a dead or stuck gyro output is
-    a note, not an error (``info``, ``ingest``: they describe and convert, they do not fit)."""
-    from ..api._inputs import read_log_from, split_read_options
-
-    if not stream or not _parquet(path):  # a streamed log sets its own heap settings
-        from ..heap import reuse_freed_memory
-
-        reuse_freed_memory()  # the whole record in memory: reuse freed arrays' pages
-    o = api_read_options(opts)
-    prof = o.pop("profile", None)
-    log = read_log_from(path, profile=prof, opts=split_read_options(o, "read"), stream=stream,
-                        dead=dead)
-    for msg in log.notes:  # a finding about the data (a dead or saturated output) is a warning
-        if msg.startswith("warning: "):
-            warn(f"{log.source}: {msg[len('warning: '):]}")
-        elif announce:
-            note(f"{log.source}: {msg}")
-    unused_unit_warning(log, opts)
-    return log
-
-
-def _parquet(path: str) -> bool:
-    """A regular file starting with Parquet's magic (a pipe or device is never opened here:
-    opening a FIFO with no writer would block)."""
-    import stat
-
-    try:
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            return False
-        with open(path, "rb") as fh:
-            return fh.read(4) == b"PAR1"
-    except OSError:
-        return False
-
-
-def api_read_options(opts: dict) -> dict:
-    """The collected ingest options as keyword arguments of :func:`gyrotest.read`."""
-    out = {api: opts[cli] for api, cli in READ_OPTIONS.items() if opts.get(cli) is not None}
-    if opts.get("field_cols_alias"):  # the old spelling --field-cols, still accepted
-        out["field_cols"] = list(out.get("field_cols") or ()) + [opts["field_cols_alias"]]
-    out["profile"] = opts.get("profile")
-    return out
-
-
-def unused_unit_warning(log, opts: dict) -> None:
-    """--rate-unit (or --angle-unit) on a log whose gyro output has no such column is not used:
-    say so rather than leave the user believing it applied."""
-    kind = getattr(getattr(log, "gyro", None), "output_kind", None)
-    if kind is None:
-        return
-    if opts.get("rate_unit") and kind not in ("rate",):
-        warn(f"{log.source}: --rate-unit {opts['rate_unit']} not used: the gyro output is "
-             f"{kind}, not a rate column")
-    if opts.get("angle_unit") and kind not in ("delta-angle", "angle"):
-        warn(f"{log.source}: --angle-unit {opts['angle_unit']} not used: the gyro output is "
-             f"{kind}, not an angle column")
+    """Read one log with the shared ingest options (:func:`gyrotest.io.inputs.read_with_options`);
+    prints the column choices as notes when ``announce``. ``dead="note"``: a dead or stuck gyro
+    output is a note, not an error (``info``, ``ingest``: they describe and convert, they do
+    not fit)."""
+    return read_with_options(path, opts, note=note if announce else None, stream=stream,
+                             dead=dead)
 
 
 def load_for_terms(path: str, opts: dict, specs: list, *, announce: bool = True):
     """:func:`load_log` for a model with term ``specs``: an ingest error about a channel a
-    term needs names the term too (:func:`gyrotest.envmodel.prepare.load_for_terms`)."""
-    from ..envmodel.prepare import load_for_terms as naming_terms
+    term needs names the term too (:func:`gyrotest.envmodel.pipeline.naming_terms`)."""
+    from ..envmodel.pipeline import naming_terms
 
     return naming_terms(lambda: load_log(path, opts, announce=announce), specs)
 
@@ -393,5 +305,5 @@ def with_ingest(func):
     return wrapper
 
 
-#: compact number formatting for tables ('—' for None/NaN), :func:`gyrotest.units.format_number`
+#: compact number formatting for tables ('—' for None/NaN), :func:`gyrotest.core.units.format_number`
 fmt_num = format_number

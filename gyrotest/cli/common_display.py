@@ -1,6 +1,6 @@
 """The ``--unit`` display option shared by the commands that print rates and noise terms.
 
-Tables, plot axes and the sheet are shown in the display unit (:mod:`gyrotest.display`);
+Tables, plot axes and the sheet are shown in the display unit (:mod:`gyrotest.core.display`);
 JSON keeps its explicit internal units. Precedence: ``--unit``, then the profile's
 ``[display] unit``, then deg/h (IEEE 952).
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import click
 
-from ..display import CHOICES, DisplayUnit, parse_display_unit
+from ..core.display import CHOICES, DisplayUnit, parse_display_unit
 
 
 def unit_option(f):
@@ -27,7 +27,7 @@ def resolve_display_unit(unit: str | None, ingest_opts: dict | None = None) -> D
         return parse_display_unit(unit)
     path = (ingest_opts or {}).get("profile")
     if path:
-        from ..profile import load_profile
+        from ..core.profile import load_profile
 
         prof = load_profile(path)
         if prof.display.get("unit"):

@@ -1,7 +1,7 @@
 """Which command-line parameters name files the command reads and which it writes.
 
 :func:`guard_commands` wraps every command (``LazyGroup`` does it once per command object):
-before the command's own code runs, a :func:`gyrotest.guard.io_guard` is opened, every input
+before the command's own code runs, a :func:`gyrotest.core.guard.io_guard` is opened, every input
 parameter is declared, then every output parameter (and the files written beside an output,
 :data:`BESIDE`), so that ``gyrotest allan in.csv --csv in.csv`` stops with one line before any
 file is read or anything is computed. The tables here are the only per-command knowledge; a
@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import functools
 import os
+import weakref
 from collections.abc import Callable, Iterable
 
 import click
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: parameter name -> what the file is (inputs)
 INPUTS: dict[str, str] = {
@@ -74,7 +75,7 @@ BESIDE: dict[str, Callable[[dict], Iterable[tuple[str, str]]]] = {
 
 
 def _declare(cmd_path: str, params: dict) -> None:
-    from ..guard import declare_input, declare_output
+    from ..core.guard import declare_input, declare_output
 
     outputs = []
     for name, value in params.items():
@@ -108,7 +109,7 @@ def _declare(cmd_path: str, params: dict) -> None:
 def _guarded(cmd_path: str, callback: Callable) -> Callable:
     @functools.wraps(callback)
     def run(*args, **kwargs):
-        from ..guard import io_guard
+        from ..core.guard import io_guard
 
         with io_guard(force=bool(kwargs.get("force"))):
             _declare(cmd_path, kwargs)
@@ -117,17 +118,21 @@ def _guarded(cmd_path: str, callback: Callable) -> Callable:
     return run
 
 
+#: the commands whose callbacks are wrapped already
+_GUARDED: weakref.WeakSet[click.Command] = weakref.WeakSet()
+
+
 def guard_commands(cmd: click.Command, path: str | None = None) -> click.Command:
     """Wrap the callbacks of ``cmd`` and of its sub-commands (once)."""
     path = path or cmd.name or ""
-    if getattr(cmd, "_gyrotest_guarded", False):
+    if cmd in _GUARDED:
         return cmd
     if isinstance(cmd, click.Group):
         for name, sub in cmd.commands.items():
             guard_commands(sub, f"{path} {name}")
     elif cmd.callback is not None:
         cmd.callback = _guarded(path, cmd.callback)
-    cmd._gyrotest_guarded = True
+    _GUARDED.add(cmd)
     return cmd
 
 

@@ -20,6 +20,8 @@ from typing import Any
 
 import click
 
+from .. import _runtime
+
 
 def jobs_option(func):
     """``--jobs N``: logs analysed in parallel (default: the number of CPU cores)."""
@@ -40,7 +42,6 @@ def default_jobs() -> int:
 def deviation_progress(min_s: float = 2.0):
     """Progress of the deviation τ loops on a terminal (not with -q, nothing when piped).
     The bar appears only once a loop has run for ``min_s`` seconds: short steps stay quiet."""
-    from ..noise import deviations
     from .common import progress, settings
 
     if settings().quiet or not sys.stderr.isatty():
@@ -65,19 +66,18 @@ def deviation_progress(min_s: float = 2.0):
             if done == total:
                 state["advance"](-total)  # reset for the next loop (transient bar)
 
-        old, deviations.PROGRESS = deviations.PROGRESS, hook
+        old, _runtime.PROGRESS = _runtime.PROGRESS, hook
         try:
             yield
         finally:
-            deviations.PROGRESS = old
+            _runtime.PROGRESS = old
 
 
 def _work(args: tuple[Callable, str, dict, dict, bool]) -> tuple[Any, list[str]]:
     fn, path, opts, kw, stream = args
-    from ..noise import deviations
     from .common import load_log
 
-    deviations.PROGRESS = None  # a worker process draws no bar
+    _runtime.PROGRESS = None  # a worker process draws no bar
 
     log = load_log(path, opts, announce=False, stream=stream)
     return named(fn, log, **kw), [f"{log.source}: {m}" for m in log.notes]
@@ -87,7 +87,7 @@ def named(fn: Callable, log, **kw):
     """``fn(log, **kw)``; an error about the data that does not say which log it is about
     ("record too short for τ = 1e5 s …") gets the log's name in front, as every other
     one-line error has."""
-    from ..errors import InputError
+    from ..core.errors import InputError
 
     try:
         return fn(log, **kw)
@@ -107,7 +107,7 @@ def prefetch_log(paths: Sequence[str], opts: dict):
     there, after the options have been checked, as without the prefetch."""
     if len(paths) != 1 or paths[0] == "-":
         return None
-    from ..documents import path_kind
+    from ..core.documents import path_kind
 
     if path_kind(paths[0]) != "file":  # a FIFO is never opened here (it would block)
         return None
@@ -119,11 +119,10 @@ def prefetch_log(paths: Sequence[str], opts: dict):
         return None
     from functools import partial
 
-    from ..beside import run_on_thread
-    from ..heap import reuse_freed_memory
+    from .._runtime import reuse_freed_memory, run_on_thread
     from .common import load_log
 
-    reuse_freed_memory()  # read whole (text): before any thread starts (gyrotest.heap)
+    reuse_freed_memory()  # read whole (text): before any thread starts (gyrotest._runtime)
     return run_on_thread(partial(load_log, announce=False), paths[0], opts,
                          name="gyrotest-read")
 
@@ -132,7 +131,7 @@ def map_logs(fn: Callable, paths: Sequence[str], opts: dict, *, jobs: int | None
              announce: bool = True, stream: bool = False, loaded=None, **kw) -> list:
     """``[fn(load_log(p), **kw) for p in paths]``, on ``jobs`` worker processes when there is
     more than one log. ``fn`` must be a module-level function (it is pickled by name).
-    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.stream`).
+    ``stream``: long Parquet logs may be streamed into θ (:mod:`gyrotest.io.stream`).
     ``loaded``: the Future of :func:`prefetch_log` for the only log."""
     from .common import load_logs, note, progress
 

@@ -3,7 +3,7 @@ physical effect, keep a history of the steps, and apply a model to another run.
 
 Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet report call these):
 
-* :func:`prepare` — a log at the working resolution (block means; see :mod:`.fit`);
+* :func:`prepare` — a log at the working resolution (block means; see :mod:`.modelfit`);
 * :func:`fit_model` — coefficients ± 1σ (GLS under the gyro's own noise model, fitted by
   maximum likelihood: :mod:`.likelihood`), held-out RMS, log-likelihood, AIC/BIC,
   collinearity, residual Allan deviation, excursions → :class:`FitResult` (``.model`` is
@@ -14,12 +14,17 @@ Core API (arrays / GyroLog in, dataclasses out; the CLI and the spec-sheet repor
 * :func:`compensate` — apply a model to another run → :class:`CompensationResult`;
 * the commands' analyses from a loaded log and their options: :func:`fit_log` (``model
   fit``), :func:`diagnose_log` (``model diagnose``), :func:`analyse_thermal`
-  (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.prepare` holds the shared
-  steps (:func:`load_for_terms`, :func:`prepare_log`, :func:`collect_terms`);
+  (``thermal-fit``), :func:`analyse_mag` (``mag-fit``); :mod:`.pipeline` holds the shared
+  steps (:func:`naming_terms`, :func:`prepare_log`, :func:`collect_terms`);
 * :mod:`.terms` — the library of physical effects (one documented function per effect).
 """
 
-from .compensate import CompensationResult, compensate
+# the effects defined in their own module (channel_terms) register themselves in
+# terms.EFFECTS when it is imported: here, so that any import of the package completes the
+# registry
+from . import channel_terms  # noqa: F401
+from .candidate import Candidate
+from .compensation import CompensationResult, compensate
 from .domain import (
     MagResult,
     SetpointResult,
@@ -31,19 +36,17 @@ from .domain import (
     thermal_fit,
     thermal_fit_setpoints,
 )
-from .fit import (
+from .history import append_history, load_history
+from .model import EnvModel
+from .modelfit import (
     FitResult,
     WorkData,
     choose_resolution,
     choose_smoothing,
-    fit_log,
     fit_model,
     prepare,
 )
-from .history import append_history, load_history
-from .model import EnvModel
-from .prepare import collect_terms, load_for_terms, prepare_log
-from .selection import Candidate
+from .pipeline import collect_terms, fit_log, naming_terms, prepare_log
 from .terms import EFFECTS, EnvFrame, TermSpec, parse_terms
 from .workbench import Diagnosis, diagnose, diagnose_log
 
@@ -51,5 +54,5 @@ __all__ = ["EFFECTS", "Candidate", "CompensationResult", "Diagnosis", "EnvFrame"
            "FitResult", "MagResult", "SetpointResult", "TermSpec", "ThermalAnalysis",
            "ThermalResult", "WorkData", "analyse_mag", "analyse_thermal", "append_history",
            "choose_resolution", "choose_smoothing", "collect_terms", "compensate", "diagnose",
-           "diagnose_log", "fit_log", "fit_model", "load_for_terms", "load_history", "mag_fit",
+           "diagnose_log", "fit_log", "fit_model", "naming_terms", "load_history", "mag_fit",
            "parse_terms", "prepare", "prepare_log", "thermal_fit", "thermal_fit_setpoints"]

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
+from .frame import find_channel
 from .terms import (
     EFFECTS,
     H0_UT,
@@ -29,27 +30,6 @@ from .terms import (
     first_order_lag,
     smoothed_rate,
 )
-
-
-# ============================================================================ channel lookup
-def find_channel(frame: EnvFrame, name: str) -> tuple[str, np.ndarray]:
-    """(group, values) of the channel ``name``: a temperature, field or extra channel, or
-    ``supply`` / ``table_rate``. InputError listing the channels when there is none."""
-    for group, chans in (("temperature", frame.temperature), ("field", frame.field_uT),
-                         ("extra", frame.extra)):
-        if name in chans:
-            return group, np.asarray(chans[name], dtype=np.float64)
-    if name == "supply" and frame.supply is not None:
-        return "supply", np.asarray(frame.supply, dtype=np.float64)
-    if name == "table_rate" and frame.table_rate is not None:
-        return "table_rate", np.asarray(frame.table_rate, dtype=np.float64)
-    have = list(frame.temperature) + list(frame.field_uT) + list(frame.extra)
-    if frame.supply is not None:
-        have.append("supply")
-    if frame.table_rate is not None:
-        have.append("table_rate")
-    raise InputError(f"{frame.source} has no channel {name!r} (channels: "
-                     f"{', '.join(have) or 'none'})")
 
 
 def numeric_channels(frame: EnvFrame) -> dict[str, tuple[str, np.ndarray]]:

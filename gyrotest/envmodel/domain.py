@@ -29,10 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import stats as st
-from .fit import FitResult, WorkData, fit_model, predict_blocks
-from .prepare import prepare_log
+from .modelfit import FitResult, WorkData, fit_model, predict_blocks
+from .pipeline import prepare_log
 from .terms import H0_UT, TermSpec, parse_terms, split_terms, temperature_rate
 
 #: the paper's published coefficients for its FOG sample (GYRO_REFERENCE §6)
@@ -231,7 +231,7 @@ def read_setpoints(path: str | Path) -> dict[str, np.ndarray]:
     """Read a set-point table (CSV/TSV with a header): temperature °C, drift deviation deg/h,
     optional σ deg/h and dT/dt °C/h. Columns are recognised by name (temperature / thermostat
     / setpoint; dw / drift / delta_omega; sigma / std / rms; dTdt)."""
-    from ..documents import read_table_text
+    from ..core.documents import read_table_text
 
     p = Path(path)
     text = read_table_text(p, "the set-point table")  # FIFO, device, gzip, encoding: one line
@@ -519,7 +519,7 @@ THERMAL_TERMS = ("T", "dTdt")
 
 def thermal_terms() -> list[TermSpec]:
     """The term specs of :data:`THERMAL_TERMS` (for
-    :func:`gyrotest.envmodel.prepare.load_for_terms`)."""
+    :func:`gyrotest.envmodel.pipeline.naming_terms`)."""
     return parse_terms(list(THERMAL_TERMS))
 
 
@@ -563,8 +563,8 @@ def analyse_thermal(log=None, *, path: str | None = None, setpoints: str | Path 
                     folds: int = 5, reference=None) -> ThermalAnalysis:
     """The analysis of ``gyrotest thermal-fit``: the set-point table ``setpoints``
     (:func:`read_setpoints`, :func:`thermal_fit_setpoints`) and/or the chamber run ``log``
-    (a :class:`~gyrotest.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
-    (:func:`gyrotest.envmodel.prepare.prepare_log` with the ``axis``/``skip``/``resolution``/
+    (a :class:`~gyrotest.core.data.GyroLog` read from ``path``): prepared with ΔT from ``t0_c``
+    (:func:`gyrotest.envmodel.pipeline.prepare_log` with the ``axis``/``skip``/``resolution``/
     ``smooth`` options as typed), then :func:`thermal_fit`. ``reference``: a static reference
     log of the same gyro whose noise model is fixed for the fit
     (:func:`gyrotest.envmodel.likelihood.reference_noise`)."""
@@ -603,7 +603,7 @@ def analyse_mag(log, *, path: str | None = None, with_terms: str | None = None,
                 skip: str | float = "0", resolution: str | None = "auto",
                 smooth: str | None = "auto", folds: int = 5, reference=None) -> MagResult:
     """The analysis of ``gyrotest mag-fit``: ``log`` (read from ``path``) needs three field
-    channels; prepared (:func:`gyrotest.envmodel.prepare.prepare_log`), then :func:`mag_fit`
+    channels; prepared (:func:`gyrotest.envmodel.pipeline.prepare_log`), then :func:`mag_fit`
     with the ``--with`` terms ``with_terms`` (comma-separated); ``reference`` as in
     :func:`analyse_thermal`."""
     extra, _ = mag_terms(with_terms)

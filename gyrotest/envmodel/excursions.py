@@ -12,9 +12,26 @@ and the warm-up period when the log starts at power-on.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .terms import temperature_rate
+
+
+@dataclass
+class Excursion:
+    """A stretch where the residual exceeds k·σ, with what the channels were doing."""
+
+    t_start_s: float
+    t_end_s: float
+    peak_dph: float
+    mean_dph: float
+    description: str
+
+    def to_dict(self) -> dict:
+        return {"t_start_s": self.t_start_s, "t_end_s": self.t_end_s, "peak_dph": self.peak_dph,
+                "mean_dph": self.mean_dph, "description": self.description}
 
 
 def _moving_mean(x: np.ndarray, w: int) -> np.ndarray:
@@ -74,13 +91,7 @@ def describe_interval(frame, refs, t1: float, t2: float, power_on: bool = False)
     inside = (t >= t1) & (t <= t2)
     if not inside.any():
         inside = sel
-    cache = getattr(frame, "_rate_cache", None)
-    if cache is None:
-        cache = {}
-        try:
-            frame._rate_cache = cache
-        except AttributeError:  # pragma: no cover
-            pass
+    cache = frame.rate_cache
     for name, T in list(frame.temperature.items())[:1]:
         if name not in cache:
             cache[name] = temperature_rate(T, frame.dt, refs.smoothing_s, frame.bounds)
@@ -128,9 +139,8 @@ def describe_interval(frame, refs, t1: float, t2: float, power_on: bool = False)
 
 
 def find_excursions(res, k_sigma: float = 3.0, max_items: int = 20) -> list:
-    """Excursions of a :class:`~gyrotest.envmodel.fit.FitResult` (see the module docstring),
+    """Excursions of a :class:`~gyrotest.envmodel.modelfit.FitResult` (see the module docstring),
     chronological, at most ``max_items`` (the largest)."""
-    from .fit import Excursion
 
     # the white and flicker part of the fitted noise at the working resolution: a random walk
     # the noise model took on may be an effect the model lacks, and a step or a transient it

@@ -24,11 +24,11 @@ from __future__ import annotations
 import ast
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: element-wise numpy functions allowed in expressions: name -> (function, number of args)
 FUNCTIONS: dict[str, tuple[Callable, tuple[int, ...]]] = {
@@ -211,9 +211,9 @@ class _Evaluator:
         if isinstance(node, ast.UnaryOp):
             return _UNARY[type(node.op)](self.visit(node.operand))
         if isinstance(node, ast.Call):
-            name = node.func.id  # type: ignore[attr-defined]
+            name = cast(ast.Name, node.func).id  # the parser admits only named calls
             if name == "ddt":
-                from .terms import smoothed_rate
+                from .effects import smoothed_rate
 
                 x = np.broadcast_to(np.asarray(self.visit(node.args[0]), float), (self.frame.n,))
                 if self.raw_ddt:
@@ -224,10 +224,10 @@ class _Evaluator:
                     return out
                 return smoothed_rate(x, self.frame.dt, self.smoothing_s, self.frame.bounds)
             if name == "lag":
-                from .terms import first_order_lag
+                from .effects import first_order_lag
 
                 x = np.broadcast_to(np.asarray(self.visit(node.args[0]), float), (self.frame.n,))
-                tau = float(node.args[1].value)  # type: ignore[attr-defined]
+                tau = float(cast(ast.Constant, node.args[1]).value)
                 if not tau > 0:
                     raise _err(self.text, "lag(x, tau_s): tau_s must be > 0")
                 return first_order_lag(x, self.frame.t, tau, self.frame.bounds)

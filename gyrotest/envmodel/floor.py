@@ -21,7 +21,7 @@ def floor_rms(N: float, B: float, K: float, t_eff_s: float, duration_s: float) -
     Formula: rms² = N²/T_eff + B²·ln(T/(2·T_eff))/(2 ln 2) + K²·T/6, with N in
     (deg/h)·√s (σ² = N²/τ), B the flicker Allan plateau in deg/h, K in (deg/h)/√s
     (σ² = K²τ/3), T_eff the averaging time of the working filter (smoother and block mean,
-    :func:`gyrotest.envmodel.fit.effective_averaging_time`) and T the record length: white
+    :func:`gyrotest.envmodel.modelfit.effective_averaging_time`) and T the record length: white
     noise averaged over T_eff; flicker with one-sided PSD B²/(2 ln 2·f) integrated from 1/T to
     1/(2·T_eff); a random walk of diffusion K² has a mean-removed variance K²·T/6 over T.
     Source: IEEE Std 952-1997 Annex C (σ² of white, flicker and random-walk rate noise);
@@ -39,8 +39,8 @@ def check_reference(ref_log, log, wd, noise) -> None:
     white noise (``noise``: its :class:`~gyrotest.envmodel.likelihood.NoiseParams`) differs
     from the log's own (the robust scale of the rate's first differences) by more than 10×
     (another unit or another gyro)."""
-    from ..errors import InputError
-    from .workdata import _white_sigma
+    from ..core.errors import InputError
+    from .frame import _white_sigma
 
     if ref_log.tau0 > wd.frame.dt * (1 + 1e-6):
         raise InputError(f"--reference {ref_log.source}: sampled every {ref_log.tau0:g} s, "

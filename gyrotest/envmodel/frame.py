@@ -1,5 +1,5 @@
 """The channels frame of the drift model: a uniformly sampled set of channels (full rate or
-block means) split into contiguous segments at gaps, built from a :class:`~gyrotest.data.GyroLog`;
+block means) split into contiguous segments at gaps, built from a :class:`~gyrotest.core.data.GyroLog`;
 and the earth-rate projection along an input axis that changes direction during a log.
 
 Conventions: time s, temperature degC, field uT, supply V, rates deg/h.
@@ -7,12 +7,13 @@ Conventions: time s, temperature degC, field uT, supply V, rates deg/h.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 SEC_PER_HOUR = 3600.0
 
@@ -47,6 +48,9 @@ class EnvFrame:
     #: earth-rate component along the IA per sample, deg/h, when the log has a position or
     #: IA-attitude channel and a site latitude (:func:`earth_projection`); else None
     earth_dph: np.ndarray | None = None
+    #: temperature rates per channel (:mod:`gyrotest.envmodel.excursions`), computed on first use
+    rate_cache: dict[str, np.ndarray] = field(default_factory=dict, init=False, repr=False,
+                                              compare=False)
 
     @property
     def n(self) -> int:
@@ -81,7 +85,7 @@ class EnvFrame:
 
 def frame_from_log(log, *, axis: str | None = None, dt: float | None = None,
                    subtract_table: bool = True) -> EnvFrame:
-    """Build an :class:`EnvFrame` from a :class:`~gyrotest.data.GyroLog`.
+    """Build an :class:`EnvFrame` from a :class:`~gyrotest.core.data.GyroLog`.
 
     With ``dt`` (s) the channels are averaged over consecutive bins of m = round(dt/τ0)
     samples within each segment (a trailing part shorter than m/2 is dropped); otherwise the
@@ -162,8 +166,8 @@ def earth_projection(log) -> np.ndarray | None:
     labels (``up``, ``north``, ``AZ/EL``, ...) or from numeric IA elevation/azimuth channels
     (``ia_elevation_deg``, ``ia_azimuth_deg``), at the site latitude. None without a
     latitude or such a channel. Formula: Ω_IA = Ω_E (cos φ cos e cos A + sin φ sin e)
-    (:func:`gyrotest.earth.earth_rate_component`)."""
-    from ..earth import earth_rate_component, parse_ia
+    (:func:`gyrotest.core.earth.earth_rate_component`)."""
+    from ..core.earth import earth_rate_component, parse_ia
 
     site = getattr(log, "site", None)
     if site is None:
@@ -189,3 +193,32 @@ def earth_projection(log) -> np.ndarray | None:
     az_k = next((low[n] for n in _AZIM_NAMES if n in low), None)
     az = np.asarray(log.extra[az_k], float) if az_k else site.ia_azimuth_deg
     return np.asarray(earth_rate_component(lat, az, el), float)
+
+
+# ============================================================================ channel lookup
+def find_channel(frame: EnvFrame, name: str) -> tuple[str, np.ndarray]:
+    """(group, values) of the channel ``name``: a temperature, field or extra channel, or
+    ``supply`` / ``table_rate``. InputError listing the channels when there is none."""
+    for group, chans in (("temperature", frame.temperature), ("field", frame.field_uT),
+                         ("extra", frame.extra)):
+        if name in chans:
+            return group, np.asarray(chans[name], dtype=np.float64)
+    if name == "supply" and frame.supply is not None:
+        return "supply", np.asarray(frame.supply, dtype=np.float64)
+    if name == "table_rate" and frame.table_rate is not None:
+        return "table_rate", np.asarray(frame.table_rate, dtype=np.float64)
+    have = list(frame.temperature) + list(frame.field_uT) + list(frame.extra)
+    if frame.supply is not None:
+        have.append("supply")
+    if frame.table_rate is not None:
+        have.append("table_rate")
+    raise InputError(f"{frame.source} has no channel {name!r} (channels: "
+                     f"{', '.join(have) or 'none'})")
+
+
+def _white_sigma(frame: EnvFrame) -> float:
+    """White-noise σ of the gyro rate per fine sample (deg/h): the robust scale of its first
+    differences / √2 (steps and drifts do not count)."""
+    r = np.asarray(frame.rate, float)
+    d = np.concatenate([np.diff(r[a:b]) for a, b in frame.bounds if b - a > 1] or [[0.0]])
+    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)

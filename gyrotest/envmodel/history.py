@@ -15,10 +15,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..output import write_json
-
-HISTORY_FORMAT = "gyrotest-model-history"
+from ..core.errors import InputError
+from ..core.output import write_json
+from .schemas import HISTORY_FORMAT
 
 
 @dataclass
@@ -76,8 +75,8 @@ def resolve_history(path: str | Path) -> Path:
 
 def load_history(path: str | Path) -> list[HistoryStep]:
     """Read the steps (oldest first); InputError when there is no readable history."""
-    from ..documents import DocumentError, load_document, path_kind
-    from ..schemas import history_problems
+    from ..core.documents import DocumentError, load_document, path_kind
+    from .schemas import history_problems
 
     hp = resolve_history(path)
     if path_kind(hp) == "missing":
@@ -86,7 +85,7 @@ def load_history(path: str | Path) -> list[HistoryStep]:
     # not declared an input: 'model fit -o' reads it to append a step (the command line
     # declares it for 'model history', gyrotest.cli.io_roles)
     d, _ = load_document(hp, fmt="json", what="a model history", declare=False)
-    problems = history_problems(d)  # every problem, naming its key (gyrotest.schemas)
+    problems = history_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
     if problems:
         raise DocumentError(str(hp), problems)
     return [HistoryStep.from_dict(s) for s in d["steps"]]
@@ -100,7 +99,7 @@ def _f(x: Any) -> float:
 
 
 def make_step(res, steps: list[HistoryStep], model_file: str | None = None) -> HistoryStep:
-    """A history step for a :class:`~gyrotest.envmodel.fit.FitResult`, diffed against the
+    """A history step for a :class:`~gyrotest.envmodel.modelfit.FitResult`, diffed against the
     previous step of the same log (same sha256, or the same file name without one)."""
     data = res.data or {}
     sha = data.get("sha256")

@@ -40,8 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg, optimize
 
-from ..errors import AnalysisError
-from ..workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
+from ..core.errors import AnalysisError
+from .workbench_rules import NL_MAX  # noqa: E402  (computing budget of the likelihood)
 
 #: fewest first differences a likelihood needs
 MIN_DIFFS = 8
@@ -377,13 +377,7 @@ class NoiseFit:
 def acov_for(wd, grid: LikGrid) -> dict[str, np.ndarray]:
     """Unit-parameter component autocovariances of the differenced samples of ``grid``
     (cached on ``wd`` per sample length)."""
-    cache = getattr(wd, "_acov_cache", None)
-    if cache is None:
-        cache = {}
-        try:
-            wd._acov_cache = cache
-        except AttributeError:  # pragma: no cover - frozen objects
-            pass
+    cache = wd.acov_cache
     fr = wd.frame
     from .effects import smoothing_half
 
@@ -484,7 +478,7 @@ def white_level(wd) -> float:
     robust scale of the fine-grid rate's first differences, σ_d²/2·dt (white noise dominates
     the sample-to-sample changes; slow effects and steps do not move a median). Where the
     whole band is quantised to one level (no difference at all) it is 0: not measured."""
-    from .workdata import _white_sigma
+    from .frame import _white_sigma
 
     s = _white_sigma(wd.frame)
     return float(s * s * wd.frame.dt) if math.isfinite(s) else 0.0

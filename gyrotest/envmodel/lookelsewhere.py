@@ -23,7 +23,7 @@ import numpy as np
 from scipy import special
 from scipy import stats as sps
 
-from ..workbench_rules import ALPHA, MC_DRAWS, WHITE_LAGS
+from .workbench_rules import ALPHA, MC_DRAWS, WHITE_LAGS
 
 
 @dataclass

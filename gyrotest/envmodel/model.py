@@ -19,11 +19,11 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
-from ..errors import InputError
-from ..output import jsonable, write_text
+from ..core.errors import InputError
+from ..core.output import jsonable, write_text
+from .schemas import FORMAT
 from .terms import EFFECTS, Refs, TermSpec, build_term, frame_from_log, resolve_terms
 
-FORMAT = "gyrotest-envmodel"
 FORMAT_VERSION = 1
 
 
@@ -136,13 +136,13 @@ class EnvModel:
 
     @staticmethod
     def load(path: str | Path) -> EnvModel:
-        from ..documents import DocumentError, load_document
-        from ..schemas import model_problems
+        from ..core.documents import DocumentError, load_document
+        from .schemas import model_problems
 
         p = Path(path)
         d, _ = load_document(p, what="the model file", not_found="model file not found; give a "
                              "file written by 'gyrotest model fit -o' (or thermal-fit/mag-fit)")
-        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
         if problems:
             raise DocumentError(str(p), problems)
         return EnvModel.from_dict(d, str(p))

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..output import atomic_path
-from ..plotting import COLORS, STYLE, check_plot_path, new_figure, save_figure
+from ..core.output import atomic_path
+from ..core.plotting import COLORS, STYLE, check_plot_path, new_figure, save_figure
 
 
 def _time_axis(t_s: np.ndarray) -> tuple[np.ndarray, str]:

@@ -67,11 +67,11 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
     keys_present = {s.key for s in present}
     cands: list[TermSpec] = []
     temps = [k for k, v in frame.temperature.items() if _varies(v)]
-    for c in temps:
+    for tc in temps:
         for k in ("T", "T2", "T3", "dTdt", "Tlag", "dTlagdt", "hyst"):
-            if k == "T3" and TermSpec("T2", (c,)).label not in have:
+            if k == "T3" and TermSpec("T2", (tc,)).label not in have:
                 continue
-            cands.append(TermSpec(k, (c,)))
+            cands.append(TermSpec(k, (tc,)))
     for i, a in enumerate(temps):
         for b in temps[i + 1:]:
             if _varies(frame.temperature[a] - frame.temperature[b]):
@@ -93,8 +93,8 @@ def candidate_terms(frame: EnvFrame, present: list[TermSpec]) -> list[TermSpec]:
             cands.append(TermSpec("chan2", ("supply",)))
     if frame.table_rate is not None and _varies(frame.table_rate):
         cands.append(TermSpec("rate"))
-        for c in temps:
-            cands.append(TermSpec("rateT", (c,)))
+        for ch in temps:
+            cands.append(TermSpec("rateT", (ch,)))
     accel, plain = [], []
     for name, v in frame.extra.items():
         if not _varies(v):

@@ -38,7 +38,7 @@ information criterion on that model:
    lags at the same α); the verdict prints the residual's N, B, K. A model term the data do
    not support (ΔBIC of dropping it < −BIC_TIE) is named for removal.
 7. **Never degenerate.** A candidate whose design column lies in the span of the model's
-   (variance inflation ≥ :data:`gyrotest.envmodel.fit.VIF_MAX`) is not proposed.
+   (variance inflation ≥ :data:`gyrotest.envmodel.modelfit.VIF_MAX`) is not proposed.
 
 Sources: S. S. Wilks (1938) (likelihood ratio); R. B. Davies, Biometrika 74 (1987) 33–43;
 R. E. Kass, A. E. Raftery, JASA 90 (1995) 773–795 (Bayes factors, ΔBIC); G. M. Ljung,
@@ -48,21 +48,12 @@ G. E. P. Box, Biometrika 65 (1978) 297–303.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import optimize
 
-from ..errors import AnalysisError, InputError
-from ..workbench_rules import (  # noqa: E402  (the decision constants, one source)
-    ALPHA,
-    BIC_TIE,
-    MC_DRAWS,
-    PAIR_POOL,
-    TAU_POINTS,
-    WHITE_LAGS,
-)
-from .fit import VIF_MAX, FitResult, WorkData, fit_model
+from ..core.errors import AnalysisError, InputError
+from .candidate import Candidate, Removal, _fmt_p
 from .lookelsewhere import (
     Whiteness,
     davies_log_p,
@@ -70,8 +61,16 @@ from .lookelsewhere import (
     ljung_box,
     total_variation,
 )
+from .modelfit import VIF_MAX, FitResult, WorkData, fit_model
 from .screen import CLASS_ORDER, block_candidates, candidate_terms, period_matches, term_class
 from .terms import TermSpec, describe, nonlinear_bounds, parse_terms, resolve_terms
+from .workbench_rules import (  # noqa: E402  (the decision constants, one source)
+    ALPHA,
+    BIC_TIE,
+    PAIR_POOL,
+    TAU_POINTS,
+    WHITE_LAGS,
+)
 
 #: within a class, simpler forms first at equal evidence (x before x², a lag before a rate)
 FORM_ORDER = {"chan": 0, "chanlag": 1, "dchan": 2, "dchanlag": 3, "chan2": 4, "chanabs": 5,
@@ -85,144 +84,6 @@ INTERACTION_KEYS = ("Hprod", "gprod", "chanprod")
 #: the plain form of a lagged term (a lag that replaces its plain form is the same sensor)
 UNLAGGED = {"Tlag": "T", "Tlag2": "T2", "dTlagdt": "dTdt", "chanlag": "chan",
             "dchanlag": "dchan"}
-
-
-# ============================================================================ results
-@dataclass
-class Candidate:
-    """One candidate move (a term added, or a block in place of model terms) and its test."""
-
-    term: str
-    effect: str
-    spec: TermSpec | None
-    klass: str = "library"
-    replaces: str | None = None
-    lr: float = math.nan  # Λ = 2Δℓ, the noise shape re-estimated under both models
-    df: int = 0  # coefficients added (net of those replaced)
-    searched: str | None = None  # the nonlinear parameter searched and its range
-    log_p: float = math.nan  # ln of its own (local) p-value, at the best searched value
-    p_fw: float = math.nan  # family-wise p-value (min-P parametric bootstrap)
-    tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
-    p_fw_full: float = math.nan  # family-wise p of the re-estimated-shape Λ (Bonferroni)
-    #: (Λ the sensors' noise alone would give a better reading of the same nodes, its sd):
-    #: set when the candidate's gain is no larger (errors in variables)
-    sensor_limited: tuple[float, float] | None = None
-    trials: int = 1  # candidates in the family of the step
-    dbic: float = math.nan  # BIC of the model with it minus the model's
-    theta: dict = field(default_factory=dict)
-    significant: bool = False
-    degenerate: str | None = None
-    error: str | None = None
-    equivalents: list[str] = field(default_factory=list)
-    pair: tuple[str, float, float] | None = None  # (other member, pair Λ, pair p_fw)
-    note: str | None = None
-    lr_fixed: float = math.nan  # Λ at the model's own noise shape (the screen)
-    lr_refit: float = math.nan  # 2Δℓ of the refitted models (θ and noise optimised)
-    rms_fit: float = math.nan
-    rms_holdout: float = math.nan
-    improvement_pct: float = math.nan  # held-out RMS gain of the refitted model, %
-    z: float = math.nan  # the added coefficient's z in the refitted model
-    n_params: int = 0
-    coefficients: list[dict] = field(default_factory=list)
-    advice: str | None = None  # what measurement separates it from its equivalents
-    _fit: FitResult | None = None
-
-    @property
-    def p(self) -> float:
-        return float(math.exp(self.log_p)) if math.isfinite(self.log_p) else math.nan
-
-    @property
-    def p_family(self) -> float:
-        """Family-wise p-value over every candidate and searched value of the step (the
-        min-P parametric bootstrap of :func:`family_p`)."""
-        return self.p_fw if math.isfinite(self.log_p) else math.nan
-
-    @property
-    def p_adj(self) -> float:
-        return self.p_family
-
-    @property
-    def evidence(self) -> str:
-        if self.error:
-            return self.error
-        if self.degenerate:
-            return self.degenerate
-        if not math.isfinite(self.lr):
-            return "not tested"
-        s = f"Λ = {self.lr:.1f} on {self.df} coefficient{'s' if self.df != 1 else ''}"
-        if self.searched:
-            s += f" with {self.searched} searched"
-        pf = self.p_family
-        fw = (f"< {1.0 / MC_DRAWS:.2g}" if math.isfinite(pf) and pf <= 1.0 / (MC_DRAWS + 1) + 1e-15
-              else f"= {_fmt_p(pf)}")
-        s += (f", local p = {_fmt_p(self.p)}, family-wise p {fw} over {self.trials} "
-              f"candidates and their searched values, ΔBIC = {self.dbic:+.1f}")
-        return s
-
-    def add_hint(self, base_terms: list | None = None) -> str:
-        """The complete ``--terms`` (and ``--term``) to paste: the model's terms (labels, or
-        the :class:`TermSpec` of each, which keeps a custom term's expression), without those
-        it replaces, plus this one."""
-        replaced = set((self.replaces or "").split("; "))
-        lib: list[str] = []
-        own: list[str] = []
-        for t in base_terms or []:
-            label = t.label if isinstance(t, TermSpec) else str(t)
-            if label == "bias" or label in replaced:
-                continue
-            if isinstance(t, TermSpec) and t.key == "custom":
-                own.append(f"{t.name}:{t.expr}")
-            elif ":" in label:
-                own.append(label)
-            else:
-                lib.append(label)
-        if self.spec is not None and self.spec.key == "custom":
-            own.append(f"{self.spec.name}:{self.spec.expr}")
-        else:
-            lib.append(self.term)
-        parts = [f"--terms '{','.join(lib)}'"] if lib else []
-        return " ".join(parts + [f"--term '{o}'" for o in own])
-
-    def to_dict(self) -> dict:
-        return {"term": self.term, "effect": self.effect, "class": self.klass,
-                "replaces": self.replaces, "lr": self.lr, "df": self.df,
-                "searched": self.searched, "p": self.p, "p_family": self.p_family,
-                "trials": self.trials, "delta_bic": self.dbic, "theta": self.theta,
-                "significant": self.significant, "degenerate": self.degenerate,
-                "equivalents": self.equivalents, "separate_by": self.advice,
-                "pair": list(self.pair) if self.pair else None, "note": self.note,
-                "lr_at_model_noise_shape": self.lr_fixed, "lr_refitted": self.lr_refit, "rms_fit_dph": self.rms_fit,
-                "rms_holdout_dph": self.rms_holdout, "improvement_pct": self.improvement_pct,
-                "z": self.z, "coefficients": self.coefficients, "evidence": self.evidence,
-                "error": self.error}
-
-
-def _fmt_p(p: float) -> str:
-    if not math.isfinite(p):
-        return "n/a"
-    if p < 1e-300:
-        return "< 1e-300"
-    return f"{p:.2g}"
-
-
-@dataclass
-class Removal:
-    """A model term the data do not support: the model without it has the better BIC."""
-
-    term: str
-    lr: float
-    df: int
-    dbic: float
-
-    @property
-    def text(self) -> str:
-        return (f"the data do not support {self.term} (Λ = {self.lr:.1f} on {self.df} "
-                f"parameter{'s' if self.df != 1 else ''}, ΔBIC of removing it "
-                f"{self.dbic:+.1f}): the model does as well without it; remove it")
-
-    def to_dict(self) -> dict:
-        return {"term": self.term, "lr": self.lr, "df": self.df, "delta_bic": self.dbic,
-                "text": self.text}
 
 
 # ============================================================================ the screen
@@ -285,7 +146,7 @@ class Screen:
             return self._grid
         u0 = np.asarray(nf.logits, float)
         steps = (0.5, 0.0, -2.0, -5.0, -30.0)
-        white = getattr(self.wd, "_white_level", 0.0) or None
+        white = self.wd.white_n2 or None
         X = self.base.fitter.X(self.base.thetas)
         for a in steps:
             for b in steps:
@@ -902,7 +763,7 @@ def pair_step(wd: WorkData, base: FitResult, sc: Screen, tested: list[Candidate]
 
 
 def separation_advice(a: Candidate, b: Candidate) -> str:
-    from .fit import _advice
+    from .modelfit import _advice
 
     ka = a.spec.key if a.spec else ""
     kb = b.spec.key if b.spec else ""

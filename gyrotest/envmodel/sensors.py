@@ -89,7 +89,7 @@ def measure_frame(frame) -> dict[str, SensorNoise]:
     return found
 
 
-from ..workbench_rules import EIV_DRAWS  # noqa: E402  (draws of each channel's noise)
+from .workbench_rules import EIV_DRAWS  # noqa: E402  (draws of each channel's noise)
 
 
 def term_channels(spec) -> set[str]:

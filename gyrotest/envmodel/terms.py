@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .effects import (  # noqa: F401  (re-exported: the effect functions live in effects.py)
     H0_UT,
     SEC_PER_HOUR,
@@ -402,7 +402,7 @@ def resolve_terms(specs: list[TermSpec], frame: EnvFrame) -> list[TermSpec]:
                                      f"(field channels: {', '.join(have)})")
                 _check_channel(frame.field_uT[c], f"term {label!r}", c, src)
         elif e.needs in ("any", "any2"):
-            from .channel_terms import find_channel
+            from .frame import find_channel
 
             n_need = 2 if e.needs == "any2" else 1
             if len(chans) != n_need:
@@ -656,6 +656,3 @@ def effect_table() -> list[dict]:
              "nonlinear": [p.name for p in e.nonlinear], "source": e.source}
             for e in EFFECTS.values() if e.key != "custom"]
 
-
-# the effects defined in their own module register themselves in EFFECTS
-from . import channel_terms as _channel_terms  # noqa: E402,F401

@@ -1,12 +1,12 @@
 """Variable projection: the design matrix of a term set on a :class:`WorkData` and the
 optimiser of its nonlinear parameters (:class:`_Fitter`), used by
-:func:`gyrotest.envmodel.fit.fit_model`.
+:func:`gyrotest.envmodel.modelfit.fit_model`.
 
 Linear coefficients are solved exactly at every step; each time constant is searched on a
 log grid and refined by bounded Brent minimisation of the residual sum of squares, a
 frequency from the highest peaks of the residual periodogram, and two or more time
 constants are polished jointly (:meth:`_Fitter.polish_joint`; the estimation section of
-:mod:`.fit`).
+:mod:`.modelfit`).
 """
 
 from __future__ import annotations

@@ -15,16 +15,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .fit import FitResult, WorkData, fit_model
+from .candidate import Candidate, Removal, _fmt_p
 from .likelihood import NoiseParams
 from .lookelsewhere import Whiteness
-from .prepare import prepare_log
+from .modelfit import FitResult, WorkData, fit_model
+from .pipeline import prepare_log
 from .selection import (
     ALPHA,
     BIC_TIE,
-    Candidate,
-    Removal,
-    _fmt_p,
     judge_step,
     removal,
     residual_whiteness,
@@ -122,7 +120,7 @@ class Diagnosis:
 
 def rule_line(alpha: float) -> str:
     """The decision rule in one line (``model diagnose`` prints it under the verdict)."""
-    from ..workbench_rules import SUMMARY
+    from .workbench_rules import SUMMARY
 
     return SUMMARY.format(alpha=alpha)
 
@@ -134,7 +132,7 @@ def diagnose_log(log, specs: list[TermSpec], candidates: list[str] | None = None
                  alpha: float | None = None, folds: int = 5, progress=None, reference=None,
                  path_steps: int = 3, power_on: bool | None = None, **_ignored) -> Diagnosis:
     """``gyrotest model diagnose``: prepare ``log`` with the command's options
-    (:func:`gyrotest.envmodel.prepare.prepare_log`; ``reference``: a static reference log
+    (:func:`gyrotest.envmodel.pipeline.prepare_log`; ``reference``: a static reference log
     that fixes the noise model; ``power_on``: the log starts at the gyro's power-on) and
     :func:`diagnose` the model ``specs``. ``progress(i, n, label)`` is called before each
     candidate term is scored."""

@@ -34,8 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from . import stats as st
+from .frame import _white_sigma
 from .terms import (
     EnvFrame,
     Refs,
@@ -85,6 +86,21 @@ class WorkData:
     #: each filtered channel's measurement noise ({name: SensorNoise},
     #: :mod:`gyrotest.envmodel.sensors`)
     sensor_noise: dict = field(default_factory=dict)
+    #: the working resolution in a few words, for one-line summaries
+    resolution_short: str = ""
+    #: effective averaging time of the smoother and the blocks (s); None: the resolution
+    t_eff: float | None = None
+    #: the white-noise parameter N² ((deg/h)²·s) of the full band
+    #: (:func:`gyrotest.envmodel.likelihood.white_level`), computed on first use
+    white_n2: float | None = field(default=None, init=False, repr=False, compare=False)
+    #: the component autocovariances per sample length
+    #: (:func:`gyrotest.envmodel.likelihood.acov_for`)
+    acov_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _sel_cache: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
+    _starts_cache: np.ndarray | None = field(default=None, init=False, repr=False,
+                                             compare=False)
+    _ids_cache: tuple[np.ndarray, bool] | None = field(default=None, init=False, repr=False,
+                                                       compare=False)
 
     @property
     def nb(self) -> int:
@@ -116,14 +132,14 @@ class WorkData:
 
     @property
     def _sel(self) -> np.ndarray:
-        if not hasattr(self, "_sel_cache"):
+        if self._sel_cache is None:
             self._sel_cache = self.block >= 0
         return self._sel_cache
 
     @property
     def _starts(self) -> np.ndarray:
         """Index (among the selected samples) of the first sample of each block."""
-        if not hasattr(self, "_starts_cache"):
+        if self._starts_cache is None:
             ids, _ = self._ids
             self._starts_cache = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
         return self._starts_cache
@@ -131,7 +147,7 @@ class WorkData:
     @property
     def _ids(self) -> tuple[np.ndarray, bool]:
         """The block id of each selected fine sample, and whether every sample is selected."""
-        if not hasattr(self, "_ids_cache"):
+        if self._ids_cache is None:
             sel = self._sel
             self._ids_cache = (self.block[sel], bool(sel.all()))
         return self._ids_cache
@@ -261,14 +277,6 @@ def choose_smoothing(frame: EnvFrame, duration_s: float) -> tuple[float, str]:
     return W, f"smoothing window W = {W:g} s ({why})"
 
 
-def _white_sigma(frame: EnvFrame) -> float:
-    """White-noise σ of the gyro rate per fine sample (deg/h): the robust scale of its first
-    differences / √2 (steps and drifts do not count)."""
-    r = np.asarray(frame.rate, float)
-    d = np.concatenate([np.diff(r[a:b]) for a, b in frame.bounds if b - a > 1] or [[0.0]])
-    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
-
-
 def _rate_effect_bound(frame: EnvFrame, trate: np.ndarray, inner: np.ndarray,
                        w0: float) -> float:
     """Upper estimate (deg/h) of the RMS of the gyro-rate variation that follows one sensor's
@@ -318,7 +326,7 @@ def prepare(log, *, axis: str | None = None, resolution: float | None = None,
             t_ref: float | None = None, v_ref: float | None = None,
             smoothing_s: float | None = None, t_on_s: float = 0.0,
             provenance: dict | None = None, fine_dt: float | None = None) -> WorkData:
-    """Prepare a :class:`~gyrotest.data.GyroLog` for fitting at the working resolution.
+    """Prepare a :class:`~gyrotest.core.data.GyroLog` for fitting at the working resolution.
 
     ``resolution`` T_b (s; default chosen by :func:`choose_resolution`), ``t_ref`` reference
     temperature degC (default: mean, per sensor), ``v_ref`` reference supply V (default mean),

@@ -5,7 +5,7 @@ file atomically (temp file + rename: never a half-written deliverable).
 The inputs are the documents gyrotest already writes: ``gyrotest allan --json`` (kind
 ``allan``), a model file of ``gyrotest model fit -o`` / ``thermal-fit -o`` (kind ``envmodel``),
 ``gyrotest scale-factor --json`` (kind ``scale-factor``). Every malformed input is an
-:class:`~gyrotest.errors.InputError` naming the file and the fix.
+:class:`~gyrotest.core.errors.InputError` naming the file and the fix.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..errors import InputError
-from ..output import atomic_open
+from ..core.errors import InputError
+from ..core.output import atomic_open
 
 DEG = math.pi / 180.0
 
@@ -58,7 +58,7 @@ def detect_kind(d: Any) -> str | None:
 
 def read_document(path: str | Path, want: str) -> Document:
     """Read a JSON (or, for models, TOML) result and check it is of kind ``want``."""
-    from ..documents import load_document
+    from ..core.documents import load_document
 
     p = Path(path)
     try:
@@ -71,10 +71,10 @@ def read_document(path: str | Path, want: str) -> Document:
         raise InputError(f"{e}; cannot parse it, give {PRODUCERS[want]}") from None
     kind = detect_kind(d)
     if kind == "envmodel" and want == "envmodel":
-        from ..documents import DocumentError
-        from ..schemas import model_problems
+        from ..core.documents import DocumentError
+        from ..envmodel.schemas import model_problems
 
-        problems = model_problems(d)  # every problem, naming its key (gyrotest.schemas)
+        problems = model_problems(d)  # every problem, naming its key (gyrotest.envmodel.schemas)
         if problems:
             raise DocumentError(str(p), problems)
     if kind != want:
@@ -222,7 +222,7 @@ def dph_rad_s(x_deg_h: float) -> float:
     return x_deg_h * DEG / 3600.0
 
 
-#: standard gravity, m/s² (as in :mod:`gyrotest.units`)
+#: standard gravity, m/s² (as in :mod:`gyrotest.core.units`)
 G0 = 9.80665
 
 
@@ -262,7 +262,7 @@ def write_output(path: str | Path, content: str | bytes | None = None, *, writer
     """Write ``content`` (or call ``writer(tmp_path)``) atomically to ``path``. A directory
     that does not exist or cannot be written is an InputError naming it; nothing is left
     behind on error."""
-    from ..output import atomic_path
+    from ..core.output import atomic_path
 
     p = Path(path)
     if p.is_dir():

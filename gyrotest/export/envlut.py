@@ -24,11 +24,15 @@ import io
 import math
 import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import Document, banner
+
+if TYPE_CHECKING:
+    from ..envmodel.model import EnvModel
 
 POLY = {"bias": 0, "T": 1, "T2": 2, "T3": 3}
 LINEAR_INPUT = {"dTdt", "dGdt", "Hx", "Hy", "Hz", "V"}
@@ -55,7 +59,7 @@ def ascii_text(s: str) -> str:
 class Plan:
     """The exportable terms of a model: (term, kind) pairs, the dropped ones, the inputs."""
 
-    model: object  # EnvModel
+    model: EnvModel
     terms: list  # ModelTerm, exportable
     dropped: list[str]
     temp_channels: list[str]  # channels of the polynomial terms
@@ -137,7 +141,7 @@ def regressor_text(t, refs) -> tuple[str, str]:
 
 # ----------------------------------------------------------------------------- evaluation
 #: a coefficient whose |value / 1σ| is below this is not determined by the log it was fitted
-#: on ("not significant" in :attr:`gyrotest.envmodel.fit.Coefficient.significance`)
+#: on ("not significant" in :attr:`gyrotest.envmodel.modelfit.Coefficient.significance`)
 DETERMINED_Z = 2.0
 
 

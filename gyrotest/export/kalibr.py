@@ -8,7 +8,7 @@ Keys and units (ethz-asl/kalibr wiki, "IMU Noise Model" and "YAML formats"):
   (:func:`~gyrotest.export.common.rrw_rad_s2_rt_hz`);
 * ``accelerometer_noise_density`` (m/s²/√Hz) = VRW (m/s/√h) / 60, ``accelerometer_random_walk``
   (m/s³/√Hz) = acceleration random walk K (m/s/h/√h) / 216000 — from the accelerometer axes
-  of the Allan document (IEEE Std 1293 terms; :mod:`gyrotest.accel`), or the options (which
+  of the Allan document (IEEE Std 1293 terms; :mod:`gyrotest.io.accel`), or the options (which
   win); only when the log had no accelerometer and no option gives them, a marked
   placeholder;
 * ``update_rate`` — Hz, the log's sample rate (Kalibr derives the discrete σ = density·√rate
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import (
     AllanAxis,
     acrw_m_s3_rt_hz,

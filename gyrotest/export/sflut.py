@@ -1,6 +1,6 @@
 """Firmware compensation of the scale-factor model (``gyrotest scale-factor --json``).
 
-IEEE Std 952-1997 §8.3 model equation, as :mod:`gyrotest.scalefactor.fit` fits it::
+IEEE Std 952-1997 §8.3 model equation, as :mod:`gyrotest.scalefactor.tablefit` fits it::
 
     S0·out = (I + D)·(1 + 1e-6·ε_K)⁻¹,   ε_K = ε_0 + ε_T·(T − T_ref) + f(I)
 
@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
-from ..scalefactor.fit import TERM_ALIASES, TERMS
+from ..core.errors import InputError
+from ..scalefactor.tablefit import TERM_ALIASES, TERMS
 from .common import Document, banner, need, number
 from .envlut import ascii_text
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 
 from .. import __version__
-from ..errors import InputError
+from ..core.errors import InputError
 from .common import AllanAxis, need, number
 
 SIGMA_TYPES = {

@@ -19,7 +19,7 @@ def _unit_tag(unit: str) -> str:
 def allan_csv(axes: list[AllanAxis]) -> str:
     units = {str((need(a.doc, "deviation", a.file).get("unit")) or "deg/h") for a in axes}
     if len(units) > 1:  # one header for all rows
-        from ..errors import InputError
+        from ..core.errors import InputError
 
         raise InputError(f"the axes have different units ({', '.join(sorted(units))}); export "
                          "them one at a time with --axis")

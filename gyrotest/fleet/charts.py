@@ -28,7 +28,7 @@ def control_charts(fleet: Fleet, keys: list[str] | None = None, ncols: int = 2):
     :func:`key_items`); None when there is nothing to chart."""
     import matplotlib.pyplot as plt
 
-    from ..plotting import STYLE
+    from ..core.plotting import STYLE
 
     keys = key_items(fleet) if keys is None else keys
     if not keys:

@@ -124,9 +124,9 @@ def analyse_campaign(path: str) -> dict[str, Any]:
     identity (model, serial, date, report id, campaign SHA-256), the overall verdict and every
     spec item (value, 1σ, expanded uncertainty, limit, verdict). A bad campaign or log gives
     ``{"campaign": path, "error": message}`` (the caller raises it, naming the file)."""
-    from ..errors import GyrotestError
-    from ..report.build import build_sheet, run_campaign
-    from ..report.campaign import load_campaign
+    from ..core.errors import GyrotestError
+    from ..specsheet.build import build_sheet, run_campaign
+    from ..specsheet.campaign import load_campaign
 
     t0 = time.perf_counter()
     try:
@@ -212,7 +212,7 @@ class Fleet:
 
     def overall(self) -> str:
         """Worst overall verdict over the lot."""
-        from ..report.sheet import NO_LIMIT, SEVERITY
+        from ..specsheet.sheet import NO_LIMIT, SEVERITY
 
         v = {r["overall"] for r in self.lot}
         return next((s for s in SEVERITY if s in v), NO_LIMIT)

@@ -1,4 +1,4 @@
-"""The lot summary as a document (:class:`~gyrotest.report.sheet.Sheet`), so that the report's
+"""The lot summary as a document (:class:`~gyrotest.specsheet.sheet.Sheet`), so that the report's
 Markdown, HTML and PDF renderers lay it out."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import hashlib
 from typing import Any
 
 from .. import __version__
-from ..report.sheet import Figure, Num, Para, Section, Sheet, Table, fmt_number
+from ..specsheet.sheet import Figure, Num, Para, Section, Sheet, Table, fmt_number
 from .core import OUTLIER_ALPHA, OUTLIER_MIN_N, Fleet, outlier_threshold
 
 #: serial columns per summary table (wider lots continue in a second table)
@@ -113,7 +113,7 @@ def fleet_sheet(fleet: Fleet, figures: bool = True) -> Sheet:
     # 3 control charts
     s3 = Section("3", "Control charts")
     if figures:
-        from ..report.figures import _png_from_fig
+        from ..specsheet.figures import _png_from_fig
         from .charts import control_charts
 
         fig = control_charts(fleet)

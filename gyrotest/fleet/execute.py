@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .core import Fleet, analyse_campaign, summarise
 
 
@@ -50,7 +50,7 @@ def _pool(paths: list[str], jobs: int, progress) -> list[dict[str, Any]]:
             out[futs[f]] = f.result()
             if progress:
                 progress(paths[futs[f]])
-    return out  # type: ignore[return-value]
+    return out
 
 
 def _dask(paths: list[str], scheduler: str, jobs: int, progress) -> list[dict[str, Any]]:
@@ -85,7 +85,9 @@ def dask_map(client, paths: list[str], progress=None, as_completed=None) -> list
     """Run :func:`analyse_campaign` for every path on a Dask ``client``; records in the order
     of ``paths`` (``pure=False``: a campaign may change on disk between runs)."""
     if as_completed is None:
-        from distributed import as_completed
+        from distributed import as_completed as dask_as_completed
+
+        as_completed = dask_as_completed
     futs = client.map(analyse_campaign, paths, pure=False)
     index = {f.key: i for i, f in enumerate(futs)}
     out: list[dict[str, Any] | None] = [None] * len(paths)
@@ -93,7 +95,7 @@ def dask_map(client, paths: list[str], progress=None, as_completed=None) -> list
         out[index[f.key]] = f.result()
         if progress:
             progress(paths[index[f.key]])
-    return out  # type: ignore[return-value]
+    return out
 
 
 def run_fleet(paths: list[str], *, jobs: int | None = None, scheduler: str | None = None,
@@ -103,7 +105,7 @@ def run_fleet(paths: list[str], *, jobs: int | None = None, scheduler: str | Non
     ``jobs``: worker processes (default :func:`default_jobs`; 1 = in this process);
     ``scheduler``: ``"local"`` or a Dask scheduler address (runs on Dask instead of the pool);
     ``client``: an existing ``distributed.Client`` to use (tests, notebooks). A campaign that
-    fails raises :class:`~gyrotest.errors.InputError` naming it.
+    fails raises :class:`~gyrotest.core.errors.InputError` naming it.
     """
     paths = [str(p) for p in paths]
     if not paths:

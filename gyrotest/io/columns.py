@@ -6,9 +6,9 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from ..errors import InputError
-from ..profile import Profile
-from .tables import _missing_column_msg
+from ..core.errors import InputError
+from ..core.profile import Profile
+from .rawtable import _missing_column_msg
 
 # ----------------------------------------------------------------------------- auto-detection
 _TIME_NAMES = {"time", "t", "t_s", "time_s", "times", "timestamp", "seconds", "sec", "elapsed",

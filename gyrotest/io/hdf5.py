@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from .containers import (
+from ..core.errors import InputError
+from .containerbase import (
     MAX_MATRIX_CHANNELS,
     Found,
     equal_lengths,

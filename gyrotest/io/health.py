@@ -1,6 +1,6 @@
 """Channel health: a dead or stuck gyro output, and magnitudes the arithmetic cannot carry.
 
-Checked once, where every log is read (:func:`gyrotest.ingest.read_log`), so that no analysis
+Checked once, where every log is read (:func:`gyrotest.io.ingest.read_log`), so that no analysis
 starts on a channel that cannot hold a result:
 
 * **Overflow.** A value beyond ±:data:`MAX_ABS` in any channel is a logger's overflow or error
@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 
 #: largest magnitude accepted in any channel, in the file's units and in internal units
 MAX_ABS = 1e40
@@ -85,7 +85,7 @@ PHYSICAL_RANGE = {
 
 def outside_physical(v: np.ndarray, unit: str, quantity: str) -> np.ndarray:
     """Finite values of ``v`` (in ``unit``) outside :data:`PHYSICAL_RANGE` of ``quantity``."""
-    from ..units import to_internal
+    from ..core.units import to_internal
 
     lo, hi, _ = PHYSICAL_RANGE[quantity]
     with np.errstate(invalid="ignore", over="ignore"):

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from .containers import MAT73_TEXT, Found, as_channels, equal_lengths, matrix_columns
+from ..core.errors import InputError
+from .containerbase import MAT73_TEXT, Found, as_channels, equal_lengths, matrix_columns
 from .hdf5 import as_column
 
 _HINT_SUFFIXES = ("_names", "_columns", "_colnames", "_labels", "_header")

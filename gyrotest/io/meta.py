@@ -13,11 +13,11 @@ import numpy as np
 import pyarrow as pa
 
 from .. import __version__
-from ..data import Gap, GyroConstants, GyroLog, Timing
-from ..earth import Site
-from ..errors import InputError
-from ..profile import Profile, merge
-from ..units import INTERNAL
+from ..core.data import Gap, GyroConstants, GyroLog, Timing
+from ..core.earth import Site
+from ..core.errors import InputError
+from ..core.profile import Profile, merge
+from ..core.units import INTERNAL
 from .site import site_from_profile
 from .tables import META_KEY, _read_feather, _read_parquet
 
@@ -171,7 +171,7 @@ def _from_gyrotest(raw, source: str, fmt: str, meta: dict, prof: Profile) -> Gyr
     cols = meta["columns"]
 
     def col(name):
-        from ..fastcsv import float64_values  # Arrow's to_numpy would import pandas
+        from .fastcsv import float64_values  # Arrow's to_numpy would import pandas
 
         return float64_values(tab.column(name))
 
@@ -263,7 +263,7 @@ def log_to_table(log: GyroLog) -> pa.Table:
 
 def write_log(log: GyroLog, path: str | os.PathLike, fmt: str | None = None) -> Path:
     """Write a GyroLog to Parquet (default) or Feather atomically, with metadata."""
-    from ..output import atomic_path
+    from ..core.output import atomic_path
 
     p = Path(path)
     fmt = fmt or ("feather" if p.suffix.lower() in (".feather", ".arrow") else "parquet")

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
-from .containers import Found, need
+from ..core.errors import InputError
+from .containerbase import Found, need
 
 IMU_TYPES = ("sensor_msgs/msg/Imu", "sensor_msgs/Imu")
 COLUMNS = ["time", "gx", "gy", "gz", "ax", "ay", "az"]

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from ..earth import Site, check_latitude, parse_ia
-from ..errors import InputError
-from ..profile import Profile
+from ..core.earth import Site, check_latitude, parse_ia
+from ..core.errors import InputError
+from ..core.profile import Profile
 
 
 def site_from_profile(prof: Profile, source: str = "profile") -> Site | None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import csv
-import difflib
 import gzip
 import io
 import json
@@ -18,61 +17,16 @@ import re
 import stat
 import sys
 import zlib
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 
-from ..errors import InputError
-from ..fastcsv import _skip_comment_rows  # the one invalid-row handler of both CSV readers
+from ..core.errors import InputError
+from .fastcsv import _skip_comment_rows  # the one invalid-row handler of both CSV readers
+from .rawtable import RawTable, _check_columns
 
 META_KEY = b"gyrotest"  # schema-metadata key of gyrotest's own converted files
-
-@dataclass
-class RawTable:
-    """A table as read from disk, before roles and units are applied."""
-
-    table: pa.Table
-    source: str
-    fmt: str  # csv | tsv | whitespace | parquet | feather | mat | hdf5 | rosbag
-    path: Path | None  # None for stdin
-    header_line: int = 0  # 1-based line of the header in a text file
-    meta: dict | None = None  # gyrotest metadata of a converted Parquet/Feather file
-    # float64 columns read by the streaming reader, writeable and owned by this table: handed
-    # to the first (only) role that uses them without a copy (see _column_to_float)
-    owned: dict[str, np.ndarray] = field(default_factory=dict)
-    exclusive: set[str] = field(default_factory=set)
-    #: units the file itself states for columns (a ROS message definition, an HDF5 ``units``
-    #: attribute); a profile's [units] still wins
-    units: dict[str, str] = field(default_factory=dict)
-    #: what the reader left out or assumed (shown as notes)
-    notes: list[str] = field(default_factory=list)
-    compressed: bool = False  # gzip'd text
-    origin: dict = field(default_factory=dict)  # where in a container file (ROS topic ...)
-
-    def line_of_row(self, row: int) -> int | None:
-        """1-based text line of 0-based data row ``row`` (text files only)."""
-        if self.fmt not in ("csv", "tsv", "whitespace"):
-            return None
-        if self.path is None:
-            return None
-        count = -1
-        with (gzip.open(self.path, "rb") if self.compressed else open(self.path, "rb")) as fh:
-            for lineno, line in enumerate(fh, 1):
-                if lineno <= self.header_line:
-                    continue
-                s = line.strip()
-                if not s or s.startswith(b"#"):
-                    continue
-                count += 1
-                if count == row:
-                    return lineno
-        return None
-
-    def where(self, row: int) -> str:
-        line = self.line_of_row(row)
-        return f"row {row + 1}" + (f" (line {line})" if line else "")
 
 
 # ----------------------------------------------------------------------------- table reading
@@ -159,7 +113,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     Besides text and Parquet/Feather: gzip'd text, MATLAB ``.mat``, HDF5 and ROS bags
     (:mod:`gyrotest.io.containers`); ``select`` names the ROS topic, HDF5 group or MATLAB
     struct that holds the columns. ``_data``: the bytes of a stream already read (a named
-    pipe, :func:`gyrotest.ingest.read_log`), parsed like stdin."""
+    pipe, :func:`gyrotest.io.ingest.read_log`), parsed like stdin."""
     source = _source_name(path)
     data: bytes | None = None
     p: Path | None = None
@@ -218,7 +172,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
     else:
         owned = None
         if p and decimal == ".":
-            from ..fastcsv import arrow_table, read_numeric  # plain numbers: fast path
+            from .fastcsv import arrow_table, read_numeric  # plain numbers: fast path
 
             with _quiet_invalid_row_handler():
                 owned = read_numeric(p, delim, skip, names, columns)
@@ -229,7 +183,7 @@ def read_table(path: str | os.PathLike, columns: list[str] | None = None,
         elif p:
             owned = _stream_numeric(p, delim, skip, names, columns, decimal=decimal)
         if owned is not None:
-            from ..fastcsv import arrow_table
+            from .fastcsv import arrow_table
 
             table = arrow_table(owned, columns or names)
             if table.num_rows == 0:
@@ -360,20 +314,6 @@ def _bad_binary(source: str):
     raise InputError(f"{source}: Parquet/Feather cannot be read from stdin; pass the file path")
 
 
-def _check_columns(wanted: list[str], names: list[str], source: str) -> None:
-    for c in wanted:
-        if c not in names:
-            raise InputError(_missing_column_msg(c, names, source))
-
-
-def _missing_column_msg(col: str, names: list[str], source: str, role: str | None = None) -> str:
-    close = difflib.get_close_matches(col, names, n=1, cutoff=0.6)
-    hint = f"did you mean {close[0]!r}? " if close else ""
-    what = f" (named for {role})" if role else ""
-    return (f"{source}: column {col!r}{what} not found; {hint}columns are: "
-            f"{', '.join(names[:20])}{' ...' if len(names) > 20 else ''}")
-
-
 NULL_VALUES = ["", "NA", "N/A", "null", "NULL", "-"]
 #: text files at least this large are read by the streaming reader straight into float64 arrays
 STREAM_MIN_BYTES = 128 << 20
@@ -438,7 +378,7 @@ def _stream_numeric(path: Path, delim: str, skip: int, names: list[str],
     except OSError:
         return None
     try:
-        from ..fastcsv import data_start_and_capacity
+        from .fastcsv import data_start_and_capacity
 
         pos, cap = data_start_and_capacity(fh.read(1 << 22), skip, size)
         out = {c: np.empty(cap) for c in cols}
@@ -607,7 +547,6 @@ def column_names(path: str | os.PathLike) -> list[str]:
     return raw.table.column_names
 
 
-
 # ----------------------------------------------------------------------------- conversion
 def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
     """A column as float64 with NaN for missing cells; a non-numeric cell is an error naming
@@ -617,7 +556,7 @@ def _column_to_float(raw: RawTable, col: str, role: str) -> np.ndarray:
     arr = raw.table.column(col)
     t = arr.type
     if pa.types.is_floating(t) or pa.types.is_integer(t) or pa.types.is_boolean(t):
-        from ..fastcsv import float64_values  # Arrow's to_numpy would import pandas
+        from .fastcsv import float64_values  # Arrow's to_numpy would import pandas
 
         out = float64_values(arr)
         # a zero-copy view of an Arrow buffer can be writeable (buffers decoded from

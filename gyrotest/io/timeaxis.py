@@ -10,10 +10,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyarrow as pa
 
-from ..data import Gap, Timing
-from ..errors import InputError
-from ..units import factor
-from .tables import RawTable, _column_to_float
+from ..core.data import Gap, Timing
+from ..core.errors import InputError
+from ..core.units import factor
+from .rawtable import RawTable
+from .tables import _column_to_float
 
 GAP_FACTOR = 1.5  # an interval longer than this many nominal intervals is a gap
 JITTER_WARN = 0.01  # relative std of the interval above which sampling is called irregular
@@ -148,7 +149,7 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             ints = num.to_numpy(dtype=np.int64)
         v = np.array(num.to_numpy(dtype=np.float64))  # a writeable copy: shifted in place
     elif pa.types.is_integer(t) and arr.null_count == 0:
-        from ..fastcsv import int64_values  # Arrow's to_numpy would import pandas
+        from .fastcsv import int64_values  # Arrow's to_numpy would import pandas
 
         ints = int64_values(arr)
         v = None
@@ -161,7 +162,7 @@ def _time_seconds(raw: RawTable, col: str, unit: str | None = "s", *,
             raise InputError(f"{raw.source}: invalid time value {v[i]!r} in column {col!r}, "
                              f"{raw.where(i)}; every row needs a finite time")
     first = float(ints[0]) if ints is not None else float(v[0])
-    notes: list[str] = []
+    notes = []
     start = None
     if unit is None:
         step = _median_step(ints.astype(np.float64) if ints is not None and v is None else v)

@@ -1,13 +1,13 @@
 """The whole Allan noise analysis of a bench log, as one pure function.
 
 :func:`analyse_allan` is what ``gyrotest allan`` and the spec-sheet report both call: it takes a
-:class:`~gyrotest.data.GyroLog` and returns an :class:`AllanAnalysis` (dataclass, ``to_dict()``
+:class:`~gyrotest.core.data.GyroLog` and returns an :class:`AllanAnalysis` (dataclass, ``to_dict()``
 for JSON) without printing anything. Per rate axis it computes
 
 1. the deviation table (default overlapping Allan deviation, IEEE 952 Annex C; NIST SP1065
    eq. 11) with noise identification, EDF and χ² confidence interval per τ
    (:mod:`gyrotest.noise.deviations`), gap-aware over the log's contiguous segments;
-2. the joint noise-model fit (:mod:`gyrotest.noise.fit`), the classic slope-line read-offs
+2. the joint noise-model fit (:mod:`gyrotest.noise.noisefit`), the classic slope-line read-offs
    and Krobka's bounds, and unit conversions for other tools;
 3. model vs measurement and the diagnosis of missing terms (:mod:`gyrotest.noise.diagnose`),
    helped by the Welch PSD lines and the autocorrelation (:mod:`gyrotest.noise.spectral`);
@@ -26,24 +26,24 @@ sample (arcsec), the form in which the quantization noise Q = S0/√12 is white 
 
 from __future__ import annotations
 
-import copy
-import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from ..data import GyroLog
-from ..errors import AnalysisError, InputError
-from ..units import format_duration, parse_duration
+from ..core.angle import angle_series
+from ..core.data import GyroLog
+from ..core.errors import AnalysisError, InputError
+from ..core.units import format_duration, parse_duration
 from . import kinds as _kinds
-from .deviations import DEVIATION_KINDS, DeviationResult, angle_series, compute_deviation
-from .diagnose import Diagnosis, diagnose
-from .fit import (
+from .allanresult import CI_TEXT, AllanAnalysis, AxisAnalysis, allan_document
+from .devcore import DeviationResult
+from .deviations import DEVIATION_KINDS, compute_deviation
+from .diagnose import diagnose
+from .impact import attitude_impact
+from .noisefit import (
     MIN_EDF,
-    NoiseFit,
     conversions,
     fit_alpha,
     fit_deviation,
@@ -52,19 +52,27 @@ from .fit import (
     slope_readoffs,
     table_quantity,
 )
-from .impact import ImpactResult, attitude_impact
-from .quantity import ACCEL, RATE, quantity_of
+from .quantity import ACCEL
 from .spectral import (
-    Autocorrelation,
-    CrossCorrelation,
-    PsdEstimate,
     SpectralLine,
     autocorrelation,
     cross_correlation,
     find_lines,
     welch_psd,
 )
-from .warnings import KrobkaWarning, krobka_checks, trend_needs_hadamard
+from .spikeguard import (
+    _clean_dev,
+    _clean_dev_streamed,
+    _outliers,
+    _outliers_flag,
+    _outliers_streamed,
+    _spike_guard,
+    _stitch_recorded,
+)
+from .warnings import krobka_checks, trend_needs_hadamard
+
+if TYPE_CHECKING:
+    from ..io.stream import StreamedLog
 
 #: samples of a streamed log's rate rebuilt for the axis cross-correlation
 STREAM_PREFIX = 1 << 24
@@ -84,23 +92,8 @@ MAX_JITTER = 0.1
 #: this long it screens (:func:`gyrotest.noise.outliers.detect_outliers`: mostly numpy work
 #: that releases the GIL, ≈ 0.2 s of CPU per 10⁷ samples). A streamed log's spike check (the
 #: running median everywhere, which holds the GIL) runs in a forked child instead
-#: (:mod:`gyrotest.beside`; benchmarks/README.md, bench_speed, sixth and eighth passes)
+#: (:mod:`gyrotest._runtime`; benchmarks/README.md, bench_speed, sixth and eighth passes)
 SPIKE_BESIDE_MIN = 1 << 20
-#: what the interval columns mean (``--ci``)
-CI_TEXT = {
-    "stable32": "Stable32's: χ² interval from the EDF of the noise type identified at that τ "
-                "(the alpha column), no capping",
-    "conservative": "Stable32's in sigma_lo/sigma_hi; sigma_lo_ci/sigma_hi_ci from the fit's "
-                    "EDF: noise type from the B1 ratio at the number of averages, EDF capped "
-                    "at the white-rate value where α > 0 came from few averages and made "
-                    "non-increasing in τ (alpha_ci/edf_ci)",
-}
-#: how the fit weights the τ (always the conservative EDF), stated with every fit
-FIT_WEIGHTS = ("the fit weights each σ̂²(τ) by a χ² likelihood with its own conservative EDF: "
-               "the noise type from the B1 ratio at the number of averages (Barnes 1969) where "
-               "Stable32's rule differs, the EDF capped at the white-rate value where α > 0 "
-               "came from few averages, non-increasing in τ; the table's α and interval are "
-               "Stable32's")
 _PER_DECADE = re.compile(r"^\s*(\d+)\s*/\s*decade\s*$")
 
 
@@ -144,137 +137,10 @@ def input_kind_of(log: GyroLog) -> tuple[str, str]:
                      "counts, updown or counter)")
 
 
-@dataclass
-class AxisAnalysis:
-    """Everything computed for one rate axis of one log (see :func:`analyse_allan`)."""
-
-    axis: str
-    input_kind: str
-    input_note: str
-    dev: DeviationResult
-    fit_dev: DeviationResult
-    edf: np.ndarray
-    sigma_lo: np.ndarray
-    sigma_hi: np.ndarray
-    fit: NoiseFit | None
-    readoffs: dict[str, Any]
-    conversions: dict[str, Any]
-    diagnosis: Diagnosis | None
-    warnings: list[KrobkaWarning]
-    impact: ImpactResult | None
-    psd: PsdEstimate | None
-    lines: list[SpectralLine]
-    acf: Autocorrelation | None
-    akdev: DeviationResult | None = None
-    ohdev: DeviationResult | None = None
-    detrend: dict[str, Any] | None = None
-    notes: list[str] = field(default_factory=list)
-    ci_conservative: dict[str, Any] | None = None
-    outliers: dict[str, Any] | None = None
-    #: what the warnings were computed from (to recompute them when a term's status changes)
-    check_inputs: dict[str, Any] | None = field(default=None, repr=False)
-    #: "rate" (a gyro axis, IEEE 952) or "acceleration" (an accelerometer axis, IEEE 1293)
-    quantity: str = "rate"
-
-    @property
-    def best_fit(self) -> NoiseFit | None:
-        """The diagnosed model when the diagnosis added terms, else the requested fit (None
-        when no model was fitted: --no-fit, or too few τ for the terms)."""
-        return self.diagnosis.final if self.diagnosis is not None else self.fit
-
-    def table(self) -> dict[str, np.ndarray]:
-        """The Stable32-like table of the requested deviation: tau, m, n, alpha, edf, sigma_lo,
-        sigma, sigma_hi (Stable32's interval: the identified α and its EDF), with --ci
-        conservative also alpha_ci, edf_ci, edf_ci_rule, sigma_lo_ci, sigma_hi_ci
-        (:func:`gyrotest.noise.fit.robust_edf_rules`), plus model σ and the residual in CI
-        units when the table is the fitted one."""
-        d = self.dev
-        out = {"tau": np.asarray(d.tau, float), "m": np.asarray(d.m), "n": np.asarray(d.n),
-               "alpha": np.asarray(d.alpha), "edf": self.edf, "sigma_lo": self.sigma_lo,
-               "sigma": np.asarray(d.sigma, float), "sigma_hi": self.sigma_hi}
-        if self.ci_conservative is not None:
-            out.update(self.ci_conservative)
-        if self.dev is self.fit_dev and self.fit is not None:
-            out["model"] = self.fit.model_sigma()
-            out["residual_ci"] = self.fit.residuals()
-            out["fitted"] = self.fit.used
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        tab = self.table()
-        rows = []
-        for i in range(len(tab["tau"])):
-            row = {"tau": float(tab["tau"][i]), "m": int(tab["m"][i]), "n": int(tab["n"][i]),
-                   "alpha": int(tab["alpha"][i]), "edf": _num(tab["edf"][i]),
-                   "sigma_lo": _num(tab["sigma_lo"][i]), "sigma": _num(tab["sigma"][i]),
-                   "sigma_hi": _num(tab["sigma_hi"][i])}
-            if "edf_ci" in tab:
-                row.update({"alpha_ci": int(tab["alpha_ci"][i]), "edf_ci": _num(tab["edf_ci"][i]),
-                            "edf_ci_rule": tab["edf_ci_rule"][i],
-                            "sigma_lo_ci": _num(tab["sigma_lo_ci"][i]),
-                            "sigma_hi_ci": _num(tab["sigma_hi_ci"][i])})
-            if "model" in tab:
-                row["model"] = _num(tab["model"][i])
-                row["residual_ci"] = _num(tab["residual_ci"][i])
-                row["fitted"] = bool(tab["fitted"][i])
-            rows.append(row)
-        d = self.dev
-        return {
-            "axis": self.axis,
-            "quantity": self.quantity,
-            "sensor": quantity_of(self.quantity).sensor,
-            "units": axis_units(self.quantity),
-            "input_kind": self.input_kind,
-            "input": self.input_note,
-            "deviation": {"kind": d.kind, "unit": d.unit, "confidence": d.confidence,
-                          "ci_method": d.ci_method,
-                          "ci": CI_TEXT["stable32" if self.ci_conservative is None
-                                        else "conservative"],
-                          "fit_weights": FIT_WEIGHTS, "alpha_method": list(d.alpha_method),
-                          "notes": list(d.notes)},
-            "table": rows,
-            "fit_deviation": self.fit_dev.kind,
-            "fit": None if self.fit is None else self.fit.to_dict(),
-            "slope_readoffs": self.readoffs,
-            "conversions": self.conversions,
-            "diagnosis": None if self.diagnosis is None else self.diagnosis.to_dict(),
-            "warnings": [w.to_dict() for w in self.warnings],
-            "impact": None if self.impact is None else self.impact.to_dict(),
-            "psd": None if self.psd is None else self.psd.to_dict(),
-            "psd_lines": [ln.to_dict() for ln in self.lines],
-            "autocorrelation": None if self.acf is None else self.acf.to_dict(),
-            "trend_check": {
-                "akdev": None if self.akdev is None else {
-                    "tau": self.akdev.tau.tolist(), "sigma": self.akdev.sigma.tolist()},
-                "ohdev": None if self.ohdev is None else {
-                    "tau": self.ohdev.tau.tolist(), "sigma": self.ohdev.sigma.tolist()},
-            },
-            "detrend": self.detrend,
-            "outliers": self.outliers,
-            "notes": list(self.notes),
-        }
-
-
-def _num(v) -> float | None:
-    v = float(v)
-    return v if math.isfinite(v) else None
-
-
-def axis_units(quantity: str) -> dict[str, str]:
-    """The units of an axis' numbers in JSON (gyro: IEEE 952; accelerometer: IEEE 1293)."""
-    q = quantity_of(quantity)
-    out = {"sigma": q.sigma_unit, "tau": "s"}
-    for params in q.units.values():
-        out.update(params)
-    if q is RATE:
-        out["attitude"] = "deg"
-    return out
-
-
 def _accelerometers(log: GyroLog, notes: list[str]):
-    """The log's accelerometer axes in m/s² (:func:`gyrotest.accel.accel_channels`), their
+    """The log's accelerometer axes in m/s² (:func:`gyrotest.io.accel.accel_channels`), their
     notes added to ``notes``."""
-    from ..accel import accel_channels
+    from ..io.accel import accel_channels
 
     acc = accel_channels(log)
     notes.extend(acc.notes)
@@ -284,49 +150,6 @@ def _accelerometers(log: GyroLog, notes: list[str]):
             + ": analysed in m/s² with the IEEE Std 1293 terms (velocity random walk, bias "
             "instability, acceleration random walk)")
     return acc
-
-
-@dataclass
-class AllanAnalysis:
-    """The Allan analysis of one log: settings, one :class:`AxisAnalysis` per rate axis, the
-    cross-correlation of the axes (multi-axis logs) and notes."""
-
-    source: str
-    tau0: float
-    n_samples: int
-    duration_s: float
-    settings: dict[str, Any]
-    axes: list[AxisAnalysis]
-    cross: CrossCorrelation | None
-    notes: list[str] = field(default_factory=list)
-
-    def axis(self, name: str | None = None) -> AxisAnalysis:
-        if name is None:
-            return self.axes[0]
-        for a in self.axes:
-            if a.axis == name:
-                return a
-        raise KeyError(name)
-
-    @property
-    def warnings(self) -> list[KrobkaWarning]:
-        return [w for a in self.axes for w in a.warnings]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "source": self.source,
-            "tau0_s": self.tau0,
-            "sample_rate_hz": 1.0 / self.tau0,
-            "n_samples": self.n_samples,
-            "duration_s": self.duration_s,
-            "settings": self.settings,
-            "units": axis_units("rate"),
-            **({"accelerometer_units": axis_units("acceleration")}
-               if any(a.quantity == "acceleration" for a in self.axes) else {}),
-            "axes": [a.to_dict() for a in self.axes],
-            "cross_correlation": None if self.cross is None else self.cross.to_dict(),
-            "notes": list(self.notes),
-        }
 
 
 def parse_detrend(spec: str | None) -> tuple[str, float | None]:
@@ -397,15 +220,6 @@ def _detrend_linear(rate: np.ndarray, t: np.ndarray, segs) -> tuple[np.ndarray, 
                          "longest τ)"}
 
 
-def _outliers_streamed(log, name: str):
-    """The spike check of a streamed log's axis (flag mode: report and warn only)."""
-    from .streamed import detect_outliers_series
-
-    rep = detect_outliers_series(log.series[name], log.means[name], log.tau0, channel=name)
-    return (_outlier_report(rep, "flag"),
-            None if not rep.found else _outlier_warning(rep, "flag"), rep)
-
-
 def _cross_streamed(log, names, notes: list[str]):
     """Axis cross-correlation of a streamed log from the first samples of its segments."""
     from .streamed import rate_prefixes
@@ -418,249 +232,6 @@ def _cross_streamed(log, names, notes: list[str]):
         notes.append(f"axis cross-correlation from the first {log.n - left} samples (streamed "
                      "log)")
     return cross_correlation(rates, log.tau0, segments=segs)
-
-
-def _outlier_report(rep, mode: str) -> dict[str, Any]:
-    info = rep.to_dict()
-    info["mode"] = mode
-    return info
-
-
-def _outlier_warning(rep, mode: str) -> KrobkaWarning:
-    what = {"flag": "analysed as recorded (--outliers remove or robust to treat them)",
-            "remove": "each replaced by its running median before the analysis "
-                      "(--outliers remove)",
-            "robust": "each clipped to the threshold before the analysis "
-                      "(--outliers robust)"}[mode]
-    info = rep.to_dict()
-    return KrobkaWarning(
-        code="OUTLIERS", title="spikes in the rate",
-        message=f"{rep.summary()}; {what}",
-        reason="isolated spikes (data link, ADC, shock) are not gyro noise: one 40σ sample "
-               "in 10^6 raises the short-τ Allan deviation and N; detected with a Hampel "
-               "filter (running median, robust scale; Pearson, IEEE Trans. Control Syst. "
-               "Technol. 10, 2002)",
-        evidence={"n_outliers": rep.n_outliers, "n_events": len(rep.events),
-                  "threshold_k": rep.k, "excess_kurtosis": info["excess_kurtosis"]})
-
-
-def _outliers(rate: np.ndarray, log: GyroLog, segs, name: str, mode: str,
-              unit: str = "deg/h"):
-    """Spike detection on one axis (:mod:`gyrotest.noise.outliers`): (report dict, warning or
-    None, the rate after the ``mode`` treatment)."""
-    from .outliers import apply_outliers, detect_outliers
-
-    rep = detect_outliers(rate, log.tau0, t0=float(log.t[0]) if log.n else 0.0, channel=name,
-                          segments=segs, unit=unit)
-    info = _outlier_report(rep, mode)
-    warn = None
-    if rep.found:
-        warn = _outlier_warning(rep, mode)
-        rate = apply_outliers(rate, rep, mode, segments=segs)
-    return info, warn, rate, rep
-
-
-def _outliers_flag(rate: np.ndarray, tau0: float, t0: float, segs, name: str,
-                   unit: str = "deg/h"):
-    """:func:`_outliers` for ``--outliers flag`` (the rate stays as recorded), with plain
-    arguments and only the small results, for a thread beside the analysis."""
-    from .outliers import detect_outliers
-
-    rep = detect_outliers(rate, tau0, t0=t0, channel=name, segments=segs, unit=unit)
-    return (_outlier_report(rep, "flag"), (_outlier_warning(rep, "flag") if rep.found else None),
-            rep)
-
-
-def _stitch_recorded(dev: DeviationResult, data_rec: np.ndarray, segs_rec, stop_ratio,
-                     kw: dict[str, Any]) -> DeviationResult:
-    """``dev`` (computed across bridged gaps) with the rows at the τ that the recorded
-    samples' own gap-free segments support replaced by the deviation of those segments alone
-    (pooled, no difference spanning a gap): the filled samples then only serve the longer τ,
-    where their effect (:mod:`gyrotest.gapfill`) is far inside the confidence interval, and
-    leave the short τ, whose intervals are narrow, exactly as recorded."""
-    from .taus import max_averaging_factor
-
-    longest = max(b - a for a, b in segs_rec)
-    m_max = max_averaging_factor(longest, dev.kind, stop_ratio)
-    sel = np.flatnonzero(np.asarray(dev.m) <= m_max)
-    if sel.size == 0:
-        return dev
-    kw = {k: v for k, v in kw.items() if k != "reuse"}
-    try:
-        rec = compute_deviation(data_rec, dev.tau0, input_kind=dev.input_kind, kind=dev.kind,
-                                taus=[float(dev.tau[i]) for i in sel],
-                                confidence=dev.confidence, stop_ratio=stop_ratio,
-                                segments=segs_rec, unit=dev.unit, **kw)
-    except (InputError, AnalysisError):
-        return dev
-    pos = {int(m): j for j, m in enumerate(rec.m)}
-    out = copy.copy(dev)
-    for name in ("m", "tau", "n", "alpha", "edf", "sigma", "sigma_lo", "sigma_hi"):
-        arr = np.array(getattr(dev, name), copy=True)
-        src = getattr(rec, name)
-        for i in sel:
-            j = pos.get(int(dev.m[i]))
-            if j is not None:
-                arr[i] = src[j]
-        setattr(out, name, arr)
-    meth = list(dev.alpha_method)
-    for i in sel:
-        j = pos.get(int(dev.m[i]))
-        if j is not None and j < len(rec.alpha_method):
-            meth[i] = rec.alpha_method[j]
-    out.alpha_method = meth
-    if dev.alpha_fit is not None and rec.alpha_fit is not None:
-        af, ef = np.array(dev.alpha_fit, copy=True), np.array(dev.edf_fit, copy=True)
-        afm = list(dev.alpha_fit_method or [""] * len(af))
-        for i in sel:
-            j = pos.get(int(dev.m[i]))
-            if j is not None:
-                af[i], ef[i] = rec.alpha_fit[j], rec.edf_fit[j]
-                afm[i] = (rec.alpha_fit_method or [""] * len(rec.alpha_fit))[j]
-        out.alpha_fit, out.edf_fit, out.alpha_fit_method = af, ef, afm
-    t_split = float(max(dev.tau[i] for i in sel))
-    out.notes = list(dev.notes) + [
-        f"τ ≤ {t_split:.4g} s from the recorded samples' gap-free segments alone (pooled); "
-        "longer τ across the bridged gaps"]
-    return out
-
-
-def _clean_dev(res: AxisAnalysis, rate: np.ndarray, rep, segs, tau0: float,
-               confidence: float, stop_ratio: float | None):
-    """The OADEV (the fit's τ) of ``rate`` with the flagged samples replaced by their running
-    median (the ``remove`` treatment), or the error text when it cannot be computed."""
-    from .outliers import apply_outliers
-
-    clean = apply_outliers(rate, rep, "remove", segments=segs)
-    data = clean * tau0 if res.input_kind == "increment" else clean
-    try:
-        return compute_deviation(data, tau0, input_kind=res.input_kind, kind="oadev",
-                                 taus=[float(t) for t in res.fit_dev.tau],
-                                 confidence=confidence, stop_ratio=stop_ratio, segments=segs,
-                                 unit=res.dev.unit)
-    except (InputError, AnalysisError) as e:
-        return str(e)
-
-
-def _clean_dev_streamed(res: AxisAnalysis, series, means, segs, rep, confidence: float,
-                        stop_ratio: float | None):
-    """:func:`_clean_dev` of a streamed log, from its θ alone: each flagged sample's running
-    median is computed from the rate rebuilt around it (the same window as for a record read
-    whole), θ is shifted in place by the cumulative corrections, the OADEV computed, and θ
-    shifted back (no copy of the record)."""
-    from .outliers import _running_median, _seg_window
-    from .streamed import rate_segment
-
-    w_half = rep.window
-    theta = series.theta
-    step = 1.0 if series.input_kind != "increment" else series.tau0  # θ per rate unit
-    # per segment: θ indices just after the flagged samples and the running sum of their Δθ
-    fixes: list[tuple[int, int, np.ndarray, np.ndarray]] = []
-    for j, ((a, b), (p0, p1)) in enumerate(zip(segs, series.bounds)):
-        w = _seg_window(a, b, rep.window)
-        pos, dth = [], []
-        for e in rep.events:
-            if not (a <= e.start < b):
-                continue
-            lo, hi = max(a, e.start - w_half), min(b, e.stop + w_half)
-            x = rate_segment(series, means, j, lo - a, hi - a)
-            med = _running_median(x, w) if w >= 3 else x
-            i = np.arange(e.start, e.stop)
-            pos.append(i - a + 1)
-            dth.append((x[i - lo] - med[i - lo]) * step)
-        if pos:
-            q = np.concatenate(pos)
-            order = np.argsort(q, kind="stable")
-            fixes.append((p0, p1, q[order], np.cumsum(np.concatenate(dth)[order])))
-    if not fixes:
-        return "no flagged sample inside a segment"
-
-    def shift(sign: float) -> None:
-        for p0, p1, q, csum in fixes:  # θ after each flagged sample moves by the Δθ so far
-            ends = np.append(q[1:], p1 - p0)
-            for start, end, c in zip(q, ends, csum):
-                theta[p0 + start:p0 + end] -= sign * c
-
-    shift(1.0)
-    try:
-        return compute_deviation(series, series.tau0, input_kind=series.input_kind,
-                                 kind="oadev", taus=[float(t) for t in res.fit_dev.tau],
-                                 confidence=confidence, stop_ratio=stop_ratio,
-                                 unit=res.dev.unit)
-    except (InputError, AnalysisError) as e:
-        return str(e)
-    finally:
-        shift(-1.0)
-
-
-def _spike_guard(res: AxisAnalysis, rep, dev_c) -> None:
-    """No term is identified from flagged spikes (``--outliers flag``, the rate analysed as
-    recorded).
-
-    The fitted models (requested and diagnosed) are refitted, same terms and τ, to the OADEV
-    of the rate with the flagged samples replaced by their running median (the ``remove``
-    treatment). A term identified on the record as it is but not without the spikes rests on
-    them: it becomes an upper bound (the 95 % bound of the refit, the sensor's own), with the
-    reason in its notes and ``status_note``; a term identified both ways whose value moves by
-    more than twice its 1σ gets the value without the spikes in its notes. The warnings are
-    recomputed with the new statuses. Modifies ``res`` in place. ``dev_c`` is the cleaned
-    OADEV (:func:`_clean_dev`, :func:`_clean_dev_streamed`) or the reason it is missing."""
-    from .outliers import MAX_LISTED
-
-    if isinstance(dev_c, str):
-        res.notes.append(f"spike guard not applied: {dev_c}")
-        return
-    ev = sorted(rep.events, key=lambda e: -abs(e.peak_z))[:MAX_LISTED]
-    where = ", ".join(f"t = {e.t_s:.6g} s ({e.peak_z:+.0f}σ)"
-                      for e in sorted(ev, key=lambda e: e.t_s))
-    models = [res.fit]
-    if res.diagnosis is not None and res.diagnosis.final is not res.fit:
-        models.append(res.diagnosis.final)
-    marked: list[str] = []
-    for model in models:
-        try:
-            ref = fit_deviation(dev_c, terms=model.requested, min_edf=model.min_edf,
-                                bi_cutoff_hz=model.bi_f0)
-        except AnalysisError:
-            continue
-        for t in model.terms:
-            if not t.identified:
-                continue
-            tc = ref.term(t.label)
-            if tc is None or not tc.identified:
-                bound = tc.upper if tc is not None and tc.upper is not None else t.value
-                t.notes.append(
-                    f"identified only with the {rep.n_outliers} flagged spike sample(s) "
-                    f"({where}): with them replaced by their running median the same model "
-                    f"gives {t.main} ≤ {bound:.4g} {t.units[t.main]} (not identified); "
-                    f"{t.main} = {t.value:.4g} with the spikes is theirs, not the sensor's")
-                t.status = "upper bound"
-                t.status_note = "spike-driven"
-                t.upper = bound
-                t.sigma = {k: None for k in t.sigma}
-                marked.append(f"{t.label} ({t.main} = {t.value:.4g} → ≤ {bound:.4g})")
-            else:
-                s_raw = t.sigma.get(t.main) or 0.0
-                s_cln = tc.sigma.get(t.main) or 0.0
-                if abs(t.value - tc.value) > 2.0 * max(s_raw, s_cln, 1e-300):
-                    t.status_note = "spikes move it"
-                    t.notes.append(f"without the {rep.n_outliers} flagged spike sample(s): "
-                                   f"{tc.text()} (the spikes move it)")
-                    marked.append(f"{t.label} moved: {t.value:.4g} with the spikes, "
-                                  f"{tc.value:.4g} without")
-    if not marked:
-        return
-    res.notes.append("spike guard (no term identified from flagged spikes): "
-                     + "; ".join(dict.fromkeys(marked))
-                     + " — --outliers remove analyses the rate without them")
-    if res.check_inputs is not None:
-        warns = krobka_checks(res.fit, res.readoffs, **res.check_inputs)
-        from .filtered import FILTER_STATUS
-
-        if any(t.status == FILTER_STATUS for m in models for t in m.terms):
-            warns = [w for w in warns if w.code not in ("KROBKA-M1", "KROBKA-M5")]
-        res.warnings = warns
-    res.conversions = conversions(res.best_fit)
 
 
 def _fold_filters(fit, diag, warns, tau0):
@@ -739,14 +310,6 @@ def _skip_warmup(log: GyroLog, skip: float | str) -> GyroLog:
     return log.skip(skip_s)
 
 
-def allan_document(results: Sequence[AllanAnalysis], *, csv: str | None = None,
-                   plot: str | None = None, psd: str | None = None) -> dict[str, Any]:
-    """The JSON document of ``gyrotest allan --json``: every log's analysis and the files
-    written."""
-    return {"analysis": "allan", "logs": [r.to_dict() for r in results],
-            "files": {"csv": csv, "plot": plot, "psd": psd}}
-
-
 def analyse_allan(
     log: GyroLog,
     *,
@@ -780,13 +343,13 @@ def analyse_allan(
     Parameters
     ----------
     skip_s : warm-up trim at the start of the log, seconds, or a duration text such as
-        ``"30min"`` (read by :func:`gyrotest.units.parse_duration`; quoted as written when it
+        ``"30min"`` (read by :func:`gyrotest.core.units.parse_duration`; quoted as written when it
         removes the whole record).
     dev : deviation for the table: oadev (default), adev, mdev, tdev, hdev, ohdev, totdev,
         mtotdev, akdev, hkdev. The noise model is fitted to it when it is Allan-type (oadev,
         adev, totdev, akdev), otherwise to an OADEV computed on the same τ (noted).
     taus : ``octave``, ``decade``, ``N/decade`` (default 10/decade), ``all`` or a list of τ (s).
-    terms : noise terms to fit (default Q,N,B,K,R; see :func:`gyrotest.noise.fit.parse_terms`).
+    terms : noise terms to fit (default Q,N,B,K,R; see :func:`gyrotest.noise.noisefit.parse_terms`).
     vehicle_rates : strapdown vehicle rates in rad/s for the impact prediction.
     axes : rate axes to analyse (default all).
     confidence : of the χ² intervals (0.683 as Stable32).
@@ -810,11 +373,11 @@ def analyse_allan(
         warn with the times, analyse unchanged), "remove" (Hampel filter: each spike replaced by
         its running median) or "robust" (each spike clipped to the threshold). Never silent.
     accelerometers : also analyse the log's accelerometer axes (extra channels named ax/ay/az,
-        acc_x ... with an acceleration unit: :func:`gyrotest.accel.accel_channels`), σ in
+        acc_x ... with an acceleration unit: :func:`gyrotest.io.accel.accel_channels`), σ in
         m/s², the terms in IEEE Std 1293 units (VRW m/s/√h, B µg, acceleration random walk
         m/s/h/√h); ``axes`` may name them.
     fill : bridge gaps of at most this many missed samples before the analysis (default 1:
-        single missed samples; 0 never bridges; :func:`gyrotest.gapfill.fill_gaps`, whose
+        single missed samples; 0 never bridges; :func:`gyrotest.io.gapfill.fill_gaps`, whose
         effect on σ is stated in the notes). Gaps left split the record into segments.
     fit_model : False gives the plain deviation table (no noise model, diagnosis, warnings or
         impact). With True the model is still skipped, with a note, when the τ grid has too
@@ -823,7 +386,7 @@ def analyse_allan(
     Raises :class:`InputError`/:class:`AnalysisError` for bad settings or data the analysis
     cannot support (too short, constant, NaN, irregular timing), with a one-line reason.
     """
-    streamed = getattr(log, "series", None) is not None  # gyrotest.stream.StreamedLog: θ only
+    streamed = getattr(log, "series", None) is not None  # gyrotest.io.stream.StreamedLog: θ only
     if streamed and (_skip_seconds(skip_s) > 0 or detrend not in (None, "none")
                      or env_model is not None or outliers != "flag"
                      or dev not in STREAM_DEVS):
@@ -832,7 +395,7 @@ def analyse_allan(
     log = _skip_warmup(log, skip_s) if not streamed else log
     fill_rep = None
     if not streamed and log.timing.gaps:
-        from ..gapfill import fill_gaps
+        from ..io.gapfill import fill_gaps
 
         log, fill_rep = fill_gaps(log, int(fill))
     if dev not in DEVIATION_KINDS:
@@ -904,21 +467,22 @@ def analyse_allan(
                   horizon=impact_horizon_s, bi_cutoff_hz=bi_cutoff_hz, max_steps=max_steps,
                   record_s=log.duration_s, source=log.source, fit_model=fit_model, ci=ci)
     for name in names:
-        from ..beside import run_beside, run_on_thread
+        from .._runtime import run_beside, run_on_thread
 
         spike = None  # the spike check beside the analysis (its report comes back at the end)
         if streamed:
+            slog = cast("StreamedLog", log)
             spike = run_beside(_outliers_streamed, log, name)
             rep = None
             try:
                 res = _analyse_axis(name, None, log.tau0, segs, in_kind, in_note, quantum,
-                                    det_info=None, series=log.series[name],
-                                    means=log.means[name], **common)
+                                    det_info=None, series=slog.series[name],
+                                    means=slog.means[name], **common)
             finally:  # its error first, as in the serial order
                 out_info, out_warn, rep = spike.result()
             if outliers == "flag" and rep is not None and rep.found and res.fit is not None:
                 _spike_guard(res, rep, _clean_dev_streamed(
-                    res, log.series[name], log.means[name], segs, rep, confidence,
+                    res, slog.series[name], slog.means[name], segs, rep, confidence,
                     stop_ratio))
         else:
             is_acc = name in acc_axes and name not in log.rates

@@ -3,13 +3,13 @@
 Krobka (Allan-graph topology §6, misconception 4 / notes M6): the five-slope IEEE basis is incomplete, and
 unmodelled noises turn into parameter error. So every fit is checked against the measurement:
 
-1. **Residuals in CI units** at each τ (:func:`gyrotest.noise.fit.ci_residuals`): |r| ≤ 1 means
+1. **Residuals in CI units** at each τ (:func:`gyrotest.noise.noisefit.ci_residuals`): |r| ≤ 1 means
    the model lies inside the confidence interval of σ̂(τ).
 2. **Misfit regions**: runs of consecutive fitted τ beyond ±2 CI units, named with their τ
    range, direction and size, and a hint from their shape ("τ 0.5–4 s: measured above model by
    3–5 CI: a hump — try markov").
 3. **Goodness of fit**: Pearson χ²/dof with the EDF-based variances and its p-value with the
-   correlation-corrected degrees of freedom (:class:`gyrotest.noise.fit.NoiseFit`).
+   correlation-corrected degrees of freedom (:class:`gyrotest.noise.noisefit.NoiseFit`).
 4. **Diagnosis**: each candidate extra term (Markov, sinusoid, blue S(0)=0 noise, and Q, N, B,
    K (RRW), R (ramp) when the model lacks them — also a requested term the fit eliminated,
    e.g. N swamped by an unmodelled hump; such a restored term is taken before the model is
@@ -36,8 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AnalysisError
-from .fit import LINEAR_KEYS, NoiseFit, fit_noise_model
+from ..core.errors import AnalysisError
+from .fitmodel import LINEAR_KEYS
+from .fitresult import NoiseFit
+from .noisefit import fit_noise_model
 
 __all__ = ["Candidate", "Diagnosis", "MisfitRegion", "diagnose", "misfit_regions"]
 

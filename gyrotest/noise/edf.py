@@ -34,7 +34,7 @@ from statistics import NormalDist
 import numpy as np
 from scipy import special
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 
 __all__ = [
     "DEFAULT_CONFIDENCE",
@@ -584,7 +584,7 @@ ACF_MIN_POINTS = 30
 #: Φ(−0.25·√n), ≤ 1 % from n = (z₀.₉₉/0.25)² = 87 points on; with 30 points it is 9 %, and the
 #: Greenhall EDF of a wrongly read α = +2 is the number of samples (thousands of times the
 #: white-rate EDF at long τ). Below this count an α > 0 is not trusted for the fit's EDF
-#: (:func:`gyrotest.noise.fit.robust_edf_rules`); Stable32's rule (30 points) is kept for the
+#: (:func:`gyrotest.noise.noisefit.robust_edf_rules`); Stable32's rule (30 points) is kept for the
 #: printed α.
 ACF_DECISIVE_POINTS = math.ceil((NormalDist().inv_cdf(0.99) / 0.25) ** 2)
 B1_MIN_POINTS = 8

@@ -27,8 +27,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
-from . import deviations as _dv
+from ..core import angle as _angle
+from ..core.errors import AnalysisError, InputError
+from . import devcore as _dv
 from . import edf as _edf
 from .taus import tau_grid
 
@@ -89,23 +90,23 @@ def compute_gap_oadev(
     pooled, as if the gaps between them were longer than any τ. Raises :class:`InputError`
     for inf, an all-missing record or bad settings.
     """
-    _dv._check_kind(input_kind)
+    _angle._check_kind(input_kind)
     if not 0.0 < confidence < 1.0:
         raise InputError(f"confidence must be between 0 and 1 (e.g. 0.683), got {confidence!r}")
-    arr = _dv._as_float_array(data)
+    arr = _angle._as_float_array(data)
     if arr.size == 0:
         raise InputError("empty record: no samples to analyse")
     if np.isinf(arr).any():
         i = int(np.flatnonzero(np.isinf(arr))[0])
         raise InputError(f"{input_kind} sample {i} is {arr[i]}: mark missing samples as NaN, "
                          "not inf")
-    segs = _dv._normalise_segments(segments, arr.size)
+    segs = _angle._normalise_segments(segments, arr.size)
     runs = [(a + r0, a + r1) for a, b in segs for r0, r1 in finite_runs(arr[a:b])]
     if not runs:
         raise InputError("every sample is missing (NaN): nothing to analyse")
     n_missing = int(sum(b - a for a, b in segs) - sum(b - a for a, b in runs))
     # the runs give the angle series used for noise identification and the EDF
-    series = _dv.angle_series(arr, tau0, input_kind=input_kind, segments=runs)
+    series = _angle.angle_series(arr, tau0, input_kind=input_kind, segments=runs)
     parts_runs = series.parts()
     # centre the data (the statistic is invariant to a constant rate / a straight angle line)
     work = []

@@ -49,8 +49,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..units import factor, parse_duration
+from ..core.errors import InputError
+from ..core.units import factor, parse_duration
 from .terms import PLATFORM_BENIGN_LABEL
 
 __all__ = [
@@ -72,7 +72,7 @@ RAD_PER_ARCSEC = math.pi / (180.0 * 3600.0)
 class Component:
     """One noise term for the attitude prediction, in internal units (deg/h = arcsec/s, s):
     ``key`` (N, Q, markov, B, K, R, sine, blue), ``c`` its Allan-variance coefficient as in
-    :mod:`gyrotest.noise.fit` (N², Q², (q_cT_c)², B², K², R², Ω0², α), ``shape`` (T_c s, f0 Hz
+    :mod:`gyrotest.noise.noisefit` (N², Q², (q_cT_c)², B², K², R², Ω0², α), ``shape`` (T_c s, f0 Hz
     or β Hz), ``f_hi`` the band edge of B (Hz), ``label``."""
 
     key: str
@@ -229,7 +229,7 @@ _RATE_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\s]
 
 def parse_vehicle_rate(text: str | float) -> float:
     """Parse a vehicle rate like ``10deg/s``, ``0.5 rad/s``, ``30 rpm``, ``100deg/h`` (a bare
-    number is deg/s) → rad/s. Units: any angular-rate unit of :mod:`gyrotest.units`."""
+    number is deg/s) → rad/s. Units: any angular-rate unit of :mod:`gyrotest.core.units`."""
     if isinstance(text, (int, float)):
         return _sane_vehicle_rate(math.radians(float(text)), text)
     m = _RATE_RE.match(str(text))
@@ -315,7 +315,7 @@ class ImpactResult:
 
 
 def components_from_fit(fit, *, conservative: bool = False) -> list[Component]:
-    """:class:`Component` list from a :class:`gyrotest.noise.fit.NoiseFit` (point estimates; with
+    """:class:`Component` list from a :class:`gyrotest.noise.noisefit.NoiseFit` (point estimates; with
     ``conservative`` the terms that are upper bounds enter at their bound)."""
     out = []
     for t in fit.terms:
@@ -345,7 +345,7 @@ def unshaped_bounds(fit) -> list[str]:
 
 def _coef_from_value(key: str, v: float, shape: float | None, q=None) -> float:
     """The fit's coefficient c of a term from its reported main value (the inverse of
-    :func:`gyrotest.noise.fit._reported`; ``q`` the table's
+    :func:`gyrotest.noise.noisefit._reported`; ``q`` the table's
     :class:`~gyrotest.noise.quantity.Quantity`, default gyro)."""
     if q is not None:
         main = {"markov": "q_c", "sine": "Omega0", "blue": "alpha"}.get(key, key)
@@ -375,7 +375,7 @@ def extrapolation_reason(fit, horizon_s: float, record_s: float) -> str | None:
     reason, never as a measurement."""
     if not horizon_s > record_s * (1.0 + 1e-9):
         return None
-    from ..units import format_duration
+    from ..core.units import format_duration
 
     t_max = float(np.max(fit.tau[fit.used])) if np.any(fit.used) else float(np.max(fit.tau))
     slow = [t.label for t in fit.terms if t.key in ("B", "K", "R", "markov", "sine")

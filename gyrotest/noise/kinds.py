@@ -13,7 +13,7 @@ DEVIATION_KINDS = (
     # long-τ and gap-tolerant kinds, computed in gyrotest.noise.theo / gyrotest.noise.gapdev
     "theo1", "theoh", "ttotdev", "htotdev", "gapadev",
 )
-#: deviations a streamed log (θ only, :mod:`gyrotest.stream`) supports: those computed from θ
+#: deviations a streamed log (θ only, :mod:`gyrotest.io.stream`) supports: those computed from θ
 STREAM_DEVS = ("oadev", "adev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "akdev",
                "hkdev")
 #: default fitting floor: τ with fewer equivalent degrees of freedom are not fitted (at EDF 2

@@ -224,7 +224,7 @@ class _Stream:
         P = None
         if want_p:
             # three arrays, not one 3 × nb × n block: each stays under glibc's mmap threshold
-            # (pinned at 1 MiB by gyrotest.stream), so buffers are reused instead of faulted in
+            # (pinned at 1 MiB by gyrotest.io.stream), so buffers are reused instead of faulted in
             P = [np.empty((self.nb, n)) for _ in range(3)]
             t = np.arange(p, q - 1, dtype=float)
             for k in range(3):

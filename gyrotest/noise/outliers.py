@@ -480,7 +480,7 @@ def apply_outliers(x, report: OutlierReport, mode: str, *, segments=None) -> np.
     """The samples after the ``mode`` treatment: ``flag`` returns ``x`` unchanged, ``remove``
     replaces each outlier by its running median, ``robust`` clips each residual to ±k·σ_MAD."""
     if mode not in OUTLIER_MODES:
-        from ..errors import InputError
+        from ..core.errors import InputError
 
         raise InputError(f"unknown --outliers {mode!r}; use flag, remove or robust")
     x = np.asarray(x, dtype=np.float64)

@@ -10,17 +10,18 @@
 
 Each has a figure-returning variant with a ``size`` (inches): :func:`figure_allan`,
 :func:`figure_psd` (the spec-sheet report lays them out at its own size); the ``plot_*``
-functions save that figure to .png/.svg/.pdf via :func:`gyrotest.plotting.save_figure`.
+functions save that figure to .png/.svg/.pdf via :func:`gyrotest.core.plotting.save_figure`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from ..plotting import COLORS, new_figure, save_figure
+from ..core.plotting import COLORS, new_figure, save_figure
 
 __all__ = ["figure_allan", "figure_psd", "plot_allan", "plot_psd"]
 
@@ -70,8 +71,8 @@ def legend_pm_title(k: float = 1.0) -> str:
 def _components(ax, fit, tf, unit=None, k: float = 1.0) -> None:
     """The fitted model's terms as dashed curves (bounds dotted); ``k``: the legend's ± is
     k·1σ."""
-    from ..display import DEFAULT, term_text
-    from .fit import _basis
+    from ..core.display import DEFAULT, term_text
+    from .fitmodel import _basis
     from .impact import _coef_from_value
 
     u = unit or DEFAULT
@@ -95,7 +96,7 @@ def _components(ax, fit, tf, unit=None, k: float = 1.0) -> None:
 def _unit_of(items, unit):
     """The display unit of a figure: ``unit`` (default deg/h) for gyro axes, the
     accelerometer's own for accelerometer axes; a figure holds one kind (ValueError)."""
-    from ..display import ACCEL_DISPLAY, DEFAULT
+    from ..core.display import ACCEL_DISPLAY, DEFAULT
 
     kinds = {getattr(a, "quantity", "rate") for _, a in items}
     if len(kinds) > 1:
@@ -117,7 +118,7 @@ def split_by_quantity(items, path):
     return [(gyro, str(p)), (acc, str(p.with_name(p.stem + "_accel" + p.suffix)))]
 
 
-def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
+def plot_allan(items: Sequence[tuple[str, Any]], path, *, labels: Sequence[str] | None = None,
                title: str | None = None, show_components: bool | None = None,
                size: tuple[float, float] = ALLAN_SIZE, unit=None):
     """Write :func:`figure_allan` to ``path`` (.png/.svg/.pdf); returns the path."""
@@ -126,7 +127,7 @@ def plot_allan(items: Sequence[tuple[str, object]], path, *, labels: Sequence[st
                        path)
 
 
-def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+def figure_allan(items: Sequence[tuple[str, Any]], *, labels: Sequence[str] | None = None,
                  title: str | None = None, show_components: bool | None = None,
                  size: tuple[float, float] = ALLAN_SIZE, unit=None, k: float = 1.0):
     """Allan deviation figure (module docstring), ``size`` inches. ``items`` = [(source,
@@ -134,7 +135,7 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     components of the fitted model are drawn; when the diagnosis added terms, the diagnosed
     model is the main curve and the requested model is shown thin and grey with its
     residuals. Returns the matplotlib figure (close it, or save it with
-    :func:`gyrotest.plotting.save_figure`). ``unit``: a :class:`~gyrotest.display.DisplayUnit`
+    :func:`gyrotest.core.plotting.save_figure`). ``unit``: a :class:`~gyrotest.core.display.DisplayUnit`
     for the σ axis and the term labels (default deg/h). ``k``: the terms' ± in the legend
     is k·1σ (a sheet's expanded uncertainty U), and the legend's title says which.
     """
@@ -240,17 +241,17 @@ def figure_allan(items: Sequence[tuple[str, object]], *, labels: Sequence[str] |
     return fig
 
 
-def plot_psd(items: Sequence[tuple[str, object]], path, *, labels: Sequence[str] | None = None,
+def plot_psd(items: Sequence[tuple[str, Any]], path, *, labels: Sequence[str] | None = None,
              size: tuple[float, float] = PSD_SIZE, unit=None):
     """Write :func:`figure_psd` to ``path`` (.png/.svg/.pdf); returns the path."""
     return save_figure(figure_psd(items, labels=labels, size=size, unit=unit), path)
 
 
-def figure_psd(items: Sequence[tuple[str, object]], *, labels: Sequence[str] | None = None,
+def figure_psd(items: Sequence[tuple[str, Any]], *, labels: Sequence[str] | None = None,
                size: tuple[float, float] = PSD_SIZE, unit=None):
     """Welch PSD with the fitted model PSD and detected lines, plus the autocorrelation
     (module docstring), ``size`` inches. ``items`` = [(source, AxisAnalysis), …]. Returns the
-    matplotlib figure. ``unit``: a :class:`~gyrotest.display.DisplayUnit` for the PSD axis
+    matplotlib figure. ``unit``: a :class:`~gyrotest.core.display.DisplayUnit` for the PSD axis
     (default deg/h)."""
     items = list(items)
     u = _unit_of(items, unit)

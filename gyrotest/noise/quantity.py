@@ -4,7 +4,7 @@ The noise terms, their closed forms and the fit are the same for both (angle ↔
 rate ↔ acceleration); only the unit σ(τ) is computed in and the units the coefficients are
 reported in differ. The fit works in the σ unit of the table (deg/h for gyros, m/s² for
 accelerometers) and reports each coefficient with the formula of the gyro unit
-(:func:`gyrotest.noise.fit._reported`: N = √c/60, K = 60√c, R = 3600√c, B = √c, Q = √c,
+(:func:`gyrotest.noise.noisefit._reported`: N = √c/60, K = 60√c, R = 3600√c, B = √c, Q = √c,
 q_c = 60√c/T_c, Ω0 = √c) times the factor of :attr:`Quantity.scale`:
 
 =====================  ======================  =========================  ===================
@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..units import G0
+from ..core.units import G0
 
 __all__ = ["ACCEL", "QUANTITIES", "RATE", "Quantity", "quantity_of"]
 

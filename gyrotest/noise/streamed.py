@@ -1,7 +1,7 @@
 """Rate-domain checks of a streamed log, computed from its angle series θ in bounded memory.
 
-A log streamed by :mod:`gyrotest.stream` keeps only θ (per gap-free segment
-[0, cumsum(x − x̄)], see :class:`~gyrotest.noise.deviations.AngleSeries`). The rate samples are
+A log streamed by :mod:`gyrotest.io.stream` keeps only θ (per gap-free segment
+[0, cumsum(x − x̄)], see :class:`~gyrotest.core.angle.AngleSeries`). The rate samples are
 rebuilt from it where they are needed, Ω_k = (θ_{k+1} − θ_k)/s + x̄ (s = 1 for rate input, τ0
 for increments; the rounding error is ε·|θ|, far below any gyro's noise):
 
@@ -25,8 +25,8 @@ import math
 
 import numpy as np
 
-from . import deviations
-from .deviations import AngleSeries
+from .. import _runtime
+from ..core.angle import AngleSeries
 from .outliers import (
     FALSE_ALARM,
     K_MIN,
@@ -115,8 +115,8 @@ def detect_outliers_series(series: AngleSeries, means: list[float], tau0: float,
     cand_r: list[np.ndarray] = []
     cth = None
     for g, r in _residual_batches(series, means, window):
-        if deviations.PROGRESS is not None:
-            deviations.PROGRESS(g + r.size, n, "spike check")
+        if _runtime.PROGRESS is not None:
+            _runtime.PROGRESS(g + r.size, n, "spike check")
         for lo, hi in stretches:
             s, e = max(lo, g), min(hi, g + r.size)
             if s < e:

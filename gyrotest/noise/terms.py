@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 from scipy import special
 
-from ..earth import OMEGA_E_DPH
+from ..core.earth import OMEGA_E_DPH
 
 __all__ = [
     "BIAS_INSTABILITY_PLATEAU",
@@ -61,7 +61,7 @@ SEC_PER_HOUR = 3600.0
 SQRT_SEC_PER_HOUR = 60.0
 #: sqrt(2 ln2 / pi): the bias-instability plateau sigma/B (IEEE 952 Annex C: "0.664").
 BIAS_INSTABILITY_PLATEAU = math.sqrt(2.0 * math.log(2.0) / math.pi)
-#: Sidereal earth rate, deg/h (7.2921150e-5 rad/s): the one in :mod:`gyrotest.earth`.
+#: Sidereal earth rate, deg/h (7.2921150e-5 rad/s): the one in :mod:`gyrotest.core.earth`.
 EARTH_RATE_DPH = OMEGA_E_DPH
 PLATFORM_BENIGN_LABEL = "platform-benign / strapdown-critical"
 

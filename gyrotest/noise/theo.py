@@ -46,8 +46,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
-from . import deviations as _dv
+from ..core import angle as _angle
+from ..core.errors import AnalysisError, InputError
+from . import devcore as _dv
 from . import edf as _edf
 from .taus import STOP_RATIOS, m_from_taus, tau_grid
 from .theo_kernels import Theo1Engine, theo1_terms
@@ -262,7 +263,7 @@ def compute_theo_deviation(
     if bias_correction and kind not in ("ttotdev", "htotdev"):
         raise InputError(f"bias correction is defined for totdev, mtotdev, ttotdev and htotdev, "
                          f"not {kind}")
-    series = _dv.angle_series(data, tau0, input_kind=input_kind, segments=segments)
+    series = _angle.angle_series(data, tau0, input_kind=input_kind, segments=segments)
     parts = series.parts()
     t0 = series.tau0
     longest = max(p.size for p in parts)

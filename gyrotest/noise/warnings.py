@@ -12,7 +12,7 @@ code           check
 KROBKA-M1      ARW is a ray through (or below) the leftmost point, not a −½ segment: the
                fitted N exceeds N_upper, the 95 % upper bound of white rate noise from the
                measured curve (min over τ of the upper confidence limit of σ × √τ/60,
-               Bonferroni over the τ; :func:`gyrotest.noise.fit.n_upper_bound`), or the
+               Bonferroni over the τ; :func:`gyrotest.noise.noisefit.n_upper_bound`), or the
                slope-line N (read at the −½ point, MATLAB style) is above N_upper.
 KROBKA-M4      B from the zero-slope tangent at the minimum: report B_fit and B_tangent =
                σ_min/0.664; warn when B_fit/B_tangent < 0.5 (the tangent over-estimates B
@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from .fit import NoiseFit
+from .fitresult import NoiseFit
 
 __all__ = ["KrobkaWarning", "krobka_checks", "local_slopes", "CODES"]
 
@@ -493,7 +493,7 @@ def krobka_checks(fit: NoiseFit, readoffs: dict[str, Any], *, akdev=None, ohdev=
     """Run every check (module docstring) on a fitted Allan table.
 
     ``fit``: the :class:`NoiseFit` of the OADEV table (its τ, σ, CI and EDF are used);
-    ``readoffs``: :func:`gyrotest.noise.fit.slope_readoffs` of the same table; ``akdev`` /
+    ``readoffs``: :func:`gyrotest.noise.noisefit.slope_readoffs` of the same table; ``akdev`` /
     ``ohdev``: Allan–Krobka and Hadamard deviation results at (some of) the same τ, for the
     trend check (the Hadamard values are reported, the test uses Allan–Krobka: the Hadamard
     variance differs from the Allan variance for RRW and flicker); ``record_s``: record length; ``quantum_arcsec``: pulse scale factor S0 for the Q comparison; ``diagnosis``:

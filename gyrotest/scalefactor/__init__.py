@@ -16,12 +16,13 @@ report call; ``reduce_table(path)`` for a ready plateau table). Modules:
 * :mod:`.settling` — the settling time of each plateau, found from its data;
 * :mod:`.plateaus` — plateau extraction (commanded column or step detection), batch-means
   standard errors, rate snapping, sweeps;
-* :mod:`.fit` — weighted least squares, nonlinearity terms f(I), forward model selection
-  (F-test + AICc), rate-periodic scan, linearity, asymmetry, lock-in;
+* :mod:`.tablefit` — weighted least squares, nonlinearity terms f(I), forward model selection
+  (F-test + AICc), rate-periodic scan;
+* :mod:`.characteristics` — linearity, asymmetry, lock-in (§5.3.2.1);
 * :mod:`.analysis` — per-run and combined results: SF, bias, repeatability, stability,
-  temperature sensitivity;
+  temperature sensitivity (the result types: :mod:`.sfresult`);
 * :mod:`.points` — the plateau table on disk (``--points`` / ``--table``);
-* :mod:`.plot` — residuals vs input rate and raw output vs time with the plateaus.
+* :mod:`.plots` — residuals vs input rate and raw output vs time with the plateaus.
 """
 
 from __future__ import annotations
@@ -30,16 +31,14 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .analysis import (
     ASYMMETRY_SKIPPED,
     PULSE_KINDS,
-    ScaleFactorResult,
     analyse,
     scale_factor_from_slope,
     sf_unit,
 )
-from .fit import TERMS, Points, fit_model, line_fit, select_model, wls
 from .plateaus import (
     Plateau,
     RunPlateaus,
@@ -51,6 +50,8 @@ from .plateaus import (
 )
 from .points import read_points_table, write_points_csv
 from .settling import SettlingFound, find_settling
+from .sfresult import ScaleFactorResult
+from .tablefit import TERMS, Points, fit_model, line_fit, select_model, wls
 
 __all__ = [
     "ASYMMETRY_SKIPPED", "PULSE_KINDS", "Plateau", "Points", "RunPlateaus", "ScaleFactorResult",
@@ -80,7 +81,7 @@ def parse_rates(value: str | None) -> list[float] | None:
 def parse_term_choice(value: str) -> str | list[str]:
     """``--terms``: ``auto``, ``linear`` (also ``none``) or a list of nonlinearity terms
     (``u1`` … ``u4``; their earlier names ``quadratic`` … ``quintic`` are read too)."""
-    from .fit import canonical_terms
+    from .tablefit import canonical_terms
 
     v = value.strip().lower()
     if v in ("auto", "linear", "none"):
@@ -189,7 +190,7 @@ def reduce_table(path: str | Path, *, latitude_deg: float | None = None, ia: str
                    full_scale_dps=analyse_kw.get("full_scale_dps"))
     er = None
     if latitude_deg is not None:
-        from ..earth import check_latitude, earth_rate_component, parse_ia
+        from ..core.earth import check_latitude, earth_rate_component, parse_ia
 
         az, el, _ = parse_ia(ia or "up")
         er = earth_rate_component(check_latitude(latitude_deg), az, el)

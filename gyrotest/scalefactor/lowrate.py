@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fit import DPS, Points, line_fit
+from .tablefit import DPS, Points, line_fit
 
 NOT_TESTED = "not tested"
 

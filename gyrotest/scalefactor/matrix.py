@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from ..core.errors import InputError
 from .plateaus import DPS, constant_runs, mean_stderr
 from .settling import find_settling
 

@@ -2,7 +2,7 @@
 
 A rate-table scale-factor test holds the table at a set of rates ±ω_i; for each plateau the
 gyro output is averaged after the settling time. This module finds the plateaus in a
-:class:`~gyrotest.data.GyroLog` and reduces each to one point (input rate, mean output,
+:class:`~gyrotest.core.data.GyroLog` and reduces each to one point (input rate, mean output,
 standard error, duration, mean temperature):
 
 * from the commanded-rate column (``log.table_rate``) when the log has one: every stretch of
@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import AnalysisError, InputError
+from ..core.errors import AnalysisError, InputError
 from .repeatability import power_on_label
 from .settling import SettlingFound, find_settling
 
@@ -574,7 +574,7 @@ def extract_plateaus(log, run: str | None = None, *, settle_s: float = 0.0,
     along the IA (from ``log.site``; 0 without a site) is stored with each point so that the
     input is table rate + Ω_IA. ``stderr``: ``allan`` (default, :func:`allan_stderr`: σ_A at
     the plateau length from the run's pooled noise model) or ``batch`` (:func:`mean_stderr`).
-    Raises :class:`~gyrotest.errors.InputError` naming the rate and the run for a plateau that
+    Raises :class:`~gyrotest.core.errors.InputError` naming the rate and the run for a plateau that
     does not settle within its dwell or is left with fewer than 8 samples after
     settling/trimming ("shorter than the settling time").
     """

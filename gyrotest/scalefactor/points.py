@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ..errors import InputError
-from ..output import atomic_open
+from ..core.errors import InputError
+from ..core.output import atomic_open
 from .plateaus import DPS, Plateau, RunPlateaus, assign_sweeps
 
 _INPUT = {"table_rate_dps": DPS, "table_rate_dph": 1.0, "rate_dps": DPS, "rate_dph": 1.0,
@@ -64,7 +64,7 @@ def read_points_table(path: str | Path, *, earth_rate_dph: float | None = None,
                       scale_factor: float | None = None
                       ) -> tuple[list[RunPlateaus], str, float | None, list[str]]:
     """Read a ready plateau table (see module doc). Returns (runs, output_kind, S0, notes)."""
-    from ..documents import read_table_text
+    from ..core.documents import read_table_text
 
     p = Path(path)
     src = str(p)

@@ -246,6 +246,17 @@ def _unit_for(col: str, prof: Profile, default: str, stated: dict[str, str] | No
     return (stated or {}).get(col) or _unit_from_name(col) or default
 
 
+def _take(keep, arrays: dict, temps: dict, fields: dict, extra: dict, supply, table,
+          position) -> tuple:
+    """The rows ``keep`` (a mask or a slice) of every channel of a log being built."""
+    def sub(v):
+        return None if v is None else v[keep]
+
+    return ({k: v[keep] for k, v in arrays.items()}, {k: v[keep] for k, v in temps.items()},
+            {k: v[keep] for k, v in fields.items()}, {k: v[keep] for k, v in extra.items()},
+            sub(supply), sub(table), sub(position))
+
+
 def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[str],
               nan_policy: str = "error") -> GyroLog:
     """Apply roles, units, the gyro output conversion and the timing analysis."""
@@ -374,13 +385,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
     if drop.any():
         keep = ~drop
         t = t[keep]
-        arrays = {k: v[keep] for k, v in arrays.items()}
-        temps = {k: v[keep] for k, v in temps.items()}
-        fields = {k: v[keep] for k, v in fields.items()}
-        extra = {k: v[keep] for k, v in extra.items()}
-        supply = None if supply is None else supply[keep]
-        table = None if table is None else table[keep]
-        position = None if position is None else position[keep]
+        arrays, temps, fields, extra, supply, table, position = _take(
+            keep, arrays, temps, fields, extra, supply, table, position)
         rows = np.flatnonzero(keep)
     else:
         rows = None
@@ -399,13 +405,8 @@ def build_log(raw: RawTable, roles: dict[str, Any], prof: Profile, notes: list[s
                 raise InputError(f"{source}: duplicated timestamp {t[i]:.6g} s with different "
                                  f"values at {where(int(i))}; fix the logger output")
         t = t[keep]
-        arrays = {k: v[keep] for k, v in arrays.items()}
-        temps = {k: v[keep] for k, v in temps.items()}
-        fields = {k: v[keep] for k, v in fields.items()}
-        extra = {k: v[keep] for k, v in extra.items()}
-        supply = None if supply is None else supply[keep]
-        table = None if table is None else table[keep]
-        position = None if position is None else position[keep]
+        arrays, temps, fields, extra, supply, table, position = _take(
+            keep, arrays, temps, fields, extra, supply, table, position)
         timing, _ = analyse_timing(t, source, where, tau0_given)
         timing.duplicates_dropped = int((~keep).sum())
         notes.append(f"{timing.duplicates_dropped} duplicated row(s) (same time, same values) dropped")

@@ -209,8 +209,10 @@ def noise_line(p) -> str:
     """The noise model in one line (IEEE 952 terms)."""
     src = ("fixed from the reference run" if p.fixed else
            "maximum likelihood on this log with this model")
+    gm = (f", Gauss–Markov σ = {p.gm_sigma:.3g} deg/h with T_c = {p.gm_tau_s:.3g} s"
+          if getattr(p, "markov", False) else "")
     return (f"noise model ({src}): N = {p.N:.3g} deg/√h (angle random walk), B = {p.B:.3g} "
-            f"deg/h (bias instability), K = {p.K:.3g} deg/h/√h (rate random walk)")
+            f"deg/h (bias instability), K = {p.K:.3g} deg/h/√h (rate random walk){gm}")
 
 
 def render_diagnosis(diag, top: int = 12) -> None:

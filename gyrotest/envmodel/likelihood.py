@@ -159,6 +159,38 @@ def component_psd(f: np.ndarray, key: str) -> np.ndarray:
     raise ValueError(key)
 
 
+def gm_psd(f: np.ndarray, tau_c: float) -> np.ndarray:
+    """Two-sided rate PSD of a first-order Gauss–Markov process of unit variance, (deg/h)²/Hz.
+
+    S(f) = 2·T_c / (1 + (2π·f·T_c)²), with correlation time T_c (s): the autocovariance is
+    σ²·exp(−|t|/T_c) and ∫S df = 1. In IEEE 952 terms q_c = σ·√(2/T_c) (S(0) = (q_c·T_c)²).
+    Source: IEEE Std 952-1997 Annex C (correlated noise); A. Papoulis, *Probability, Random
+    Variables and Stochastic Processes*, McGraw-Hill 1991 (the Lorentzian)."""
+    f = np.abs(np.asarray(f, float))
+    return 2.0 * tau_c / (1.0 + (2.0 * np.pi * f * tau_c) ** 2)
+
+
+def _acov_kernel(dt: float, half: int, M: int, nlag: int) -> tuple[np.ndarray, np.ndarray, int, float]:
+    """The frequency grid and integration weights of :func:`component_acov`: (f, weights
+    |H_W|²·|H_Δ|²·4 sin²(πfΔ)·df, P, Δ)."""
+    delta = M * dt
+    L = 2 * half + 1
+    P = 1 << int(math.ceil(math.log2(max(8 * nlag, 64))))
+    df = 1.0 / (P * delta)
+    fmax = min(0.5 / dt, 24.0 / (L * dt))
+    nf = max(P, int(math.ceil(fmax / df)) + 1)
+    f = np.arange(nf) * df
+    H = _dirichlet2(f, L, dt) ** 2 * _dirichlet2(f, M, dt)
+    w = np.full(nf, 2.0 * df)
+    w[0] = df
+    return f, H * 4.0 * np.sin(np.pi * f * delta) ** 2 * w, P, delta
+
+
+def _fold(g: np.ndarray, P: int, nlag: int) -> np.ndarray:
+    folded = np.bincount(np.arange(len(g)) % P, weights=g, minlength=P)
+    return np.real(np.fft.fft(folded))[:nlag]
+
+
 def component_acov(dt: float, half: int, M: int, nlag: int) -> dict[str, np.ndarray]:
     """Autocovariance (lags 0 … ``nlag`` − 1, at Δ = M·dt) of the first differences of the
     likelihood samples for each noise component with unit parameter (see the module
@@ -168,35 +200,31 @@ def component_acov(dt: float, half: int, M: int, nlag: int) -> dict[str, np.ndar
     Numerical integration on f ∈ [0, f_max] with step 1/(P·Δ), P ≥ 8·nlag a power of two
     (the integrand is folded modulo P and one FFT gives every lag); f_max = min(1/(2·dt),
     24/W) (beyond, the smoother's sidelobes leave < 1e-6 of the variance)."""
-    delta = M * dt
-    L = 2 * half + 1
-    P = 1 << int(math.ceil(math.log2(max(8 * nlag, 64))))
-    df = 1.0 / (P * delta)
-    fmax = min(0.5 / dt, 24.0 / (L * dt))
-    nf = max(P, int(math.ceil(fmax / df)) + 1)
-    f = np.arange(nf) * df
-    H = _dirichlet2(f, L, dt) ** 2 * _dirichlet2(f, M, dt)
-    diff = 4.0 * np.sin(np.pi * f * delta) ** 2
-    w = np.full(nf, 2.0 * df)
-    w[0] = df
+    f, wk, P, delta = _acov_kernel(dt, half, M, nlag)
     out = {}
     for key, _ in COMPONENTS:
-        S = component_psd(f[1:], key)
-        g = np.empty(nf)
-        g[1:] = S * H[1:] * diff[1:]
+        g = np.empty(len(f))
+        g[1:] = component_psd(f[1:], key) * wk[1:]
         # f → 0 limits: white and flicker vanish after differencing, random walk tends to Δ²
-        g[0] = delta * delta if key == "rw" else 0.0
-        g *= w
-        folded = np.bincount(np.arange(nf) % P, weights=g, minlength=P)
-        gam = np.real(np.fft.fft(folded))[:nlag]
-        out[key] = gam
+        # (the random walk's integrand tends to Δ², times the weight df = 1/(P·Δ))
+        g[0] = delta / P if key == "rw" else 0.0
+        out[key] = _fold(g, P, nlag)
     return out
+
+
+def gm_acov(dt: float, half: int, M: int, nlag: int, tau_c: float) -> np.ndarray:
+    """As :func:`component_acov` for a first-order Gauss–Markov rate of unit variance and
+    correlation time ``tau_c`` (s) (:func:`gm_psd`)."""
+    f, wk, P, _ = _acov_kernel(dt, half, M, nlag)
+    return _fold(gm_psd(f, tau_c) * wk, P, nlag)
 
 
 # ============================================================================ noise model
 @dataclass
 class NoiseParams:
-    """The gyro's noise in IEEE 952 terms: N (deg/√h), B (deg/h), K (deg/h/√h)."""
+    """The gyro's noise in IEEE 952 terms: N (deg/√h), B (deg/h), K (deg/h/√h), and a
+    first-order Gauss–Markov rate of standard deviation ``gm_sigma`` (deg/h) and correlation
+    time ``gm_tau_s`` (s) when the log needs one (0 and None otherwise)."""
 
     N: float
     B: float
@@ -204,38 +232,57 @@ class NoiseParams:
     loglik: float = math.nan
     fixed: bool = False  # from a reference run, not estimated on this log
     basis: str = ""
+    gm_sigma: float = 0.0
+    gm_tau_s: float | None = None
 
     @property
     def var(self) -> dict[str, float]:
         """Component parameters squared in the internal units of :func:`component_acov`:
         N² in (deg/h)²·s, B² in (deg/h)², K² in (deg/h)²/s."""
         return {"white": (self.N * 60.0) ** 2, "flicker": self.B ** 2,
-                "rw": (self.K / 60.0) ** 2}
+                "rw": (self.K / 60.0) ** 2, "gm": self.gm_sigma ** 2}
+
+    @property
+    def markov(self) -> bool:
+        return bool(self.gm_tau_s) and self.gm_sigma > 0
 
     def to_dict(self) -> dict:
-        return {"N_deg_per_sqrt_h": float(self.N), "B_deg_per_h": float(self.B),
-                "K_deg_per_h_per_sqrt_h": float(self.K), "loglik": float(self.loglik),
-                "from_reference": bool(self.fixed), "basis": self.basis}
+        d = {"N_deg_per_sqrt_h": float(self.N), "B_deg_per_h": float(self.B),
+             "K_deg_per_h_per_sqrt_h": float(self.K), "loglik": float(self.loglik),
+             "from_reference": bool(self.fixed), "basis": self.basis}
+        if self.markov:
+            d["markov_sigma_deg_per_h"] = float(self.gm_sigma)
+            d["markov_tau_s"] = float(self.gm_tau_s)
+        return d
 
     def text(self) -> str:
-        return (f"N = {self.N:.3g} deg/√h, B = {self.B:.3g} deg/h, "
-                f"K = {self.K:.3g} deg/h/√h")
+        t = (f"N = {self.N:.3g} deg/√h, B = {self.B:.3g} deg/h, "
+             f"K = {self.K:.3g} deg/h/√h")
+        if self.markov:
+            t += f", Gauss–Markov σ = {self.gm_sigma:.3g} deg/h with T_c = {self.gm_tau_s:.3g} s"
+        return t
 
 
-def params_from_shares(shares: np.ndarray, sigma2: float, gam0: dict[str, float]
-                       ) -> NoiseParams:
+def params_from_shares(shares: np.ndarray, sigma2: float, gam0: dict[str, float],
+                       tau_c: float | None = None) -> NoiseParams:
     """Noise parameters from the shares of the variance of the differenced samples and its
-    level σ²: component c has parameter² = σ²·share_c / γ_c(0)."""
-    v = {k: sigma2 * s / gam0[k] if gam0[k] > 0 else 0.0
-         for (k, _), s in zip(COMPONENTS, shares)}
+    level σ²: component c has parameter² = σ²·share_c / γ_c(0) (the fourth share, when
+    given, is the Gauss–Markov term's at correlation time ``tau_c``)."""
+    keys = [k for k, _ in COMPONENTS] + ["gm"]
+    v = {k: sigma2 * s / gam0[k] if gam0.get(k, 0.0) > 0 else 0.0
+         for k, s in zip(keys, shares)}
     return NoiseParams(N=math.sqrt(max(v["white"], 0.0)) / 60.0,
                        B=math.sqrt(max(v["flicker"], 0.0)),
-                       K=math.sqrt(max(v["rw"], 0.0)) * 60.0)
+                       K=math.sqrt(max(v["rw"], 0.0)) * 60.0,
+                       gm_sigma=math.sqrt(max(v.get("gm", 0.0), 0.0)),
+                       gm_tau_s=tau_c if len(shares) > 3 else None)
 
 
 def _shares(u: np.ndarray) -> np.ndarray:
-    """Softmax of (0, u1, u2): the shares of white, flicker and random walk."""
-    z = np.concatenate([[0.0], np.asarray(u, float)])
+    """Softmax of (0, u1, u2[, u3]): the shares of white, flicker, random walk[, Gauss–Markov];
+    a fourth logit (ln T_c of the Gauss–Markov term) is not a share."""
+    u = np.asarray(u, float)
+    z = np.concatenate([[0.0], u[:3] if len(u) >= 4 else u])
     z = z - z.max()
     e = np.exp(z)
     return e / e.sum()
@@ -388,13 +435,30 @@ def acov_for(wd, grid: LikGrid) -> dict[str, np.ndarray]:
     key = (M, half, nlag)
     if key not in cache:
         cache[key] = component_acov(fr.dt, half, M, nlag)
+        cache[key]["_spec"] = np.array([fr.dt, half, M, nlag], float)
     return cache[key]
 
 
+def with_markov(acov: dict[str, np.ndarray], tau_c: float) -> dict[str, np.ndarray]:
+    """The component autocovariances of :func:`acov_for` plus a Gauss–Markov term of
+    correlation time ``tau_c`` (s) under the key ``"gm"`` (cached per T_c to 0.1 %)."""
+    dt, half, M, nlag = acov["_spec"]
+    lt = round(math.log(tau_c), 3)
+    memo = acov.setdefault("_gm", {})
+    if lt not in memo:
+        memo[lt] = gm_acov(float(dt), int(half), int(M), int(nlag), math.exp(lt))
+    out = {k: v for k, v in acov.items() if not k.startswith("_")}
+    out["gm"] = memo[lt]
+    out["_spec"] = acov["_spec"]
+    return out
+
+
 def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
-    """Autocovariance of the differences for shares of the variance (σ² = 1)."""
+    """Autocovariance of the differences for shares of the variance (σ² = 1); a fourth share
+    is the Gauss–Markov term's (``acov["gm"]``, :func:`with_markov`)."""
     g = np.zeros_like(acov["white"])
-    for (k, _), s in zip(COMPONENTS, shares):
+    keys = [k for k, _ in COMPONENTS] + ["gm"]
+    for k, s in zip(keys, shares):
         if s > 0 and acov[k][0] > 0:
             g = g + s * acov[k] / acov[k][0]
     return g
@@ -402,11 +466,22 @@ def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
 
 def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
               maxiter: int = 40, white: float | None = None,
-              extra: np.ndarray | None = None) -> NoiseFit:
+              extra: np.ndarray | None = None, markov: bool = True) -> NoiseFit:
     """Maximum-likelihood noise model for the model whose whitened residual sum of squares at
     a given :class:`Likelihood` is ``resid_fn(lik) -> RSS`` (GLS inside): Nelder–Mead over
     the two logits of the white/flicker/random-walk shares of the differenced variance, from
     ``start`` (logits) or two standard starts.
+
+    ``markov``: also try a first-order Gauss–Markov term (its share and ln T_c, with
+    Δ ≤ T_c ≤ half the log; :func:`gm_psd`) and keep it when it lowers Akaike's criterion
+    (twice the log-likelihood gain above 4, the term's two parameters): the noise model is a
+    nuisance of every test, and a nuisance left too simple makes the tests too liberal,
+    while one a little too rich only costs a little power. Real MEMS records carry
+    correlated wander that white, flicker and random walk do not describe (the ADIS16405
+    record's x axis gains 2Δℓ ≈ 8.7 with T_c ≈ 280 s), and a drift model judged under too
+    simple a noise model names that wander as an effect. With a ``start`` (a
+    related model's logits) the related model's choice stands: four logits keep the term
+    (at its correlation time; the shares are refitted), two leave it out.
 
     ``white``: the white-noise parameter N² ((deg/h)²·s) measured on the full band of the
     log (:func:`white_level`); the level of the other two then follows from their shares.
@@ -422,22 +497,28 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
                             f"{grid.delta_s:g} s for the noise model; the log is too short for "
                             "the working smoother (use a shorter --smooth)")
     memo: dict[tuple, tuple[float, Likelihood, float]] = {}
+    lt_lo = math.log(grid.delta_s)
+    span = (float(grid.t[-1] - grid.t[0]) if grid.n > 1 else grid.delta_s)
+    lt_hi = max(lt_lo, math.log(max(span / 2.0, grid.delta_s)))
 
     def nll(u) -> float:
-        key = tuple(np.round(np.asarray(u, float), 6))
+        u = np.asarray(u, float)
+        key = tuple(np.round(u, 6))
         if key in memo:
             return -memo[key][0]
         sh = _shares(u)
+        ac = with_markov(acov, math.exp(float(np.clip(u[3], lt_lo, lt_hi)))) if len(u) == 4 \
+            else acov
         if extra is not None:
             s2 = white * float(acov["white"][0]) / max(sh[0], 1e-300)
-            g = s2 * shape_gamma(acov, sh)
+            g = s2 * shape_gamma(ac, sh)
             n = min(len(g), len(extra))
             g[:n] += extra[:n]
             lk = Likelihood.build(grid, g)
             ll = lk.loglik(resid_fn(lk), 1.0)
             memo[key] = (ll, lk, s2)
             return -ll
-        lk = Likelihood.build(grid, shape_gamma(acov, sh))
+        lk = Likelihood.build(grid, shape_gamma(ac, sh))
         rss = resid_fn(lk)
         if white:
             s2 = white * float(acov["white"][0]) / max(sh[0], 1e-300)
@@ -447,27 +528,64 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
         memo[key] = (ll, lk, s2)
         return -ll
 
-    # from a related model's shape alone, else from two standard starts (mostly white; even)
-    starts = ([np.asarray(start, float)] if start is not None
-              else [np.array([-3.0, -3.0]), np.array([0.0, 0.0])])
-    best = None
-    for x0 in starts:
-        r = optimize.minimize(nll, x0, method="Nelder-Mead",
-                              bounds=[(-18.0, 18.0), (-18.0, 18.0)],
-                              options={"xatol": 0.1, "fatol": 0.05, "maxiter": maxiter,
-                                       "initial_simplex": [x0, x0 + [1.0, 0.0],
-                                                           x0 + [0.0, 1.0]]})
-        if best is None or r.fun < best.fun:
-            best = r
-    key = tuple(np.round(np.asarray(best.x, float), 6))
+    def search(x0s: list[np.ndarray], it: int):
+        best = None
+        for x0 in x0s:
+            d = len(x0)
+            bounds = [(-18.0, 18.0)] * min(d, 3) + ([(lt_lo, lt_hi)] if d == 4 else [])
+            x0 = np.clip(x0, [lo for lo, _ in bounds], [hi for _, hi in bounds])
+            simplex = [x0] + [x0 + np.eye(d)[i] for i in range(d)]
+            r = optimize.minimize(nll, x0, method="Nelder-Mead", bounds=bounds,
+                                  options={"xatol": 0.1, "fatol": 0.05, "maxiter": it,
+                                           "initial_simplex": simplex})
+            if best is None or r.fun < best.fun:
+                best = r
+        return best
+
+    start = None if start is None else np.asarray(start, float)
+    if start is not None and len(start) == 4:
+        # a related model keeps the Gauss–Markov correlation time; the shares are refitted
+        lt_fix = float(start[3])
+        start = np.append(np.clip(start[:3], -18.0, 18.0), lt_fix)
+        r3 = optimize.minimize(lambda v: nll(np.append(v, lt_fix)), start[:3],
+                               method="Nelder-Mead", bounds=[(-18.0, 18.0)] * 3,
+                               options={"xatol": 0.1, "fatol": 0.05, "maxiter": maxiter,
+                                        "initial_simplex": [start[:3]] + [
+                                            start[:3] + np.eye(3)[i] for i in range(3)]})
+        best = optimize.OptimizeResult(x=np.append(r3.x, lt_fix), fun=r3.fun)
+    else:
+        # from a related model's shape alone, else from two standard starts (mostly white;
+        # even)
+        best = search([start] if start is not None
+                      else [np.array([-3.0, -3.0]), np.array([0.0, 0.0])], maxiter)
+        if markov and start is None and lt_hi - lt_lo > math.log(4.0):
+            # a coarse look first, at T_c = 2Δ … T/2 a factor 4 apart: the term beside the
+            # fitted shape (a tenth of the variance) or in place of its flicker and random
+            # walk; the search only from a look that raises the likelihood
+            crit = 4.0  # Akaike: the term's two parameters must buy 2 units of ℓ each
+            u0 = np.asarray(best.x, float)
+            lts = np.arange(lt_lo + math.log(2.0), lt_hi + 1e-9, math.log(4.0))
+            looks = ([np.concatenate([u0, [-2.0, lt]]) for lt in lts]
+                     + [np.concatenate([u0 - 3.0, [max(u0.max(), 0.0), lt]]) for lt in lts])
+            vals = [nll(x) for x in looks]
+            if vals and min(vals) < best.fun:
+                gm = search([looks[int(np.argmin(vals))]], maxiter)
+                if 2.0 * (best.fun - gm.fun) > crit:
+                    best = gm
+    x = np.asarray(best.x, float)
+    key = tuple(np.round(x, 6))
     if key not in memo:
-        nll(best.x)
+        nll(x)
     ll, lk, s2 = memo[key]
-    sh = _shares(best.x)
-    gam0 = {k: float(acov[k][0]) for k, _ in COMPONENTS}
-    p = params_from_shares(sh, s2, gam0)
+    sh = _shares(x)
+    tau_c = None
+    if len(x) == 4:
+        tau_c = math.exp(float(np.clip(x[3], lt_lo, lt_hi)))
+        acov = with_markov(acov, tau_c)
+    gam0 = {k: float(acov[k][0]) for k in ("white", "flicker", "rw", "gm") if k in acov}
+    p = params_from_shares(sh, s2, gam0, tau_c)
     p.loglik = float(ll)
-    nf = NoiseFit(p, sh, lk, acov, s2, logits=np.asarray(best.x, float), extra=extra)
+    nf = NoiseFit(p, sh, lk, acov, s2, n_free=len(x), logits=x, extra=extra)
     if extra is not None:
         nf.level = 1.0  # the likelihood holds the absolute covariance
     return nf
@@ -488,12 +606,16 @@ def fixed_noise(wd, grid: LikGrid, params: NoiseParams) -> NoiseFit:
     """The likelihood under noise parameters given from outside (a static reference run):
     shares and level from the parameters, nothing estimated."""
     acov = acov_for(wd, grid)
+    keys = [k for k, _ in COMPONENTS]
+    if params.markov:
+        acov = with_markov(acov, float(params.gm_tau_s))
+        keys.append("gm")
     v = params.var
-    tot = {k: v[k] * float(acov[k][0]) for k, _ in COMPONENTS}
+    tot = {k: v[k] * float(acov[k][0]) for k in keys}
     s2 = sum(tot.values())
     if not s2 > 0:
         raise AnalysisError("the reference noise model has no variance")
-    sh = np.array([tot[k] / s2 for k, _ in COMPONENTS])
+    sh = np.array([tot[k] / s2 for k in keys])
     lk = Likelihood.build(grid, shape_gamma(acov, sh))
     return NoiseFit(params, sh, lk, acov, s2, n_free=0)
 
@@ -517,10 +639,12 @@ def reference_noise(ref_log, wd, axis: str | None = None) -> NoiseParams:
     nf = fit_noise(ref, grid, rss, white=white_level(ref) or None)
     p = nf.params
     return NoiseParams(p.N, p.B, p.K, loglik=math.nan, fixed=True,
+                       gm_sigma=p.gm_sigma, gm_tau_s=p.gm_tau_s,
                        basis=f"the noise model of the static reference run {ref_log.source} "
                              f"({p.text()}, maximum likelihood), fixed")
 
 
 __all__ = ["COMPONENTS", "LikGrid", "Likelihood", "NL_MAX", "NoiseFit", "NoiseParams",
            "acov_for", "component_acov", "component_psd", "fit_noise", "fixed_noise", "gls",
-           "lik_grid", "reference_noise", "shape_gamma", "white_level"]
+           "gm_acov", "gm_psd", "lik_grid", "reference_noise", "shape_gamma", "white_level",
+           "with_markov"]

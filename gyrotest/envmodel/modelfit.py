@@ -515,11 +515,19 @@ def model_noise(wd: WorkData, grid, fitter, thetas: dict, start: NoiseFit | None
 def bias_variance(p: NoiseParams, duration_s: float) -> float:
     """Variance (deg/h)² of the bias D_F of a record of ``duration_s``: the Allan variance of
     the fitted noise at τ = the record length, N²/T + (2 ln 2/π)·B² + K²·T/3 (IEEE 952
-    Annex C): the scatter of the mean rate from one record to the next."""
+    Annex C): the scatter of the mean rate from one record to the next; a Gauss–Markov term
+    of variance σ_m² and correlation time T_c adds
+    (2σ_m²T_c/T)·[1 − (T_c/2T)·(3 − 4e^(−T/T_c) + e^(−2T/T_c))] (IEEE 952 Table C.1)."""
     T = max(duration_s, 1.0)
     N = p.N * 60.0
     K = p.K / 60.0
-    return N * N / T + (2 * math.log(2) / math.pi) * p.B ** 2 + K * K * T / 3.0
+    v = N * N / T + (2 * math.log(2) / math.pi) * p.B ** 2 + K * K * T / 3.0
+    if p.markov:
+        tc = float(p.gm_tau_s)
+        x = T / tc
+        v += (2 * p.gm_sigma ** 2 * tc / T) * (1 - (3 - 4 * math.exp(-x) + math.exp(-2 * x))
+                                              / (2 * x))
+    return v
 
 
 def degenerate(vif: dict[str, float], corr: np.ndarray, names: list[str], wd: WorkData) -> None:

@@ -186,8 +186,7 @@ def path_entry(c: Candidate, before: FitResult) -> dict:
 
 
 def _noise_text(p: NoiseParams) -> str:
-    return (f"N = {p.N:.3g} deg/√h, B = {p.B:.3g} deg/h, K = {p.K:.3g} deg/h/√h"
-            + (" (from the reference run)" if p.fixed else ""))
+    return p.text() + (" (from the reference run)" if p.fixed else "")
 
 
 def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | None,
@@ -231,7 +230,7 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
         v = (f"no candidate passes, but the residual is not consistent with the noise model "
              f"(Ljung–Box p = {_fmt_p(white.p)} < α over {white.lags} lags; {noise}): an "
              "effect outside the library and the channel screen, or noise the model lacks "
-             "(Markov, a sinusoid); see the excursions, or try a --term")
+             "(a sinusoid, a step, a second Markov term); see the excursions, or try a --term")
     if bits:
         v += "; " + "; ".join(bits)
     if remove is not None:

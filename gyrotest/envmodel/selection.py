@@ -47,6 +47,7 @@ G. E. P. Box, Biometrika 65 (1978) 297–303.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -133,7 +134,8 @@ class Screen:
     def shapes(self) -> list[tuple]:
         """The noise shapes over which :meth:`lr_full` profiles the likelihood: the model's
         own maximum-likelihood shape and a grid of lower and higher flicker and random-walk
-        shares around it, down to none (logits of :func:`gyrotest.envmodel.likelihood.fit_noise`).
+        shares around it, down to none, with the model's Gauss–Markov term (if it has one) as
+        fitted or removed (logits of :func:`gyrotest.envmodel.likelihood.fit_noise`).
         Each entry: (likelihood, noise level σ² or None for profiled, whitened model design,
         whitened y, ℓ of the model)."""
         if self._grid is not None:
@@ -146,28 +148,32 @@ class Screen:
             return self._grid
         u0 = np.asarray(nf.logits, float)
         steps = (0.5, 0.0, -2.0, -5.0, -30.0)
+        # a Gauss–Markov term (at its fitted T_c) as fitted or none
+        gm_steps = (0.0, -30.0) if len(u0) == 4 else (None,)
         white = self.wd.white_n2 or None
         X = self.base.fitter.X(self.base.thetas)
-        for a in steps:
-            for b in steps:
-                u = np.clip(u0 + [a, b], -18.0, 18.0)
-                sh = _shares(u)
-                s2 = (white * float(nf.acov["white"][0]) / max(sh[0], 1e-300)
-                      if white else None)
-                if nf.extra is not None and s2 is not None:
-                    # the sensors' noise through the model's terms stays as the model has it
-                    g = s2 * shape_gamma(nf.acov, sh)
-                    k = min(len(g), len(nf.extra))
-                    g[:k] += nf.extra[:k]
-                    lk, s2 = Likelihood.build(self.lik.grid, g), 1.0
-                else:
-                    lk = Likelihood.build(self.lik.grid, shape_gamma(nf.acov, sh))
-                Xw = lk.whiten(X)
-                yw = lk.whiten(self.wd.y)
-                Q = _orth(Xw)
-                r = yw - Q @ (Q.T @ yw)
-                ll = _ll(lk, float(r @ r), s2)
-                self._grid.append((lk, s2, Q, r, ll))
+        for a, b, c in itertools.product(steps, steps, gm_steps):
+            u = u0.copy()
+            u[:2] = np.clip(u0[:2] + [a, b], -18.0, 18.0)
+            if c is not None:
+                u[2] = np.clip(u0[2] + c, -18.0, 18.0)
+            sh = _shares(u)
+            s2 = (white * float(nf.acov["white"][0]) / max(sh[0], 1e-300)
+                  if white else None)
+            if nf.extra is not None and s2 is not None:
+                # the sensors' noise through the model's terms stays as the model has it
+                g = s2 * shape_gamma(nf.acov, sh)
+                k = min(len(g), len(nf.extra))
+                g[:k] += nf.extra[:k]
+                lk, s2 = Likelihood.build(self.lik.grid, g), 1.0
+            else:
+                lk = Likelihood.build(self.lik.grid, shape_gamma(nf.acov, sh))
+            Xw = lk.whiten(X)
+            yw = lk.whiten(self.wd.y)
+            Q = _orth(Xw)
+            r = yw - Q @ (Q.T @ yw)
+            ll = _ll(lk, float(r @ r), s2)
+            self._grid.append((lk, s2, Q, r, ll))
         return self._grid
 
     def lr_full(self, Z: np.ndarray) -> float:
@@ -578,17 +584,23 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
             tested.append(c)
         else:
             c.log_p = math.nan
-    # two tests of one family, each at α/2 (Bonferroni): the min-P bootstrap of the
-    # likelihood ratio at the model's own noise shape, and the likelihood ratio with the
-    # noise shape, or the model's own searched parameters, re-estimated under both models
-    # (Wilks; Davies for a searched value; Bonferroni over the step's candidates). The second
+    # the step's tests share its family-wise α (Bonferroni), each at α/k: (a) the min-P
+    # bootstrap of the likelihood ratio at the model's own noise shape; (b) the likelihood
+    # ratio with the noise shape, or the model's own searched parameters, re-estimated
+    # under both models (Wilks; Davies for a searched value; Bonferroni over the step's
+    # candidates); (c) when no single move passes, the pairs (:func:`pair_step`). (b)
     # regains a missing effect that the model had absorbed — in its noise model (a slow
     # effect taken for random walk) or in another term's time constant (a warm-up τ grown
-    # long to imitate a ramp) — which the first, at the absorbing values, cannot see. With
-    # neither a shape grid (a noise model fixed from a reference run) nor a searched
-    # parameter in the model, the two are one test, at α.
+    # long to imitate a ramp) — which (a), at the absorbing values, cannot see. Without a
+    # shape grid (a noise model fixed from a reference run) or a searched parameter in the
+    # model, (a) and (b) are one test; with a list of candidates given, no pairs.
     n_c = max(1, len(tested))
-    if sc.shapes() or sc.theta_profiles():
+    two = bool(sc.shapes() or sc.theta_profiles())
+    k_tests = (2 if two else 1) + (1 if candidates is None else 0)
+    if k_tests > 1 and not two:
+        for c in tested:
+            c.p_fw = min(1.0, k_tests * c.p_fw)
+    if two:
         for c in tested:
             lr = c.lr
             try:
@@ -600,7 +612,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
                 pass
             p_full = min(1.0, n_c * math.exp(davies_log_p(lr, max(c.df, 1), c.tv)))
             c.p_fw_full = p_full
-            c.p_fw = min(1.0, 2.0 * min(c.p_fw, p_full))
+            c.p_fw = min(1.0, k_tests * min(c.p_fw, p_full))
             c.lr_fixed, c.lr = c.lr, max(c.lr, lr)
             c.dbic = -c.lr + (c.n_params - _n_replaced(sc, c)) * sc.log_m
     for c in out:
@@ -646,7 +658,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
                 other = next(c for c in tied if c is not chosen)
                 chosen.advice = separation_advice(chosen, other)
     if chosen is None and candidates is None:
-        pair = pair_step(wd, base, sc, tested, alpha)
+        pair = pair_step(wd, base, sc, tested, alpha, k_tests)
         if pair is not None:
             chosen = pair
     return out, chosen
@@ -714,9 +726,10 @@ def replaced_term(wd: WorkData, r: FitResult, c: Candidate) -> tuple[str, float]
 
 
 def pair_step(wd: WorkData, base: FitResult, sc: Screen, tested: list[Candidate],
-              alpha: float) -> Candidate | None:
+              alpha: float, k_tests: int = 1) -> Candidate | None:
     """Two effects that hide each other: the :data:`PAIR_POOL` best single candidates
-    (by Λ) fitted in pairs, each pair tested at the family-wise α over every pair of the
+    (by Λ) fitted in pairs, each pair tested at the family-wise α/``k_tests`` (the pairs
+    are one of the step's ``k_tests`` tests, :func:`judge_step`) over every pair of the
     step's candidates (Bonferroni), the searched parameters' look-elsewhere taken as the
     sum of the members' total variations. The pair's more significant member is named,
     with the other to test next."""
@@ -746,7 +759,7 @@ def pair_step(wd: WorkData, base: FitResult, sc: Screen, tested: list[Candidate]
     if best is None:
         return None
     lp, lr, a, b = best
-    p_fw = min(1.0, math.exp(min(0.0, lp + math.log(n_pairs))))
+    p_fw = min(1.0, k_tests * math.exp(min(0.0, lp + math.log(n_pairs))))
     if p_fw > alpha:
         return None
     lead, other = (a, b) if a.log_p <= b.log_p else (b, a)

@@ -45,8 +45,10 @@ MIN_RELIABILITY = 0.5
 RULES: tuple[tuple[str, str], ...] = (
     ("Statistical model",
      "The block-mean gyro rate is the model's terms plus the gyro's own noise: white, flicker "
-     "and rate random-walk noise (IEEE 952 N, B, K) seen through the workbench's smoother and "
-     "block averaging. Its two shape parameters and its level are fitted by maximum "
+     "and rate random-walk noise (IEEE 952 N, B, K), and a first-order Gauss–Markov rate "
+     "when it lowers Akaike's criterion (its share and correlation time T_c searched), seen "
+     "through the workbench's smoother and block averaging. Its shape parameters and its "
+     "level are fitted by maximum "
      "likelihood on the same log (exact Gaussian likelihood of the first differences of "
      f"at most {NL_MAX} samples, Cholesky factor of their Toeplitz covariance), or fixed from "
      "a static reference run (--reference). Coefficients are generalised least squares under "
@@ -59,7 +61,7 @@ RULES: tuple[tuple[str, str], ...] = (
      "for a time constant or width, the Fourier frequencies for a sinusoid) and refined."),
     ("One criterion",
      f"A candidate is a missing effect when its family-wise p-value is at most alpha "
-     f"(default {ALPHA:g}, --alpha). Two tests make it, each at alpha/2 (Bonferroni): (a) the "
+     f"(default {ALPHA:g}, --alpha). The step's tests share alpha (Bonferroni): (a) the "
      f"min-P parametric bootstrap (Westfall & Young 1993) of Λ at the model's noise shape: "
      f"{MC_DRAWS} draws of the noise the model leaves, projected off the model; each draw's "
      "smallest local p over every candidate and every searched value; the fraction of draws "
@@ -68,8 +70,10 @@ RULES: tuple[tuple[str, str], ...] = (
      "model's own searched time constants, frequencies and widths, re-estimated under both "
      "models (Wilks; Davies' (1987) bound for the candidate's searched value; Bonferroni over "
      "the step's candidates) — a missing effect the model had absorbed in its random walk or "
-     "in another term's time constant regains its weight there. The family-wise p-value is "
-     "twice the smaller of the two."),
+     "in another term's time constant regains its weight there; (c) the pairs (below), only "
+     "when no single candidate passes. Each test is at alpha/k for the k tests the step "
+     "makes (3, or 2 without pairs or without a shape grid); a single candidate's "
+     "family-wise p-value is k times the smaller of its (a) and (b)."),
     ("Indistinguishable candidates",
      f"Candidates within ΔBIC {BIC_TIE:g} of the best are not told apart by the data (Kass & "
      "Raftery 1995): the verdict names them together and the measurement that would separate "
@@ -83,8 +87,9 @@ RULES: tuple[tuple[str, str], ...] = (
      f"(BIC of the model without it lower by more than {BIC_TIE:g}) is named as replaced."),
     ("Pairs",
      f"When no single candidate passes, the {PAIR_POOL} with the largest Λ are tried in pairs "
-     "(two effects that hide each other); a pair passes at alpha over every pair of the "
-     "step's candidates (Bonferroni), its searched parameters corrected by Davies' (1987) "
+     "(two effects that hide each other); a pair passes at alpha/k (one of the step's k "
+     "tests) over every pair of the step's candidates (Bonferroni), its searched parameters "
+     "corrected by Davies' (1987) "
      "bound; its more significant member is named and the next step tests the other."),
     ("The sensors' own noise",
      "Each logged temperature and extra channel's own noise (white σ from its second "

@@ -47,6 +47,8 @@ from .workbench_rules import NL_MAX  # noqa: E402  (computing budget of the like
 MIN_DIFFS = 8
 #: the noise components (key, unit of the parameter)
 COMPONENTS = (("white", "N"), ("flicker", "B"), ("rw", "K"))
+#: the keys of the variance shares, in order: the components and the Gauss–Markov term
+SHARE_KEYS = tuple(k for k, _ in COMPONENTS) + ("gm",)
 
 
 # ============================================================================ sample grid
@@ -268,9 +270,8 @@ def params_from_shares(shares: np.ndarray, sigma2: float, gam0: dict[str, float]
     """Noise parameters from the shares of the variance of the differenced samples and its
     level σ²: component c has parameter² = σ²·share_c / γ_c(0) (the fourth share, when
     given, is the Gauss–Markov term's at correlation time ``tau_c``)."""
-    keys = [k for k, _ in COMPONENTS] + ["gm"]
     v = {k: sigma2 * s / gam0[k] if gam0.get(k, 0.0) > 0 else 0.0
-         for k, s in zip(keys, shares)}
+         for k, s in zip(SHARE_KEYS, shares)}
     return NoiseParams(N=math.sqrt(max(v["white"], 0.0)) / 60.0,
                        B=math.sqrt(max(v["flicker"], 0.0)),
                        K=math.sqrt(max(v["rw"], 0.0)) * 60.0,
@@ -457,8 +458,7 @@ def shape_gamma(acov: dict[str, np.ndarray], shares: np.ndarray) -> np.ndarray:
     """Autocovariance of the differences for shares of the variance (σ² = 1); a fourth share
     is the Gauss–Markov term's (``acov["gm"]``, :func:`with_markov`)."""
     g = np.zeros_like(acov["white"])
-    keys = [k for k, _ in COMPONENTS] + ["gm"]
-    for k, s in zip(keys, shares):
+    for k, s in zip(SHARE_KEYS, shares):
         if s > 0 and acov[k][0] > 0:
             g = g + s * acov[k] / acov[k][0]
     return g
@@ -582,7 +582,7 @@ def fit_noise(wd, grid: LikGrid, resid_fn, *, start: np.ndarray | None = None,
     if len(x) == 4:
         tau_c = math.exp(float(np.clip(x[3], lt_lo, lt_hi)))
         acov = with_markov(acov, tau_c)
-    gam0 = {k: float(acov[k][0]) for k in ("white", "flicker", "rw", "gm") if k in acov}
+    gam0 = {k: float(acov[k][0]) for k in SHARE_KEYS if k in acov}
     p = params_from_shares(sh, s2, gam0, tau_c)
     p.loglik = float(ll)
     nf = NoiseFit(p, sh, lk, acov, s2, n_free=len(x), logits=x, extra=extra)

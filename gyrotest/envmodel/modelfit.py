@@ -327,6 +327,18 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
             E, E_parts = eiv_acov(draws, grid, beta_by, len(nf.acov["white"]))
             if np.any(E > 0):
                 nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
+                # the sensors' noise enters the residual times the true coefficient, which
+                # the GLS one understates by the reliability ratio λ (attenuation, Fuller
+                # 1987 §1.1); a second pass takes E at the moment-corrected coefficients
+                Xw1, yw1 = nf.lik.whiten(X), nf.lik.whiten(wd.y)
+                b1 = gls(Xw1, yw1)[0]
+                b1, _ = eiv_corrected(draws, nf.lik, offs0, Xw1, yw1, b1, specs,
+                                      min_reliability=0.0)
+                beta_by = {s.label: b1[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
+                E1, E_parts1 = eiv_acov(draws, grid, beta_by, len(nf.acov["white"]))
+                if E1[0] > E[0]:
+                    E, E_parts = E1, E_parts1
+                    nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
                 nf.extra_parts = E_parts
                 fitter.lik = nf.lik
     lik = nf.lik
@@ -448,11 +460,12 @@ UNCERTAINTY = ("GLS under the gyro's noise model (white, flicker and random-walk
 
 
 def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,
-                  beta: np.ndarray, specs) -> tuple[np.ndarray, str | None]:
+                  beta: np.ndarray, specs, min_reliability: float = MIN_RELIABILITY
+                  ) -> tuple[np.ndarray, str | None]:
     """The errors-in-variables corrected GLS coefficients (X̃ᵀX̃ − M)⁻¹X̃ᵀỹ with M what the
     sensors' noise adds to X̃ᵀX̃ (:func:`gyrotest.envmodel.sensors.eiv_moment`): a noisy
     regressor's coefficient is otherwise attenuated by its reliability ratio λ. Columns with
-    λ < :data:`MIN_RELIABILITY` keep their uncorrected value, and a note names them (the
+    λ < ``min_reliability`` (default :data:`MIN_RELIABILITY`) keep their uncorrected value, and a note names them (the
     model is limited by that sensor). Returns (β, note or None)."""
     from .sensors import eiv_moment
 
@@ -464,7 +477,7 @@ def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,
     if not np.any(np.diag(M)[live] > 0):
         return beta, None
     rel = 1.0 - np.diag(M)[live] / d[live]
-    ok = live[rel >= MIN_RELIABILITY]
+    ok = live[(rel >= min_reliability) & (rel > 0)]
     weak = live[rel < MIN_RELIABILITY]
     note = None
     if len(weak):

@@ -6,9 +6,11 @@ that noise into the model: β·x_read = β·x_node + β·e. Two things follow (F
 
 * the residual holds −β·e (filtered by the term: a rate term differentiates it), which the
   gyro's noise model alone does not describe; :func:`eiv_draws` simulates it (white noise of
-  the channel's σ², at least q²/12, added to the channel and every term that reads it
-  rebuilt) and :func:`eiv_acov` turns it into an autocovariance that joins the noise model
-  of the likelihood (:mod:`gyrotest.envmodel.likelihood`);
+  the channel's σ², or for a quantised channel the rounding error along its path,
+  :func:`error_draw`, added to the channel and every term that reads it rebuilt) and
+  :func:`eiv_acov` turns it into an autocovariance that joins the noise model of the
+  likelihood (:mod:`gyrotest.envmodel.likelihood`), taken at the attenuation-corrected
+  coefficients (the residual carries the noise times the true β, not the attenuated one);
 * least squares attenuates β by the reliability ratio λ = var(x)/(var(x) + var(e)); the
   workbench corrects its GLS coefficients by the method of moments, (X̃ᵀX̃ − M)⁻¹X̃ᵀỹ with M
   what the noise adds to X̃ᵀX̃ (:func:`eiv_moment`), and names a term whose λ is below ½
@@ -20,8 +22,10 @@ the verdict tests a candidate's gain against what a noise-free reading of the mo
 sensors would give (:func:`gyrotest.envmodel.selection.sensor_limit`).
 
 Each channel's σ is the robust scale of its second differences (white noise:
-var(Δ²x) = 6σ²); the channels themselves are used as read (a filter applied to a regressor
-and not to the gyro rate would bias the coefficient).
+var(Δ²x) = 6σ²), or, below a quantiser's step where those are mostly zero, the σ that makes
+simulated readings toggle as often as the logged one (:func:`dither_sigma`); the channels
+themselves are used as read (a filter applied to a regressor and not to the gyro rate would
+bias the coefficient).
 """
 
 from __future__ import annotations
@@ -85,7 +89,13 @@ def measure_frame(frame) -> dict[str, SensorNoise]:
             v = np.asarray(v, float)
             if v.shape != frame.t.shape or not np.all(np.isfinite(v)):
                 continue
-            found[name] = SensorNoise(white_sigma(v), quantisation_step(v))
+            q = quantisation_step(v)
+            sig = white_sigma(v)
+            if q > 0 and sig < q:
+                # below its step the white noise is hidden in the rounding: read it from how
+                # often the reading toggles instead
+                sig = dither_sigma(v, q)
+            found[name] = SensorNoise(sig, q)
     return found
 
 
@@ -126,14 +136,73 @@ def eiv_draws(wd, specs, thetas: dict, seed: int = 1953) -> dict[str, list[dict]
         group = "temperature" if ch in fr.temperature else "extra"
         base = getattr(fr, group)[ch]
         ref = {s.label: _block_on(wd, fr, s, thetas.get(s.label)) for s in terms}
+        path = reading_path(base, sn.step) if sn.step > 0 else None
         draws = []
         for _ in range(EIV_DRAWS):
-            e = rng.normal(0.0, math.sqrt(sn.variance), fr.n)
+            e = error_draw(path, sn, rng) if path is not None else \
+                rng.normal(0.0, math.sqrt(sn.variance), fr.n)
             fr2 = dataclasses.replace(fr, **{group: {**getattr(fr, group), ch: base + e}})
             draws.append({s.label: _block_on(wd, fr2, s, thetas.get(s.label)) - ref[s.label]
                           for s in terms})
         out[ch] = draws
     return out
+
+
+def reading_path(x: np.ndarray, step: float) -> np.ndarray:
+    """The path a quantised channel's node follows between its steps: the reading smoothed
+    by a centred moving average as long as its mean run between changes (n / number of
+    changes: the period of the quantisation sawtooth on a ramp, shortened by the toggling
+    near each threshold; one sample when it changes every sample)."""
+    x = np.asarray(x, float)
+    n = len(x)
+    changes = int(np.count_nonzero(np.diff(x)))
+    w = int(round(n / changes)) if changes else 1
+    w = max(1, min(w, n // 50 or 1))
+    if w <= 1:
+        return x.copy()
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    h = w // 2
+    lo = np.clip(np.arange(n) - h, 0, n)
+    hi = np.clip(np.arange(n) + (w - h), 0, n)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def dither_sigma(x: np.ndarray, step: float, seed: int = 1953) -> float:
+    """The white noise σ under a quantiser's rounding, by the method of moments: the σ
+    (0 … step/2, in fortieths of the step) whose simulated readings
+    Q(path + c + w) (:func:`error_draw`, four offsets c each) change level as often as the
+    logged reading does. Second differences cannot see it: most are zero when σ is below
+    the step, yet that noise makes the reading toggle at each crossing, and the derivative
+    of a toggling reading is what a rate term reads."""
+    x = np.asarray(x, float)
+    obs = np.count_nonzero(np.diff(x))
+    if obs == 0 or not step > 0:
+        return 0.0
+    path = reading_path(x, step)
+    rng = np.random.default_rng(seed)
+    best, best_d = 0.0, math.inf
+    for k in range(21):
+        sn = SensorNoise(k * step / 40.0, step)
+        cnt = np.mean([np.count_nonzero(np.diff(path + error_draw(path, sn, rng)))
+                       for _ in range(4)])
+        d = abs(math.log(max(cnt, 1.0) / obs))
+        if d < best_d:
+            best, best_d = sn.sigma, d
+    return best
+
+
+def error_draw(path: np.ndarray, sn: SensorNoise, rng: np.random.Generator) -> np.ndarray:
+    """One realisation of a quantised channel's measurement error along ``path``
+    (:func:`reading_path`): its white noise w (σ) and the quantiser at a random offset c of
+    its grid, Q(path + c + w) − c − path with Q rounding to the step q. On a channel that
+    moves by many steps between samples this is white noise of variance σ² + q²/12 (Widrow
+    and Kollár, *Quantization Noise*, Cambridge University Press, 2008, ch. 4); on a slow
+    one it is the sawtooth the quantiser really adds, correlated over each step's
+    duration, which white noise of the same variance would understate after smoothing."""
+    q = sn.step
+    c = rng.uniform(0.0, q)
+    v = path + c + (rng.normal(0.0, sn.sigma, len(path)) if sn.sigma > 0 else 0.0)
+    return np.round(v / q) * q - c - path
 
 
 def eiv_acov(all_draws: dict[str, list[dict]], grid, beta: dict, nlag: int
@@ -199,5 +268,7 @@ def _block_on(wd, frame, spec, theta) -> np.ndarray:
     return wd.bmean(x).reshape(wd.nb, -1)
 
 
-__all__ = ["EIV_DRAWS", "SensorNoise", "eiv_acov", "eiv_draws", "eiv_moment",
-           "measure_frame", "quantisation_step", "term_channels", "white_sigma"]
+__all__ = ["EIV_DRAWS", "SensorNoise", "dither_sigma", "eiv_acov", "eiv_draws", "eiv_moment",
+           "error_draw",
+           "measure_frame", "quantisation_step", "reading_path", "term_channels",
+           "white_sigma"]

@@ -457,7 +457,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                                "improvement_pct": top.improvement_pct, "lr": top.lr,
                                "p": top.p, "p_family": top.p_family, "delta_bic": top.dbic,
                                "z": top.z, "class": top.klass, "searched": top.searched,
-                               "pair": top.pair is not None,
+                               "pair": getattr(top, "pair", None) is not None,
                                "equivalents": list(top.equivalents)}
                 added.append({"step": k, **_spec_info(top.spec), "replaces": top.replaces,
                               "equivalents": list(getattr(top, "equivalents", None) or [])})

@@ -455,9 +455,9 @@ def diagnose_cmd(log, terms, custom, axis, skip, t_ref, v_ref, resolution, smoot
     its likelihood ratio; a candidate is a missing effect when its family-wise p-value (a
     parametric bootstrap over every candidate and every searched time constant, frequency
     and width) is at most --alpha. Candidates within ΔBIC 2 are named together with the
-    measurement that would separate them; when none passes alone, pairs are tried. When
-    nothing is missing, the residual is tested against the noise model (Ljung-Box) and a
-    model term the data do not support is named for removal. Every rule: --rules (and the
+    measurement that would separate them. When nothing is missing, the residual is tested
+    against the noise model (Ljung-Box) and a model term the data do not support is named
+    for removal. Every rule: --rules (and the
     man page, WORKBENCH VERDICT RULES). The verdict names the effect, the complete --terms to
     paste, and the forward path (--path).
 

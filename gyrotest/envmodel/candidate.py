@@ -41,7 +41,6 @@ class Candidate:
     degenerate: str | None = None
     error: str | None = None
     equivalents: list[str] = field(default_factory=list)
-    pair: tuple[str, float, float] | None = None  # (other member, pair Λ, pair p_fw)
     note: str | None = None
     lr_fixed: float = math.nan  # Λ at the model's own noise shape (the screen)
     lr_refit: float = math.nan  # 2Δℓ of the refitted models (θ and noise optimised)
@@ -117,7 +116,7 @@ class Candidate:
                 "trials": self.trials, "delta_bic": self.dbic, "theta": self.theta,
                 "significant": self.significant, "degenerate": self.degenerate,
                 "equivalents": self.equivalents, "separate_by": self.advice,
-                "pair": list(self.pair) if self.pair else None, "note": self.note,
+                "note": self.note,
                 "lr_at_model_noise_shape": self.lr_fixed, "lr_refitted": self.lr_refit, "rms_fit_dph": self.rms_fit,
                 "rms_holdout_dph": self.rms_holdout, "improvement_pct": self.improvement_pct,
                 "z": self.z, "coefficients": self.coefficients, "evidence": self.evidence,

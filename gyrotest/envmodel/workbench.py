@@ -201,9 +201,7 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
         if math.isfinite(c.rms_holdout):
             v += (f"; held-out RMS {base.rms_holdout:.4g} → {c.rms_holdout:.4g} deg/h "
                   f"({-c.improvement_pct:+.1f} %)")
-        if c.pair is not None:
-            v += f"; {c.note}"
-        elif c.note:
+        if c.note:
             v += f"; {c.note}"
         if c.equivalents:
             v += (f"; indistinguishable on this log (ΔBIC ≤ {BIC_TIE:g}) from "
@@ -216,7 +214,8 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
             v += "; then " + ", then ".join(
                 f"{p['term']} (→ {p['rms_holdout_after_dph']:.3g} deg/h)" for p in path[1:])
         return v
-    best = next((c for c in cands if math.isfinite(c.log_p)), None)
+    best = next((c for c in cands if math.isfinite(c.log_p) and c.sensor_limited is None),
+                None)
     bits = []
     if best is not None:
         bits.append(f"best candidate {best.term}: family-wise p = {_fmt_p(best.p_family)} "
@@ -233,6 +232,13 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
              "(a sinusoid, a step, a second Markov term); see the excursions, or try a --term")
     if bits:
         v += "; " + "; ".join(bits)
+    lim = [c for c in cands if c.sensor_limited is not None]
+    if lim:
+        c = max(lim, key=lambda c: c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr)
+        v += (f"; limited by the sensors: {c.term} reads the model's nodes better, but by no "
+              f"more than a noise-free reading of the model's own sensors would "
+              f"(Λ ≈ {c.sensor_limited[0]:.1f} ± {c.sensor_limited[1]:.1f}): a better "
+              f"reading, not a new effect (to use it: {c.add_hint(base.specs)})")
     if remove is not None:
         v += "; " + remove.text
     return v

@@ -29,13 +29,11 @@ WHITE_LAGS = 20
 #: search budget: points of the log-spaced grid on which a time constant or a hysteresis
 #: width is profiled before refinement
 TAU_POINTS = 16
-#: search budget: the best single candidates tried in pairs when none passes alone
-PAIR_POOL = 6
 #: computing budget: at most this many likelihood samples (Cholesky factors cost O(n³))
 NL_MAX = 400
 #: draws of each noisy channel's measurement noise simulated for the errors-in-variables
 #: noise term and the attenuation correction (a computing budget)
-EIV_DRAWS = 8
+EIV_DRAWS = 32
 #: a term whose whitened regressor is more noise than signal (reliability ratio
 #: var(signal)/var(signal + noise) below this) is not corrected for attenuation — the
 #: correction would divide by a small difference — and is named as sensor-limited
@@ -70,10 +68,10 @@ RULES: tuple[tuple[str, str], ...] = (
      "model's own searched time constants, frequencies and widths, re-estimated under both "
      "models (Wilks; Davies' (1987) bound for the candidate's searched value; Bonferroni over "
      "the step's candidates) — a missing effect the model had absorbed in its random walk or "
-     "in another term's time constant regains its weight there; (c) the pairs (below), only "
-     "when no single candidate passes. Each test is at alpha/k for the k tests the step "
-     "makes (3, or 2 without pairs or without a shape grid); a single candidate's "
-     "family-wise p-value is k times the smaller of its (a) and (b)."),
+     "in another term's time constant regains its weight there. Each test is at alpha/k for "
+     "the k tests the step makes (2, or 1 without a shape grid); a candidate's family-wise "
+     "p-value is k times the smaller of its (a) and (b). Moves of two terms at once are not "
+     "made (on the campaign they named a true effect once in 17 steps)."),
     ("Indistinguishable candidates",
      f"Candidates within ΔBIC {BIC_TIE:g} of the best are not told apart by the data (Kass & "
      "Raftery 1995): the verdict names them together and the measurement that would separate "
@@ -85,22 +83,21 @@ RULES: tuple[tuple[str, str], ...] = (
      "per-axis terms, or of a custom form of one of them) replaces it. After the chosen term "
      f"is added, a model term of the same channel that the data no longer support beside it "
      f"(BIC of the model without it lower by more than {BIC_TIE:g}) is named as replaced."),
-    ("Pairs",
-     f"When no single candidate passes, the {PAIR_POOL} with the largest Λ are tried in pairs "
-     "(two effects that hide each other); a pair passes at alpha/k (one of the step's k "
-     "tests) over every pair of the step's candidates (Bonferroni), its searched parameters "
-     "corrected by Davies' (1987) "
-     "bound; its more significant member is named and the next step tests the other."),
     ("The sensors' own noise",
-     "Each logged temperature and extra channel's own noise (white σ from its second "
-     "differences, at least q²/12 for a channel quantised in steps of q) is simulated "
-     f"({EIV_DRAWS} draws) through every term that reads it: it joins the noise model, and "
-     "the coefficients are corrected for the attenuation it gives (errors in variables, "
-     f"method of moments; a term with a reliability ratio below {MIN_RELIABILITY:g} keeps its "
-     "uncorrected value and is named as sensor-limited). A candidate reading a channel of the "
-     "same kind is 'limited by the sensors', not a missing effect, when its likelihood ratio "
-     "is within the one-sided 1 − alpha quantile of what a noise-free reading of the model's "
-     "own sensors would give (tr(Σ⁻¹E), variance 2·tr((Σ⁻¹E)²))."),
+     "Each logged temperature and extra channel's own noise is simulated "
+     f"({EIV_DRAWS} draws) through every term that reads it: white noise of the σ its second "
+     "differences give, or, for a channel quantised in steps of q, the rounding error "
+     "Q(path + c + w) − c − path along the reading's smoothed path at a random offset c of "
+     "the quantiser's grid (a sawtooth on a slow channel, white q²/12 on a fast one), the "
+     "white noise w under the rounding matched to how often the reading toggles. It joins the "
+     "noise model at the attenuation-corrected coefficients (the residual carries it times the "
+     "true coefficient, not the attenuated one), and the coefficients are corrected for that "
+     "attenuation (errors in variables, method of moments; a term with a reliability ratio "
+     f"below {MIN_RELIABILITY:g} keeps its uncorrected value and is named as sensor-limited). "
+     "A candidate reading a channel of the same kind is 'limited by the sensors', not a "
+     "missing effect, when its likelihood ratio is within the one-sided 1 − alpha quantile of "
+     "what a noise-free reading of the model's own sensors would give (tr(Σ⁻¹E), variance "
+     "2·tr((Σ⁻¹E)²)); the verdict names it as a better reading and how to use it."),
     ("Never degenerate",
      f"A candidate whose design column lies in the span of the model's (variance inflation "
      f"≥ {VIF_MAX:g}) is not proposed; 'model fit' refuses such a model in one line naming "
@@ -136,4 +133,4 @@ def rules_text(width: int = 88) -> str:
 
 
 __all__ = ["ALPHA", "BIC_TIE", "EIV_DRAWS", "MC_DRAWS", "MIN_RELIABILITY", "NL_MAX",
-           "PAIR_POOL", "RULES", "SUMMARY", "TAU_POINTS", "VIF_MAX", "WHITE_LAGS", "rules_text"]
+           "RULES", "SUMMARY", "TAU_POINTS", "VIF_MAX", "WHITE_LAGS", "rules_text"]

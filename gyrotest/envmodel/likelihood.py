@@ -409,6 +409,9 @@ class NoiseFit:
     #: and each channel's part of it
     extra: np.ndarray | None = None
     extra_parts: dict = field(default_factory=dict)
+    #: each channel's simulated realisations of that noise (block level, at the same
+    #: coefficients; :func:`gyrotest.envmodel.sensors.eiv_series`)
+    extra_series: dict = field(default_factory=dict)
     #: the noise level the likelihood's covariance is scaled by: σ² (the covariance is
     #: σ²·shape), or 1 when it holds the absolute covariance (with ``extra``)
     level: float | None = None

@@ -317,7 +317,7 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
         # the noise the terms carry from their sensors joins the noise model (errors in
         # variables): a model whose residual holds a noisy thermometer's noise times a large
         # coefficient is not then "missing" whatever averages that noise out
-        from .sensors import eiv_acov, eiv_draws
+        from .sensors import eiv_acov, eiv_draws, eiv_series
 
         draws = eiv_draws(wd, specs, thetas)
         if draws:
@@ -334,12 +334,13 @@ def fit_model(wd: WorkData, terms: list[TermSpec] | list[str] | str, *, bias: bo
                 b1 = gls(Xw1, yw1)[0]
                 b1, _ = eiv_corrected(draws, nf.lik, offs0, Xw1, yw1, b1, specs,
                                       min_reliability=0.0)
-                beta_by = {s.label: b1[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
-                E1, E_parts1 = eiv_acov(draws, grid, beta_by, len(nf.acov["white"]))
+                beta1 = {s.label: b1[offs0[s.label][0]:offs0[s.label][1]] for s in specs}
+                E1, E_parts1 = eiv_acov(draws, grid, beta1, len(nf.acov["white"]))
                 if E1[0] > E[0]:
-                    E, E_parts = E1, E_parts1
+                    E, E_parts, beta_by = E1, E_parts1, beta1
                     nf = model_noise(wd, grid, fitter, thetas, start=nf, extra=E)
                 nf.extra_parts = E_parts
+                nf.extra_series = eiv_series(draws, beta_by, wd.nb)
                 fitter.lik = nf.lik
     lik = nf.lik
     Xw = lik.whiten(X)

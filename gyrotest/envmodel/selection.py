@@ -505,9 +505,12 @@ def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] 
     """Errors in variables: the model's terms carry their sensors' noise (the noise model's
     ``extra_parts``, :func:`gyrotest.envmodel.sensors.eiv_acov`). A candidate reading a
     channel of the same group (temperature or extra) as a noisy channel of the model could be
-    a better reading of the same nodes rather than a new effect; taking that noise E out of
-    the residual would give a likelihood ratio of about tr(Σ⁻¹E) with variance
-    2·tr((Σ⁻¹E)²) (a Gaussian quadratic form). The candidate is sensor-limited when its Λ is
+    a better reading of the same nodes rather than a new effect; taking the realised noise u
+    out of the residual would give a likelihood ratio of about uᵀΣ⁻¹u, whose mean is
+    tr(Σ⁻¹E). Its spread is that of the simulated realisations (``extra_series``): a
+    quantised sensor's sawtooth is far from Gaussian, and the whole error of a dwell moves
+    with the quantiser's offset, so the Gaussian variance 2·tr((Σ⁻¹E)²) (used when no
+    realisations are kept) understates it. The candidate is sensor-limited when its Λ is
     within the one-sided 1 − α quantile of that (normal approximation). Returns (expected Λ,
     its sd) then, else None."""
     from .sensors import term_channels
@@ -519,10 +522,12 @@ def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] 
     group = {"temperature": set(fr.temperature), "extra": set(fr.extra)}
     mine = term_channels(c.spec)
     E = None
+    chans = []
     for ch, acov in parts.items():
         g = "temperature" if ch in fr.temperature else "extra"
         if mine & group[g]:
             E = acov if E is None else E + acov
+            chans.append(ch)
     if E is None or not E[0] > 0:
         return None
     from scipy import stats as sps
@@ -541,6 +546,12 @@ def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] 
     if not tr1 > 0:
         return None
     sd = math.sqrt(2.0 * max(tr2, 0.0))
+    series = getattr(sc.base.noise, "extra_series", None) or {}
+    k = min((len(series.get(ch, ())) for ch in chans), default=0)
+    if k >= 2:
+        gains = [float(np.sum(lk.whiten(sum(series[ch][i] for ch in chans)) ** 2))
+                 for i in range(k)]
+        tr1, sd = float(np.mean(gains)), float(np.std(gains, ddof=1))
     lam = c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr
     z = float(sps.norm.isf(alpha))
     return (tr1, sd) if lam <= tr1 + z * sd else None

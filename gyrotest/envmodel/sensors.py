@@ -205,6 +205,24 @@ def error_draw(path: np.ndarray, sn: SensorNoise, rng: np.random.Generator) -> n
     return np.round(v / q) * q - c - path
 
 
+def eiv_series(all_draws: dict[str, list[dict]], beta: dict, nb: int
+               ) -> dict[str, list[np.ndarray]]:
+    """Per channel, each draw's Σ_j β_j·Δx_j (:func:`eiv_draws`): a realisation of what that
+    sensor's noise puts into the block-level residual (nb,) at the coefficients ``beta``
+    {term label: coefficients}; draws that touch no term of ``beta`` are left out."""
+    out: dict[str, list[np.ndarray]] = {}
+    for ch, draws in all_draws.items():
+        ds = []
+        for dr in draws:
+            d = sum((dx @ np.asarray(beta[lab], float) for lab, dx in dr.items()
+                     if lab in beta), np.zeros(nb))
+            if np.any(d):
+                ds.append(d)
+        if ds:
+            out[ch] = ds
+    return out
+
+
 def eiv_acov(all_draws: dict[str, list[dict]], grid, beta: dict, nlag: int
              ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Autocovariance (lags 0 … nlag − 1) of the differenced likelihood samples of the noise
@@ -215,14 +233,10 @@ def eiv_acov(all_draws: dict[str, list[dict]], grid, beta: dict, nlag: int
     channel's part)."""
     out = np.zeros(nlag)
     parts: dict[str, np.ndarray] = {}
-    for ch, draws in all_draws.items():
+    for ch, series in eiv_series(all_draws, beta, grid.nb).items():
         acc = np.zeros(nlag)
         count = 0
-        for dr in draws:
-            d = sum((dx @ np.asarray(beta[lab], float) for lab, dx in dr.items()
-                     if lab in beta), np.zeros(grid.nb))
-            if not np.any(d):
-                continue
+        for d in series:
             for run in grid.diffs(grid.means(d)):
                 L = min(nlag, len(run))
                 full = np.correlate(run, run, mode="full")[len(run) - 1:len(run) - 1 + L]
@@ -269,6 +283,6 @@ def _block_on(wd, frame, spec, theta) -> np.ndarray:
 
 
 __all__ = ["EIV_DRAWS", "SensorNoise", "dither_sigma", "eiv_acov", "eiv_draws", "eiv_moment",
-           "error_draw",
+           "eiv_series", "error_draw",
            "measure_frame", "quantisation_step", "reading_path", "term_channels",
            "white_sigma"]

@@ -96,8 +96,9 @@ RULES: tuple[tuple[str, str], ...] = (
      f"below {MIN_RELIABILITY:g} keeps its uncorrected value and is named as sensor-limited). "
      "A candidate reading a channel of the same kind is 'limited by the sensors', not a "
      "missing effect, when its likelihood ratio is within the one-sided 1 − alpha quantile of "
-     "what a noise-free reading of the model's own sensors would give (tr(Σ⁻¹E), variance "
-     "2·tr((Σ⁻¹E)²)); the verdict names it as a better reading and how to use it."),
+     "what a noise-free reading of the model's own sensors would give (uᵀΣ⁻¹u of the "
+     "simulated realisations u of that noise: mean tr(Σ⁻¹E), spread from the draws); the "
+     "verdict names it as a better reading and how to use it."),
     ("Never degenerate",
      f"A candidate whose design column lies in the span of the model's (variance inflation "
      f"≥ {VIF_MAX:g}) is not proposed; 'model fit' refuses such a model in one line naming "

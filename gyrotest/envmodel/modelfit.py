@@ -466,8 +466,9 @@ def eiv_corrected(draws, lik, offsets: dict, Xw: np.ndarray, yw: np.ndarray,
     """The errors-in-variables corrected GLS coefficients (X̃ᵀX̃ − M)⁻¹X̃ᵀỹ with M what the
     sensors' noise adds to X̃ᵀX̃ (:func:`gyrotest.envmodel.sensors.eiv_moment`): a noisy
     regressor's coefficient is otherwise attenuated by its reliability ratio λ. Columns with
-    λ < ``min_reliability`` (default :data:`MIN_RELIABILITY`) keep their uncorrected value, and a note names them (the
-    model is limited by that sensor). Returns (β, note or None)."""
+    λ < ``min_reliability`` (default :data:`MIN_RELIABILITY`) keep their uncorrected value;
+    a note names those below :data:`MIN_RELIABILITY` (the model is limited by that sensor).
+    Returns (β, note or None)."""
     from .sensors import eiv_moment
 
     p = Xw.shape[1]

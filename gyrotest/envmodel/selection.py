@@ -531,30 +531,37 @@ def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] 
     if E is None or not E[0] > 0:
         return None
     from scipy import stats as sps
-    from scipy.linalg import cho_solve, toeplitz
 
-    tr1 = tr2 = 0.0
     lk = sc.lik
-    for a, b in lk.grid.runs:
-        n = b - a - 1
-        if n < 1:
-            continue
-        L = lk._factor(n)
-        A = cho_solve((L, True), toeplitz(E[:n]))
-        tr1 += float(np.trace(A))
-        tr2 += float(np.sum(A * A.T))
-    if not tr1 > 0:
-        return None
-    sd = math.sqrt(2.0 * max(tr2, 0.0))
     series = getattr(sc.base.noise, "extra_series", None) or {}
     k = min((len(series.get(ch, ())) for ch in chans), default=0)
     if k >= 2:
         gains = [float(np.sum(lk.whiten(sum(series[ch][i] for ch in chans)) ** 2))
                  for i in range(k)]
         tr1, sd = float(np.mean(gains)), float(np.std(gains, ddof=1))
+    else:
+        tr1, sd = _gaussian_gain(lk, E)
+    if not tr1 > 0:
+        return None
     lam = c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr
     z = float(sps.norm.isf(alpha))
     return (tr1, sd) if lam <= tr1 + z * sd else None
+
+
+def _gaussian_gain(lk, E: np.ndarray) -> tuple[float, float]:
+    """Mean and sd of uᵀΣ⁻¹u for Gaussian u of autocovariance E (per run of differenced
+    samples): tr(Σ⁻¹E) and √(2·tr((Σ⁻¹E)²))."""
+    from scipy.linalg import cho_solve, toeplitz
+
+    tr1 = tr2 = 0.0
+    for a, b in lk.grid.runs:
+        n = b - a - 1
+        if n < 1:
+            continue
+        A = cho_solve((lk._factor(n), True), toeplitz(E[:n]))
+        tr1 += float(np.trace(A))
+        tr2 += float(np.sum(A * A.T))
+    return tr1, math.sqrt(2.0 * max(tr2, 0.0))
 
 
 def _second_tier(c: Candidate, used: set[str]) -> bool:
@@ -598,12 +605,11 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     # bootstrap of the likelihood ratio at the model's own noise shape; (b) the likelihood
     # ratio with the noise shape, or the model's own searched parameters, re-estimated
     # under both models (Wilks; Davies for a searched value; Bonferroni over the step's
-    # candidates). (b)
-    # regains a missing effect that the model had absorbed — in its noise model (a slow
-    # effect taken for random walk) or in another term's time constant (a warm-up τ grown
-    # long to imitate a ramp) — which (a), at the absorbing values, cannot see. Without a
-    # shape grid (a noise model fixed from a reference run) or a searched parameter in the
-    # model, (a) and (b) are one test.
+    # candidates). (b) regains a missing effect that the model had absorbed — in its noise
+    # model (a slow effect taken for random walk) or in another term's time constant (a
+    # warm-up τ grown long to imitate a ramp) — which (a), at the absorbing values, cannot
+    # see. Without a shape grid (a noise model fixed from a reference run) or a searched
+    # parameter in the model, (a) and (b) are one test.
     n_c = max(1, len(tested))
     two = bool(sc.shapes() or sc.theta_profiles())
     k_tests = 2 if two else 1

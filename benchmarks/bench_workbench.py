@@ -30,8 +30,10 @@ working resolution) and
 * the **plain user loop**: start from ``case.base_terms``; ``diagnose``; when it reports a
   missing effect, drop the base term it replaces (if any) and add the top one; when it
   finds none but says "the model does better without X: remove it", remove X (once per
-  term); repeat, at most ``--max-steps`` (5) diagnoses; the final model is what the loop
-  ends with.
+  term); when it finds none but names a better reading of the model's own sensors ("limited
+  by the sensors: Y reads the model's nodes better ... to use it: --terms ..."), add Y (once
+  per term; not a missing effect, so never a false alarm); repeat, at most ``--max-steps``
+  (5) diagnoses; the final model is what the loop ends with.
 
 Measures (per missing effect e, with B() = gyrotest's own smoother + block means, i.e.
 ``wd.bmean(wd.smooth(x))``, and floor = RMS of B(noise), the noise actually injected, at the
@@ -415,6 +417,7 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         total = sum((m["block"] for m in mags.values()), np.zeros(wd.nb))
         added: list[dict] = []
         removed: set[str] = set()
+        reread: set[str] = set()
         final_fit = None
         X_base = None
         for k in range(max_steps):
@@ -469,6 +472,20 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                 row["steps"].append(step)
                 terms = [s for s in terms if s.label != rm.term]
                 continue
+            held = [c for c in d.candidates if getattr(c, "sensor_limited", None) is not None
+                    and c.spec is not None and c.term not in reread]
+            if not found and held:
+                # "limited by the sensors: Y reads the model's nodes better (to use it:
+                # --terms ...)" -- the user takes the better reading the verdict names
+                best = max(held, key=lambda c: c.lr_fixed if math.isfinite(c.lr_fixed)
+                           else c.lr)
+                reread.add(best.term)
+                step["better_reading"] = best.term
+                added.append({"step": k, **_spec_info(best.spec), "replaces": None,
+                              "equivalents": [], "better_reading": True})
+                row["steps"].append(step)
+                terms = terms + [best.spec]
+                continue
             row["steps"].append(step)
             if not found:
                 final_fit = d.base
@@ -510,7 +527,9 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
             if e.name not in missing_names:
                 continue
             b = mags[e.name]["block"]
-            named_by = [a for a in added if names_effect(a["key"], a["channels"], e.accept)]
+            # a better reading the user took is not a missing effect named
+            named_by = [a for a in added if not a.get("better_reading")
+                        and names_effect(a["key"], a["channels"], e.accept)]
             if X_base is not None and X_final is not None:
                 u0, u1 = _unexplained(b, X_base), _unexplained(b, X_final)
                 capture = 1.0 - u1 / u0 if u0 > 0 else math.nan
@@ -528,7 +547,9 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
         # contribution, outside what the base model spans, correlates at |r| >= EQUIV_R with
         # the effect's own signal (or with the summed signal of the missing effects it
         # replaces together) outside the base model: the log cannot tell them apart
-        contrib = _added_contributions(final_fit, added) if X_base is not None else {}
+        contrib = (_added_contributions(final_fit, [a for a in added
+                                                    if not a.get("better_reading")])
+                   if X_base is not None else {})
         miss_b = [mags[e.name]["block"] for e in case.missing]
         comb = _resid(sum(miss_b, np.zeros(wd.nb)), X_base) if miss_b and contrib else None
         for t, e in zip(row["truth"], case.truth):

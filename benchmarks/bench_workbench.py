@@ -593,7 +593,8 @@ def run_case(case: ws.Case, *, max_steps: int = MAX_STEPS, loop: bool = True,
                                  and a["truth_reduction_floor"] < SPURIOUS]
         # a false alarm whose term explains part of the truth repairs the base model (e.g. a
         # smoother regressor for a noisy-sensor term); a spurious one follows noise
-        row["alarm_spurious"] = bool(case.is_null and added and added[0]["label"]
+        row["alarm_spurious"] = bool(case.is_null and row.get("alarm") and added
+                                     and added[0]["label"]
                                      in row["spurious_added"])
     except Exception as e:  # noqa: BLE001 - record and go on
         row.update(status="crash", crash_stage=stage, error=_fmt_err(e),

@@ -96,6 +96,9 @@ class WorkData:
     #: the component autocovariances per sample length
     #: (:func:`gyrotest.envmodel.likelihood.acov_for`)
     acov_cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: each quantised channel's reconstructed node path
+    #: (:func:`gyrotest.envmodel.sensors.reading_path`), computed on first use
+    sensor_paths: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     _sel_cache: np.ndarray | None = field(default=None, init=False, repr=False, compare=False)
     _starts_cache: np.ndarray | None = field(default=None, init=False, repr=False,
                                              compare=False)

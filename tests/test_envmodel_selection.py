@@ -19,6 +19,7 @@ from gyrotest.envmodel.sensors import (
     dither_sigma,
     error_draw,
     quantisation_step,
+    reading_path,
     white_sigma,
 )
 
@@ -142,6 +143,43 @@ def test_a_lagged_node_replaces_the_plain_term_and_never_stacks_degenerately():
     fit_model(wd, terms, light=True)  # no AnalysisError: not degenerate
 
 
+def test_when_the_best_move_would_be_degenerate_the_next_passing_one_is_chosen(monkeypatch):
+    """A move that passes but whose refit is degenerate is never proposed; the step then
+    takes the next passing move (it used to stop with nothing chosen when every move tied
+    with the best one was degenerate), and a verdict without a choice says why the
+    passing move was not taken."""
+    from gyrotest.envmodel import selection
+    from gyrotest.envmodel.workbench import verdict_text
+
+    wd = _wd(_lab_log(101, effects=[("T", 0.3), ("dTdt", 3.0)]))
+    base = fit_model(wd, "T(T_case)", light=True)
+    family = FAMILY + ["dTlagdt(T_case)", "Tlag(T_case)"]
+    out, chosen = judge_step(wd, base, family)
+    assert chosen is not None
+    first = chosen.term
+    others = [c.term for c in out if c.significant and c.term != first]
+    assert others  # the step has another passing move to fall back on
+    real = selection.refit
+
+    def refit(wd_, base_, c):
+        if c.term == first:
+            raise AnalysisError(f"terms {first} and T(T_case) are degenerate (test)")
+        return real(wd_, base_, c)
+
+    monkeypatch.setattr(selection, "refit", refit)
+    out, chosen = judge_step(wd, base, family)
+    assert chosen is not None and chosen.term in others
+    bad = next(c for c in out if c.term == first)
+    assert bad.degenerate and not bad.significant
+    monkeypatch.setattr(selection, "refit",
+                        lambda *a: (_ for _ in ()).throw(AnalysisError("degenerate (test)")))
+    out, chosen = judge_step(wd, base, family)
+    assert chosen is None
+    text = verdict_text(base, out, None, [], None, None, 0.01)
+    assert "would make the design degenerate" in text
+    assert "best candidate" not in text or f"best candidate {first}" not in text
+
+
 def test_model_fit_refuses_a_degenerate_design():
     """Two terms with the same regressor: one line naming both."""
     wd = _wd(_lab_log(1, effects=[("T", 0.3)]))
@@ -254,3 +292,35 @@ def test_the_noise_under_a_quantisers_rounding_is_recovered(seed):
     log = make_log(colored_noise(n, 1.0, rng=rng, N=0.02), 1.0, temps={"T_case": x})
     sn = prepare(log).sensor_noise["T_case"]
     assert sn.step == pytest.approx(q) and sn.sigma == pytest.approx(0.02, rel=0.25)
+
+
+def _smoothed_level_and_rate(e: np.ndarray, w: int = 600) -> np.ndarray:
+    s = np.convolve(e, np.ones(w) / w, mode="valid")
+    return np.array([np.std(s), np.std(np.diff(s[:: w // 4]))])
+
+
+def test_draws_along_the_reconstructed_path_carry_the_actual_quantisation_error():
+    """A quantised slow channel: what its rounding error does after smoothing (level) and
+    after smoothing and differencing (a rate term) depends on how the node moves inside
+    each step. The draws along the path reconstructed from the reading alone
+    (gyrotest.envmodel.sensors.reading_path, σ from dither_sigma) carry the actual error's
+    smoothed level and rate within 25 % on average over seeds and σ ∈ {q/8, q/5}; a moving
+    average of the reading (flat inside each step) carries about half."""
+    q = 0.0625
+    ratios = []
+    for seed in range(4):
+        rng = np.random.default_rng(100 + seed)
+        n = 30000
+        t = np.arange(n, dtype=float)
+        node = (22 + 0.3 * np.sin(2 * np.pi * t / rng.uniform(15000, 30000) + rng.uniform(0, 6))
+                + 0.1 * np.sin(2 * np.pi * t / rng.uniform(4000, 8000)))
+        for sigma in (q / 8, q / 5):
+            x = np.round((node + rng.normal(0.0, sigma, n)) / q) * q
+            actual = _smoothed_level_and_rate(x - node)
+            sn = SensorNoise(dither_sigma(x, q), q)
+            path = reading_path(x, q, sn.sigma)
+            draws = np.mean([_smoothed_level_and_rate(error_draw(path, sn, rng))
+                             for _ in range(8)], axis=0)
+            ratios.append(draws / actual)
+    g = np.exp(np.mean(np.log(ratios), axis=0))
+    assert np.all((g > 0.75) & (g < 1.25)), g

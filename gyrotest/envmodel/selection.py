@@ -656,7 +656,7 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     if singles:
         sig = singles
     chosen = None
-    if sig:
+    while sig and chosen is None:
         best_bic = min(c.dbic for c in sig)
         tied = [c for c in sig if c.dbic <= best_bic + BIC_TIE]
         for c in sorted(tied, key=lambda c: _prior_key(c, used)):
@@ -668,10 +668,13 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
                 chosen = None
                 continue
             break
+        # every move of the tie would make the design degenerate: the next passing ones
+        sig = [c for c in sig if c.significant and c not in tied]
         if chosen is not None:
-            chosen.equivalents = [c.term for c in tied if c is not chosen]
-            if chosen.equivalents:
-                other = next(c for c in tied if c is not chosen)
+            others = [c for c in tied if c is not chosen and c.degenerate is None]
+            chosen.equivalents = [c.term for c in others]
+            if others:
+                other = others[0]
                 chosen.advice = separation_advice(chosen, other)
     return out, chosen
 

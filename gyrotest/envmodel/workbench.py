@@ -214,9 +214,14 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
             v += "; then " + ", then ".join(
                 f"{p['term']} (→ {p['rms_holdout_after_dph']:.3g} deg/h)" for p in path[1:])
         return v
-    best = next((c for c in cands if math.isfinite(c.log_p) and c.sensor_limited is None),
-                None)
+    best = next((c for c in cands if math.isfinite(c.log_p) and c.sensor_limited is None
+                 and c.degenerate is None), None)
     bits = []
+    for d in cands:
+        if d.degenerate is not None and math.isfinite(d.log_p) and d.p_family <= alpha:
+            bits.append(f"{d.term} passes (family-wise p = {_fmt_p(d.p_family)}) but would make "
+                        f"the design degenerate: {d.degenerate}")
+            break
     if best is not None:
         bits.append(f"best candidate {best.term}: family-wise p = {_fmt_p(best.p_family)} "
                     f"≥ α = {alpha:g}")

@@ -34,6 +34,8 @@ class Candidate:
     #: (Λ the sensors' noise alone would give a better reading of the same nodes, its sd):
     #: set when the candidate's gain is no larger (errors in variables)
     sensor_limited: tuple[float, float] | None = None
+    #: why it is limited by the sensors, in words (set with ``sensor_limited``)
+    sensor_reason: str | None = None
     trials: int = 1  # candidates in the family of the step
     dbic: float = math.nan  # BIC of the model with it minus the model's
     theta: dict = field(default_factory=dict)
@@ -116,7 +118,7 @@ class Candidate:
                 "trials": self.trials, "delta_bic": self.dbic, "theta": self.theta,
                 "significant": self.significant, "degenerate": self.degenerate,
                 "equivalents": self.equivalents, "separate_by": self.advice,
-                "note": self.note,
+                "note": self.note, "limited_by_sensors": self.sensor_reason,
                 "lr_at_model_noise_shape": self.lr_fixed, "lr_refitted": self.lr_refit, "rms_fit_dph": self.rms_fit,
                 "rms_holdout_dph": self.rms_holdout, "improvement_pct": self.improvement_pct,
                 "z": self.z, "coefficients": self.coefficients, "evidence": self.evidence,

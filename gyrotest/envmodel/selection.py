@@ -54,6 +54,7 @@ import numpy as np
 from scipy import optimize
 
 from ..core.errors import AnalysisError, InputError
+from .calibration import Calibrated, noisy_model_channels
 from .candidate import Candidate, Removal
 from .lookelsewhere import (
     Whiteness,
@@ -645,9 +646,25 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
         if lim is not None:
             c.sensor_limited = lim
             c.significant = False
-            c.note = (f"its gain (Λ = {c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr:.1f}) "
-                      f"is within what a noise-free reading of the model's own sensors would "
-                      f"give (Λ ≈ {lim[0]:.1f} ± {lim[1]:.1f}): limited by the sensors")
+            c.sensor_reason = (f"reads the model's nodes better, but by no more than a "
+                               f"noise-free reading of the model's own sensors would (Λ ≈ "
+                               f"{lim[0]:.1f} ± {lim[1]:.1f})")
+    sig = [c for c in sig if c.significant]
+    # ... nor a gain that the model read through its sensors' reconstructed nodes leaves no
+    # room for (regression calibration: an attenuated coefficient leaves the effect in the
+    # residual, where any smoother reading of the same node takes it)
+    cal = None
+    for c in sig:
+        if not noisy_model_channels(wd, base, c.spec):
+            continue
+        cal = cal or Calibrated(wd, base)
+        lam, p_cal = cal.p_family(c, n_c, k_tests)
+        if math.isfinite(p_cal) and p_cal > alpha:
+            c.sensor_limited = (lam, 0.0)
+            c.significant = False
+            c.sensor_reason = (f"passes on the model as read, but on the model read through "
+                               f"its sensors' reconstructed nodes (regression calibration) it "
+                               f"gains only Λ = {lam:.1f} (family-wise p = {p_cal:.2g})")
     sig = [c for c in sig if c.significant]
     # main effects first: a field block (several coefficients at once), or a product of two
     # channels neither of which the model uses yet (weak heredity: Chipman 1996), only when

@@ -240,10 +240,8 @@ def verdict_text(base: FitResult, cands: list[Candidate], chosen: Candidate | No
     lim = [c for c in cands if c.sensor_limited is not None]
     if lim:
         c = max(lim, key=lambda c: c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr)
-        v += (f"; limited by the sensors: {c.term} reads the model's nodes better, but by no "
-              f"more than a noise-free reading of the model's own sensors would "
-              f"(Λ ≈ {c.sensor_limited[0]:.1f} ± {c.sensor_limited[1]:.1f}): a better "
-              f"reading, not a new effect (to use it: {c.add_hint(base.specs)})")
+        v += (f"; limited by the sensors: {c.term} {c.sensor_reason}: a better reading, not a "
+              f"new effect (to use it: {c.add_hint(base.specs)})")
     if remove is not None:
         v += "; " + remove.text
     return v

@@ -99,7 +99,13 @@ RULES: tuple[tuple[str, str], ...] = (
      "A candidate reading a channel of the same kind is 'limited by the sensors', not a "
      "missing effect, when its likelihood ratio is within the one-sided 1 − alpha quantile of "
      "what a noise-free reading of the model's own sensors would give (uᵀΣ⁻¹u of the "
-     "simulated realisations u of that noise: mean tr(Σ⁻¹E), spread from the draws); the "
+     "simulated realisations u of that noise: mean tr(Σ⁻¹E), spread from the draws). A "
+     "candidate that passes both is tested once more on the model refitted to its sensors' "
+     "reconstructed nodes (regression calibration: each noisy channel replaced by its "
+     "Whittaker path; Carroll, Ruppert, Stefanski & Crainiceanu 2006): where a coefficient "
+     "collapses under a noisy reading the effect stays in the residual and any smoother "
+     "reading of the same node takes it, so a candidate that no longer passes at alpha there "
+     "(the same Davies and Bonferroni corrections) is limited by the sensors too. The "
      "verdict names it as a better reading and how to use it."),
     ("Never degenerate",
      f"A candidate whose design column lies in the span of the model's (variance inflation "

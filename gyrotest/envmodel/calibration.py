@@ -1,0 +1,132 @@
+"""Regression calibration: the model read through its sensors' reconstructed nodes.
+
+A term built from a noisy or coarsely quantised sensor reads its node badly, and least squares
+attenuates its coefficient (:mod:`gyrotest.envmodel.sensors`). Under a noise model dominated
+by random walk the attenuation can be severe: the whitened band the fit listens to is where a
+rate read through a 0.0625-degC thermocouple is mostly rounding, the coefficient collapses,
+and the effect the term should carry stays in the residual. Any smoother reading of the same
+node — a lag or a smoothed rate of the same sensor, a second sensor — then "explains" it: a
+better reading, not a new effect, and no bound on the sensors' noise sees it, because what
+that reading gains is the model's own unexplained signal.
+
+Regression calibration (Carroll, Ruppert, Stefanski & Crainiceanu, *Measurement Error in
+Nonlinear Models*, 2nd ed., Chapman & Hall/CRC 2006, ch. 4) replaces each error-prone
+covariate by an estimate of its true value given the reading. Here that estimate is the
+Whittaker smoother of the reading at the sensor's own error variance
+(:func:`gyrotest.envmodel.sensors.reading_path`). A candidate that reads a channel of the same
+kind (temperature or extra) as a noisy channel of the model is a missing effect only if it
+also passes on top of the model fitted to the calibrated channels, its likelihood ratio taken
+with the noise re-estimated under both models and the same look-elsewhere correction
+(Davies) and Bonferroni share as the step's own test; otherwise it is limited by the sensors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..core.errors import AnalysisError, InputError
+from .lookelsewhere import davies_log_p
+from .modelfit import FitResult, WorkData, fit_model
+from .sensors import reading_path, term_channels
+
+
+def noisy_model_channels(wd: WorkData, base: FitResult, spec) -> list[str]:
+    """The noisy channels (with a measured sensor noise) that the model's terms read and that
+    are of the same kind (temperature or extra) as a channel ``spec`` reads: the channels of
+    which ``spec`` could be a better reading."""
+    noise = getattr(wd, "sensor_noise", None) or {}
+    if not noise or spec is None:
+        return []
+    fr = wd.frame
+    mine = term_channels(spec)
+    used = set()
+    for s in base.specs:
+        if s.key != "bias":
+            used |= term_channels(s)
+    out = []
+    for ch, sn in noise.items():
+        if ch not in used or not sn.variance > 0:
+            continue
+        group = set(fr.temperature) if ch in fr.temperature else set(fr.extra)
+        if mine & group:
+            out.append(ch)
+    return out
+
+
+def calibrated_workdata(wd: WorkData) -> WorkData:
+    """``wd`` with every channel that has a measured sensor noise replaced by its reconstructed
+    node (:func:`gyrotest.envmodel.sensors.reading_path`; cached on ``wd``) and no sensor noise
+    left; the gyro's data, blocks and noise caches are shared."""
+    fr = wd.frame
+    new = {"temperature": dict(fr.temperature), "extra": dict(fr.extra)}
+    for ch, sn in (wd.sensor_noise or {}).items():
+        group = "temperature" if ch in fr.temperature else "extra" if ch in fr.extra else None
+        if group is None or not sn.variance > 0:
+            continue
+        key = (ch, sn.step, sn.sigma)
+        path = wd.sensor_paths.get(key)
+        x = new[group][ch]
+        if path is None or len(path) != len(x):
+            path = reading_path(np.asarray(x, float), sn.step, sn.sigma)
+            wd.sensor_paths[key] = path
+        new[group][ch] = path
+    out = dataclasses.replace(wd, frame=dataclasses.replace(fr, **new), sensor_noise={})
+    out.white_n2 = wd.white_n2
+    out.acov_cache = wd.acov_cache
+    return out
+
+
+class Calibrated:
+    """The step's model refitted on the calibrated channels (built on first use), and the
+    test of a candidate on top of it."""
+
+    def __init__(self, wd: WorkData, base: FitResult):
+        self.wd, self.base = wd, base
+        self._wd: WorkData | None = None
+        self._fit: FitResult | None = None
+        self.failed = False
+
+    def fit(self) -> FitResult | None:
+        if self._fit is None and not self.failed:
+            try:
+                self._wd = calibrated_workdata(self.wd)
+                self._fit = fit_model(self._wd, [s for s in self.base.specs if s.key != "bias"],
+                                      thetas0=dict(self.base.thetas), light=True,
+                                      noise_start=self.base.noise)
+            except (AnalysisError, InputError, ValueError, np.linalg.LinAlgError):
+                self.failed = True
+        return self._fit
+
+    def lr(self, c) -> float:
+        """Λ of candidate ``c`` (its replaced term out) on top of the calibrated model, noise
+        re-estimated under both; NaN when either fit fails."""
+        base = self.fit()
+        if base is None:
+            return math.nan
+        gone = set((c.replaces or "").split("; ")) - {""}
+        specs = [s for s in base.specs if s.key != "bias" and s.label not in gone] + [c.spec]
+        th0 = {k: v for k, v in base.thetas.items() if k not in gone}
+        if c.theta:
+            th0[c.term] = dict(c.theta)
+        try:
+            r = fit_model(self._wd, specs, thetas0=th0, new_terms=[c.spec], light=True,
+                          noise_start=base.noise)
+        except (AnalysisError, InputError, ValueError, np.linalg.LinAlgError):
+            return math.nan
+        return max(0.0, 2.0 * (r.loglik - base.loglik))
+
+    def p_family(self, c, n_c: int, k_tests: int) -> tuple[float, float]:
+        """(Λ on the calibrated model, its family-wise p: Davies over the candidate's
+        searched parameter, Bonferroni over the step's ``n_c`` candidates and its
+        ``k_tests`` tests)."""
+        lam = self.lr(c)
+        if not math.isfinite(lam):
+            return lam, math.nan
+        p = min(1.0, k_tests * n_c * math.exp(davies_log_p(lam, max(c.df, 1), c.tv)))
+        return lam, p
+
+
+__all__ = ["Calibrated", "calibrated_workdata", "noisy_model_channels"]

@@ -54,7 +54,7 @@ import numpy as np
 from scipy import optimize
 
 from ..core.errors import AnalysisError, InputError
-from .calibration import Calibrated, noisy_model_channels
+from .calibration import Calibrated, noisy_model_channels, sensor_limit
 from .candidate import Candidate, Removal
 from .lookelsewhere import (
     Whiteness,
@@ -500,69 +500,6 @@ def step_candidates(wd: WorkData, base: FitResult, candidates=None) -> list[tupl
     specs = resolve_terms(parse_terms(candidates), wd.frame)
     have = {s.label for s in base.specs}
     return [(s, []) for s in specs if s.label not in have]
-
-
-def sensor_limit(sc: Screen, c: Candidate, alpha: float) -> tuple[float, float] | None:
-    """Errors in variables: the model's terms carry their sensors' noise (the noise model's
-    ``extra_parts``, :func:`gyrotest.envmodel.sensors.eiv_acov`). A candidate reading a
-    channel of the same group (temperature or extra) as a noisy channel of the model could be
-    a better reading of the same nodes rather than a new effect; taking the realised noise u
-    out of the residual would give a likelihood ratio of about uᵀΣ⁻¹u, whose mean is
-    tr(Σ⁻¹E). Its spread is that of the simulated realisations (``extra_series``): a
-    quantised sensor's sawtooth is far from Gaussian, and the whole error of a dwell moves
-    with the quantiser's offset, so the Gaussian variance 2·tr((Σ⁻¹E)²) (used when no
-    realisations are kept) understates it. The candidate is sensor-limited when its Λ is
-    within the one-sided 1 − α quantile of that (normal approximation). Returns (expected Λ,
-    its sd) then, else None."""
-    from .sensors import term_channels
-
-    parts = getattr(sc.base.noise, "extra_parts", None) or {}
-    if not parts or c.spec is None:
-        return None
-    fr = sc.wd.frame
-    group = {"temperature": set(fr.temperature), "extra": set(fr.extra)}
-    mine = term_channels(c.spec)
-    E = None
-    chans = []
-    for ch, acov in parts.items():
-        g = "temperature" if ch in fr.temperature else "extra"
-        if mine & group[g]:
-            E = acov if E is None else E + acov
-            chans.append(ch)
-    if E is None or not E[0] > 0:
-        return None
-    from scipy import stats as sps
-
-    lk = sc.lik
-    series = getattr(sc.base.noise, "extra_series", None) or {}
-    k = min((len(series.get(ch, ())) for ch in chans), default=0)
-    if k >= 2:
-        gains = [float(np.sum(lk.whiten(sum(series[ch][i] for ch in chans)) ** 2))
-                 for i in range(k)]
-        tr1, sd = float(np.mean(gains)), float(np.std(gains, ddof=1))
-    else:
-        tr1, sd = _gaussian_gain(lk, E)
-    if not tr1 > 0:
-        return None
-    lam = c.lr_fixed if math.isfinite(c.lr_fixed) else c.lr
-    z = float(sps.norm.isf(alpha))
-    return (tr1, sd) if lam <= tr1 + z * sd else None
-
-
-def _gaussian_gain(lk, E: np.ndarray) -> tuple[float, float]:
-    """Mean and sd of uᵀΣ⁻¹u for Gaussian u of autocovariance E (per run of differenced
-    samples): tr(Σ⁻¹E) and √(2·tr((Σ⁻¹E)²))."""
-    from scipy.linalg import cho_solve, toeplitz
-
-    tr1 = tr2 = 0.0
-    for a, b in lk.grid.runs:
-        n = b - a - 1
-        if n < 1:
-            continue
-        A = cho_solve((lk._factor(n), True), toeplitz(E[:n]))
-        tr1 += float(np.trace(A))
-        tr2 += float(np.sum(A * A.T))
-    return tr1, math.sqrt(2.0 * max(tr2, 0.0))
 
 
 def _second_tier(c: Candidate, used: set[str]) -> bool:

@@ -19,7 +19,7 @@ that noise into the model: β·x_read = β·x_node + β·e. Two things follow (F
 A second sensor of the same node, or a lag or rate of the same sensor, can average the first
 one's noise out and so "explain" part of the residual: a better reading, not a new effect;
 the verdict tests a candidate's gain against what a noise-free reading of the model's own
-sensors would give (:func:`gyrotest.envmodel.selection.sensor_limit`).
+sensors would give (:func:`gyrotest.envmodel.calibration.sensor_limit`).
 
 Each channel's σ is the robust scale of its second differences (white noise:
 var(Δ²x) = 6σ²), or, below a quantiser's step where those are mostly zero, the σ that makes

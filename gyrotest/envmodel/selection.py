@@ -589,20 +589,24 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
     sig = [c for c in sig if c.significant]
     # ... nor a gain that the model read through its sensors' reconstructed nodes leaves no
     # room for (regression calibration: an attenuated coefficient leaves the effect in the
-    # residual, where any smoother reading of the same node takes it)
-    cal = None
-    for c in sig:
+    # residual, where any smoother reading of the same node takes it); tested on the moves
+    # about to be chosen, in the order they are tried
+    cal: list[Calibrated] = []
+
+    def calibration_limited(c: Candidate) -> bool:
         if not noisy_model_channels(wd, base, c.spec):
-            continue
-        cal = cal or Calibrated(wd, base)
-        lam, p_cal = cal.p_family(c, n_c, k_tests)
-        if math.isfinite(p_cal) and p_cal > alpha:
-            c.sensor_limited = (lam, 0.0)
-            c.significant = False
-            c.sensor_reason = (f"passes on the model as read, but on the model read through "
-                               f"its sensors' reconstructed nodes (regression calibration) it "
-                               f"gains only Λ = {lam:.1f} (family-wise p = {p_cal:.2g})")
-    sig = [c for c in sig if c.significant]
+            return False
+        if not cal:
+            cal.append(Calibrated(wd, base))
+        lam, p_cal = cal[0].p_family(c, n_c, k_tests)
+        if not (math.isfinite(p_cal) and p_cal > alpha):
+            return False
+        c.sensor_limited = (lam, 0.0)
+        c.significant = False
+        c.sensor_reason = (f"passes on the model as read, but on the model read through its "
+                           f"sensors' reconstructed nodes (regression calibration) it gains "
+                           f"only Λ = {lam:.1f} (family-wise p = {p_cal:.2g})")
+        return True
     # main effects first: a field block (several coefficients at once), or a product of two
     # channels neither of which the model uses yet (weak heredity: Chipman 1996), only when
     # no main effect passes
@@ -614,6 +618,8 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
         best_bic = min(c.dbic for c in sig)
         tied = [c for c in sig if c.dbic <= best_bic + BIC_TIE]
         for c in sorted(tied, key=lambda c: _prior_key(c, used)):
+            if calibration_limited(c):
+                continue
             try:
                 chosen = refit(wd, base, c)
             except AnalysisError as e:  # a degenerate model: not proposed
@@ -622,10 +628,10 @@ def judge_step(wd: WorkData, base: FitResult, candidates=None, *, alpha: float =
                 chosen = None
                 continue
             break
-        # every move of the tie would make the design degenerate: the next passing ones
+        # every move of the tie degenerate or limited by the sensors: the next passing ones
         sig = [c for c in sig if c.significant and c not in tied]
         if chosen is not None:
-            others = [c for c in tied if c is not chosen and c.degenerate is None]
+            others = [c for c in tied if c is not chosen and c.significant]
             chosen.equivalents = [c.term for c in others]
             if others:
                 other = others[0]

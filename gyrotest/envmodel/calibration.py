@@ -37,7 +37,7 @@ from ..core.errors import AnalysisError, InputError
 from .candidate import Candidate
 from .lookelsewhere import davies_log_p
 from .modelfit import FitResult, WorkData, fit_model
-from .sensors import reading_path, term_channels
+from .sensors import node_path, term_channels
 
 
 def noisy_model_channels(wd: WorkData, base: FitResult, spec) -> list[str]:
@@ -73,13 +73,7 @@ def calibrated_workdata(wd: WorkData) -> WorkData:
         group = "temperature" if ch in fr.temperature else "extra" if ch in fr.extra else None
         if group is None or not sn.variance > 0:
             continue
-        key = (ch, sn.step, sn.sigma)
-        path = wd.sensor_paths.get(key)
-        x = new[group][ch]
-        if path is None or len(path) != len(x):
-            path = reading_path(np.asarray(x, float), sn.step, sn.sigma)
-            wd.sensor_paths[key] = path
-        new[group][ch] = path
+        new[group][ch] = node_path(wd, ch, sn, new[group][ch])
     out = dataclasses.replace(wd, frame=dataclasses.replace(fr, **new), sensor_noise={})
     out.white_n2 = wd.white_n2
     out.acov_cache = wd.acov_cache

@@ -32,7 +32,9 @@ class Candidate:
     tv: float = 0.0  # total variation of √Λ along its search (Davies' V)
     p_fw_full: float = math.nan  # family-wise p of the re-estimated-shape Λ (Bonferroni)
     #: (Λ the sensors' noise alone would give a better reading of the same nodes, its sd):
-    #: set when the candidate's gain is no larger (errors in variables)
+    #: set when the candidate's gain is no larger (errors in variables); or (its Λ on the
+    #: model read through the reconstructed nodes, 0) when it does not pass there
+    #: (regression calibration, :mod:`gyrotest.envmodel.calibration`)
     sensor_limited: tuple[float, float] | None = None
     #: why it is limited by the sensors, in words (set with ``sensor_limited``)
     sensor_reason: str | None = None

@@ -136,15 +136,7 @@ def eiv_draws(wd, specs, thetas: dict, seed: int = 1953) -> dict[str, list[dict]
         group = "temperature" if ch in fr.temperature else "extra"
         base = getattr(fr, group)[ch]
         ref = {s.label: _block_on(wd, fr, s, thetas.get(s.label)) for s in terms}
-        path = None
-        if sn.step > 0:
-            cache = getattr(wd, "sensor_paths", None)
-            key = (ch, sn.step, sn.sigma)
-            path = cache.get(key) if cache is not None else None
-            if path is None or len(path) != len(base):
-                path = reading_path(base, sn.step, sn.sigma)
-                if cache is not None:
-                    cache[key] = path
+        path = node_path(wd, ch, sn, base) if sn.step > 0 else None
         draws = []
         for _ in range(EIV_DRAWS):
             e = error_draw(path, sn, rng) if path is not None else \
@@ -154,6 +146,19 @@ def eiv_draws(wd, specs, thetas: dict, seed: int = 1953) -> dict[str, list[dict]
                           for s in terms})
         out[ch] = draws
     return out
+
+
+def node_path(wd, ch: str, sn: SensorNoise, x: np.ndarray) -> np.ndarray:
+    """:func:`reading_path` of channel ``ch`` (reading ``x``, noise ``sn``), computed once per
+    log (cached on the :class:`gyrotest.envmodel.workdata.WorkData`)."""
+    cache = getattr(wd, "sensor_paths", None)
+    key = (ch, sn.step, sn.sigma)
+    path = cache.get(key) if cache is not None else None
+    if path is None or len(path) != len(x):
+        path = reading_path(np.asarray(x, float), sn.step, sn.sigma)
+        if cache is not None:
+            cache[key] = path
+    return path
 
 
 def reading_path(x: np.ndarray, step: float, sigma: float = 0.0) -> np.ndarray:
@@ -340,5 +345,5 @@ def _block_on(wd, frame, spec, theta) -> np.ndarray:
 
 __all__ = ["EIV_DRAWS", "SensorNoise", "dither_sigma", "eiv_acov", "eiv_draws", "eiv_moment",
            "eiv_series", "error_draw",
-           "measure_frame", "quantisation_step", "reading_path", "term_channels",
+           "measure_frame", "node_path", "quantisation_step", "reading_path", "term_channels",
            "white_sigma"]
